@@ -1,0 +1,7 @@
+//! The subcommands of the `tiltbox` binary; each is a thin layer over the library.
+
+#[cfg(feature = "report")]
+pub mod report;
+#[cfg(feature = "net")]
+pub mod serve;
+pub mod simulate;

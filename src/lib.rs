@@ -1,0 +1,6 @@
+//! tiltbox: a 2D rigid-body physics engine written from scratch, served as a daemon over
+//! Eclipse Zenoh.
+//!
+//! - [`physics`]: the engine (no async, no network).
+pub mod cases;
+pub mod physics;

@@ -1,0 +1,52 @@
+//! `tiltbox`: the daemon and its tools (simulate, report, serve).
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod cmd;
+
+/// A 2D rigid-body physics engine served over Eclipse Zenoh.
+#[derive(Parser)]
+#[command(name = "tiltbox", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the daemon: step a scene at a fixed rate and serve it over Zenoh (the default).
+    #[cfg(feature = "net")]
+    Serve(cmd::serve::ServeArgs),
+    /// Step a scene headless and print poses.
+    Simulate(cmd::simulate::SimulateArgs),
+    /// Regenerate docs/accuracy.md and its charts: error against run time, stiff and extreme cases.
+    #[cfg(feature = "report")]
+    Report(cmd::report::ReportArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        #[cfg(feature = "net")]
+        None => cmd::serve::run(cmd::serve::ServeArgs::default()),
+        #[cfg(not(feature = "net"))]
+        None => {
+            use clap::CommandFactory;
+            let _ = Cli::command().print_help();
+            Ok(ExitCode::from(2))
+        }
+        #[cfg(feature = "net")]
+        Some(Command::Serve(args)) => cmd::serve::run(args),
+        Some(Command::Simulate(args)) => cmd::simulate::run(args),
+        #[cfg(feature = "report")]
+        Some(Command::Report(args)) => cmd::report::run(args),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}

@@ -1,0 +1,309 @@
+//! Rigid bodies: their definition (what a caller asks for) and their state (what the World keeps).
+
+use super::error::{finite, non_negative, positive, unit_interval, PhysicsError};
+use super::math::{is_finite_vec, Real, Rot, Transform, Vec2};
+use super::shape::Shape;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// A stable handle to a body in a [`super::World`].
+///
+/// Ids are generational: removing a body and adding another may reuse the slot, but never the
+/// id, so a stale id is reported as unknown instead of silently naming a different body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct BodyId {
+    /// Slot in the World's body array.
+    pub index: u32,
+    /// How many times the slot has been reused.
+    pub generation: u32,
+}
+
+impl fmt::Display for BodyId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}v{}", self.index, self.generation)
+    }
+}
+
+/// How a body's mass is given.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MassSpec {
+    /// Immovable: infinite mass and inertia (walls, ground).
+    Static,
+    /// Mass = density (kg/m^2) x shape area.
+    Density(Real),
+    /// Total mass in kilograms.
+    Mass(Real),
+}
+
+/// Everything needed to create a body. Validated by [`BodyDef::validate`] before it reaches a World.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BodyDef {
+    /// Collision shape, in body coordinates.
+    pub shape: Shape,
+    /// Centre of mass in world coordinates, metres.
+    pub position: Vec2,
+    /// Orientation in radians, counter-clockwise.
+    pub angle: Real,
+    /// Linear velocity, m/s.
+    pub linear_velocity: Vec2,
+    /// Angular velocity, rad/s, counter-clockwise.
+    pub angular_velocity: Real,
+    /// Mass, density, or static.
+    pub mass: MassSpec,
+    /// Coulomb friction coefficient, >= 0 (mixed per pair by `Settings::friction_mixing`).
+    pub friction: Real,
+    /// Coefficient of restitution in [0, 1] (mixed per pair as sqrt(eA eB)).
+    pub restitution: Real,
+}
+
+impl BodyDef {
+    /// A dynamic body of density 1 kg/m^2 at rest at `position`, friction 0.6, restitution 0.
+    pub fn dynamic(shape: Shape, position: Vec2) -> BodyDef {
+        BodyDef {
+            shape,
+            position,
+            angle: 0.0,
+            linear_velocity: Vec2::ZERO,
+            angular_velocity: 0.0,
+            mass: MassSpec::Density(1.0),
+            friction: 0.6,
+            restitution: 0.0,
+        }
+    }
+
+    /// A static (immovable) body at `position`, friction 0.6, restitution 0.
+    pub fn fixed(shape: Shape, position: Vec2) -> BodyDef {
+        BodyDef {
+            mass: MassSpec::Static,
+            ..BodyDef::dynamic(shape, position)
+        }
+    }
+
+    /// Set the orientation (radians).
+    pub fn with_angle(mut self, angle: Real) -> Self {
+        self.angle = angle;
+        self
+    }
+
+    /// Set the linear velocity (m/s).
+    pub fn with_velocity(mut self, v: Vec2) -> Self {
+        self.linear_velocity = v;
+        self
+    }
+
+    /// Set the angular velocity (rad/s).
+    pub fn with_angular_velocity(mut self, w: Real) -> Self {
+        self.angular_velocity = w;
+        self
+    }
+
+    /// Set the density (kg/m^2).
+    pub fn with_density(mut self, density: Real) -> Self {
+        self.mass = MassSpec::Density(density);
+        self
+    }
+
+    /// Set the total mass (kg).
+    pub fn with_mass(mut self, mass: Real) -> Self {
+        self.mass = MassSpec::Mass(mass);
+        self
+    }
+
+    /// Set the friction coefficient.
+    pub fn with_friction(mut self, friction: Real) -> Self {
+        self.friction = friction;
+        self
+    }
+
+    /// Set the coefficient of restitution.
+    pub fn with_restitution(mut self, restitution: Real) -> Self {
+        self.restitution = restitution;
+        self
+    }
+
+    /// Refuse anything the engine cannot simulate, naming the field and the value.
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        self.shape.validate()?;
+        finite("position.x", self.position.x)?;
+        finite("position.y", self.position.y)?;
+        finite("angle", self.angle)?;
+        finite("velocity.x", self.linear_velocity.x)?;
+        finite("velocity.y", self.linear_velocity.y)?;
+        finite("angular_velocity", self.angular_velocity)?;
+        match self.mass {
+            MassSpec::Static => {}
+            MassSpec::Density(d) => {
+                positive("density", d)?;
+                // density x area must stay a usable, finite mass
+                positive("mass (density x area)", d * self.shape.area())?;
+            }
+            MassSpec::Mass(m) => {
+                positive("mass", m)?;
+            }
+        }
+        non_negative("friction", self.friction)?;
+        unit_interval("restitution", self.restitution)?;
+        Ok(())
+    }
+}
+
+/// A rigid body as the World keeps it.
+#[derive(Clone, Debug)]
+pub struct Body {
+    pub(crate) id: BodyId,
+    pub(crate) shape: Shape,
+    pub(crate) position: Vec2,
+    pub(crate) angle: Real,
+    pub(crate) rot: Rot,
+    pub(crate) linear_velocity: Vec2,
+    pub(crate) angular_velocity: Real,
+    pub(crate) force: Vec2,
+    pub(crate) torque: Real,
+    pub(crate) mass: Real,
+    pub(crate) inv_mass: Real,
+    pub(crate) inertia: Real,
+    pub(crate) inv_inertia: Real,
+    pub(crate) friction: Real,
+    pub(crate) restitution: Real,
+}
+
+impl Body {
+    /// Build a body from a definition that has passed [`BodyDef::validate`].
+    pub(crate) fn from_def(id: BodyId, def: &BodyDef) -> Body {
+        let (mass, inv_mass, inertia, inv_inertia) = match def.mass {
+            MassSpec::Static => (Real::INFINITY, 0.0, Real::INFINITY, 0.0),
+            MassSpec::Density(d) => {
+                let m = d * def.shape.area();
+                let i = def.shape.inertia(m);
+                (m, 1.0 / m, i, 1.0 / i)
+            }
+            MassSpec::Mass(m) => {
+                let i = def.shape.inertia(m);
+                (m, 1.0 / m, i, 1.0 / i)
+            }
+        };
+        let is_static = inv_mass == 0.0;
+        Body {
+            id,
+            shape: def.shape,
+            position: def.position,
+            angle: def.angle,
+            rot: Rot::from_angle(def.angle),
+            linear_velocity: if is_static {
+                Vec2::ZERO
+            } else {
+                def.linear_velocity
+            },
+            angular_velocity: if is_static { 0.0 } else { def.angular_velocity },
+            force: Vec2::ZERO,
+            torque: 0.0,
+            mass,
+            inv_mass,
+            inertia,
+            inv_inertia,
+            friction: def.friction,
+            restitution: def.restitution,
+        }
+    }
+
+    /// This body's id.
+    pub fn id(&self) -> BodyId {
+        self.id
+    }
+    /// Collision shape, body coordinates.
+    pub fn shape(&self) -> &Shape {
+        &self.shape
+    }
+    /// Centre of mass, world coordinates (m).
+    pub fn position(&self) -> Vec2 {
+        self.position
+    }
+    /// Orientation (rad), accumulated: not wrapped to (-pi, pi].
+    pub fn angle(&self) -> Real {
+        self.angle
+    }
+    /// Orientation as a rotation.
+    pub fn rotation(&self) -> Rot {
+        self.rot
+    }
+    /// Body-to-world transform.
+    pub fn transform(&self) -> Transform {
+        Transform {
+            p: self.position,
+            q: self.rot,
+        }
+    }
+    /// Linear velocity (m/s).
+    pub fn linear_velocity(&self) -> Vec2 {
+        self.linear_velocity
+    }
+    /// Angular velocity (rad/s).
+    pub fn angular_velocity(&self) -> Real {
+        self.angular_velocity
+    }
+    /// Force accumulated for the next step (N); cleared after each step.
+    pub fn force(&self) -> Vec2 {
+        self.force
+    }
+    /// Torque accumulated for the next step (N m); cleared after each step.
+    pub fn torque(&self) -> Real {
+        self.torque
+    }
+    /// Mass (kg); infinite for static bodies.
+    pub fn mass(&self) -> Real {
+        self.mass
+    }
+    /// 1 / mass (1/kg); zero for static bodies.
+    pub fn inv_mass(&self) -> Real {
+        self.inv_mass
+    }
+    /// Moment of inertia about the centre of mass (kg m^2); infinite for static bodies.
+    pub fn inertia(&self) -> Real {
+        self.inertia
+    }
+    /// Friction coefficient.
+    pub fn friction(&self) -> Real {
+        self.friction
+    }
+    /// Coefficient of restitution.
+    pub fn restitution(&self) -> Real {
+        self.restitution
+    }
+    /// True for immovable bodies.
+    pub fn is_static(&self) -> bool {
+        self.inv_mass == 0.0
+    }
+    /// Kinetic energy, translational plus rotational (J).
+    pub fn kinetic_energy(&self) -> Real {
+        if self.is_static() {
+            return 0.0;
+        }
+        0.5 * self.mass * self.linear_velocity.length_squared()
+            + 0.5 * self.inertia * self.angular_velocity * self.angular_velocity
+    }
+    /// The definition that would recreate this body in its current state.
+    pub fn to_def(&self) -> BodyDef {
+        BodyDef {
+            shape: self.shape,
+            position: self.position,
+            angle: self.angle,
+            linear_velocity: self.linear_velocity,
+            angular_velocity: self.angular_velocity,
+            mass: if self.is_static() {
+                MassSpec::Static
+            } else {
+                MassSpec::Mass(self.mass)
+            },
+            friction: self.friction,
+            restitution: self.restitution,
+        }
+    }
+    /// True when every number in the body's state is finite.
+    pub fn is_finite(&self) -> bool {
+        is_finite_vec(self.position)
+            && self.angle.is_finite()
+            && is_finite_vec(self.linear_velocity)
+            && self.angular_velocity.is_finite()
+    }
+}

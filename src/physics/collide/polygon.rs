@@ -1,0 +1,200 @@
+//! Convex polygon against convex polygon (rectangles today) by the separating axis test,
+//! a reference face, and an incident edge clipped to the reference face's side planes.
+//!
+//! This is the appendix's box-box routine (its f_A, f_B face separations, reference and
+//! incident edges, two clips and projection) written for any convex polygon, so that
+//! general polygons reuse it unchanged.
+
+use super::{FeatureId, Manifold, ManifoldPoint};
+use crate::physics::math::{Real, Rot, Transform, Vec2};
+
+/// Most vertices a polygon may have.
+pub const MAX_VERTICES: usize = 8;
+
+/// A convex polygon in body coordinates, counter-clockwise, with outward unit edge normals.
+/// Edge `i` runs from `vertices[i]` to `vertices[(i + 1) % count]` and has `normals[i]`.
+#[derive(Clone, Copy, Debug)]
+pub struct Polygon {
+    /// Vertices, counter-clockwise (m).
+    pub vertices: [Vec2; MAX_VERTICES],
+    /// Outward unit normal of each edge.
+    pub normals: [Vec2; MAX_VERTICES],
+    /// Number of vertices in use.
+    pub count: usize,
+}
+
+impl Polygon {
+    /// The rectangle with half extents `h`, centred on the origin.
+    /// Edges: 0 bottom, 1 right, 2 top, 3 left.
+    pub fn rect(h: Vec2) -> Polygon {
+        let mut vertices = [Vec2::ZERO; MAX_VERTICES];
+        let mut normals = [Vec2::ZERO; MAX_VERTICES];
+        vertices[..4].copy_from_slice(&[
+            Vec2::new(-h.x, -h.y),
+            Vec2::new(h.x, -h.y),
+            Vec2::new(h.x, h.y),
+            Vec2::new(-h.x, h.y),
+        ]);
+        normals[..4].copy_from_slice(&[
+            Vec2::new(0.0, -1.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(0.0, 1.0),
+            Vec2::new(-1.0, 0.0),
+        ]);
+        Polygon {
+            vertices,
+            normals,
+            count: 4,
+        }
+    }
+
+    /// The polygon moved by `xf` (vertices transformed, normals rotated).
+    fn transformed(&self, xf: Transform) -> Polygon {
+        let mut out = *self;
+        for i in 0..self.count {
+            out.vertices[i] = xf.apply(self.vertices[i]);
+            out.normals[i] = xf.q.rotate(self.normals[i]);
+        }
+        out
+    }
+}
+
+/// The edge of `p1` along which `p2` is farthest out, and that separation (m).
+///
+/// For each edge normal n_i of p1 the separation is min_j n_i . (v2_j - v1_i): the appendix's
+/// f_A components, generalised. The largest is the best separating-axis candidate.
+fn max_separation(p1: &Polygon, p2: &Polygon) -> (usize, Real) {
+    let mut best_edge = 0;
+    let mut best = Real::NEG_INFINITY;
+    for i in 0..p1.count {
+        let n = p1.normals[i];
+        let v = p1.vertices[i];
+        let mut si = Real::INFINITY;
+        for j in 0..p2.count {
+            si = si.min(n.dot(p2.vertices[j] - v));
+        }
+        if si > best {
+            best = si;
+            best_edge = i;
+        }
+    }
+    (best_edge, best)
+}
+
+/// Keep the part of segment `seg` with `dot(n, v) <= offset`, each end staying in its slot.
+/// Returns None when nothing of the segment is left (appendix eqs. 29-44).
+fn clip_segment(seg: [Vec2; 2], n: Vec2, offset: Real) -> Option<[Vec2; 2]> {
+    let d0 = n.dot(seg[0]) - offset;
+    let d1 = n.dot(seg[1]) - offset;
+    match (d0 <= 0.0, d1 <= 0.0) {
+        (true, true) => Some(seg),
+        (false, false) => None,
+        (in0, _) => {
+            let t = d0 / (d0 - d1);
+            let cut = seg[0] + t * (seg[1] - seg[0]);
+            Some(if in0 { [seg[0], cut] } else { [cut, seg[1]] })
+        }
+    }
+}
+
+/// Contact manifold between convex polygons `a` at `xf_a` and `b` at `xf_b`, keeping points
+/// whose separation is at most `margin` metres. The normal points from A to B.
+pub fn collide_polygons(
+    a: &Polygon,
+    xf_a: Transform,
+    b: &Polygon,
+    xf_b: Transform,
+    margin: Real,
+) -> Manifold {
+    // Work in A's frame, with B placed relative to A: the subtraction of the two positions
+    // happens once, so worlds far from the origin lose as little precision as f32 allows.
+    let rel = Transform {
+        p: xf_a.q.inv_rotate(xf_b.p - xf_a.p),
+        q: Rot {
+            c: xf_a.q.c * xf_b.q.c + xf_a.q.s * xf_b.q.s,
+            s: xf_a.q.c * xf_b.q.s - xf_a.q.s * xf_b.q.c,
+        },
+    };
+    let pa = *a;
+    let pb = b.transformed(rel);
+
+    let (edge_a, sep_a) = max_separation(&pa, &pb);
+    if sep_a > margin {
+        return Manifold::EMPTY;
+    }
+    let (edge_b, sep_b) = max_separation(&pb, &pa);
+    if sep_b > margin {
+        return Manifold::EMPTY;
+    }
+
+    // Prefer A's face unless B's is clearly better, so the reference face does not flicker
+    // between near-equal candidates from one step to the next (the appendix's eq. 79 idea).
+    const RELATIVE_TOL: Real = 0.98;
+    const ABSOLUTE_TOL: Real = 0.0005;
+    let flip = sep_b > RELATIVE_TOL * sep_a + ABSOLUTE_TOL;
+    let (reference, incident, ref_edge) = if flip {
+        (&pb, &pa, edge_b)
+    } else {
+        (&pa, &pb, edge_a)
+    };
+
+    // Incident edge: the edge of the other polygon whose normal is most anti-parallel to the
+    // reference normal.
+    let n = reference.normals[ref_edge];
+    let mut inc_edge = 0;
+    let mut min_dot = Real::INFINITY;
+    for i in 0..incident.count {
+        let d = n.dot(incident.normals[i]);
+        if d < min_dot {
+            min_dot = d;
+            inc_edge = i;
+        }
+    }
+
+    let i1 = inc_edge;
+    let i2 = (inc_edge + 1) % incident.count;
+    let seg = [incident.vertices[i1], incident.vertices[i2]];
+
+    // Side planes of the reference edge: its tangent t, bounded by its two end vertices.
+    let r1 = reference.vertices[ref_edge];
+    let r2 = reference.vertices[(ref_edge + 1) % reference.count];
+    let t = (r2 - r1).normalize();
+    let Some(seg) = clip_segment(seg, -t, -t.dot(r1)) else {
+        return Manifold::EMPTY;
+    };
+    let Some(seg) = clip_segment(seg, t, t.dot(r2)) else {
+        return Manifold::EMPTY;
+    };
+
+    // Project onto the reference face (appendix eqs. 45-48), keeping points within the margin.
+    let mut manifold = Manifold::EMPTY;
+    let normal_in_a = if flip { -n } else { n };
+    manifold.normal = xf_a.q.rotate(normal_in_a);
+    // The incident edge runs against the reference edge: its start (slot 0) lies towards the
+    // reference edge's end vertex and its end (slot 1) towards the start vertex. A point is
+    // named by that pair of vertices, written (A's vertex, B's vertex) whichever polygon is the
+    // reference, so the id survives the reference face switching sides between steps.
+    let r_ref = [(ref_edge + 1) % reference.count, ref_edge];
+    let r_inc = [i1, i2];
+    for (k, v) in seg.into_iter().enumerate() {
+        let separation = n.dot(v - r1);
+        if separation > margin {
+            continue;
+        }
+        // Halfway between the incident vertex and its projection on the reference face.
+        let mid = v - (0.5 * separation) * n;
+        let (va, vb) = if flip {
+            (r_inc[k], r_ref[k])
+        } else {
+            (r_ref[k], r_inc[k])
+        };
+        let id: FeatureId = (va as u16) << 8 | vb as u16;
+        manifold.points[manifold.count] = ManifoldPoint {
+            point: xf_a.apply(mid),
+            separation,
+            id,
+        };
+        manifold.count += 1;
+    }
+    manifold
+}

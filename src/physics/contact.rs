@@ -1,0 +1,101 @@
+//! Persistent contacts: one per touching (or about to touch) pair of bodies, carrying the
+//! solver's accumulated impulses from one step to the next so the next solve can warm start.
+
+use super::body::BodyId;
+use super::collide::FeatureId;
+use super::math::{Real, Vec2};
+use super::solver::soft_step::Softness;
+
+/// One contact point and the solver state attached to it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct ContactPoint {
+    /// Which features produced the point (matches points across steps).
+    pub id: FeatureId,
+    /// World position at collision time (m).
+    pub point: Vec2,
+    /// Signed separation at collision time (m); negative = overlap.
+    pub separation: Real,
+    /// Contact point relative to body A's centre, world frame (m).
+    pub anchor_a: Vec2,
+    /// Contact point relative to body B's centre, world frame (m).
+    pub anchor_b: Vec2,
+    /// Accumulated normal impulse (N s); never negative: contacts only push.
+    pub normal_impulse: Real,
+    /// Accumulated friction impulse (N s); within the Coulomb cone +-mu Pn.
+    pub tangent_impulse: Real,
+    /// Largest normal impulse applied in this step (N s): restitution only acts where the
+    /// contact actually pushed.
+    pub max_normal_impulse: Real,
+    /// Effective mass along the normal, 1 / (1/mA + 1/mB + (rA x n)^2/IA + (rB x n)^2/IB) (appendix eq. 56).
+    pub normal_mass: Real,
+    /// Effective mass along the tangent (appendix eq. 57).
+    pub tangent_mass: Real,
+    /// Soft step: separation minus the anchors' contribution, so the current separation is
+    /// (dpB - dpA + qB rB - qA rA) . n + adjusted_separation.
+    pub adjusted_separation: Real,
+    /// Normal relative velocity before the solve (m/s): the approach speed restitution reverses.
+    pub relative_velocity: Real,
+    /// Sequential solver: target normal velocity (m/s) from position bias or restitution.
+    pub bias: Real,
+}
+
+/// A contact between two bodies: a manifold plus solver state.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Contact {
+    /// Pair key (lower slot index first); contacts are kept sorted by it.
+    pub key: u64,
+    /// Slot index of body A (the lower index).
+    pub a: u32,
+    /// Slot index of body B.
+    pub b: u32,
+    /// Unit normal from A to B.
+    pub normal: Vec2,
+    /// Mixed friction coefficient.
+    pub friction: Real,
+    /// Mixed restitution coefficient.
+    pub restitution: Real,
+    /// True when A or B is static (the soft step makes those contacts stiffer).
+    pub touches_static: bool,
+    /// The points; the first `count` are live.
+    pub points: [ContactPoint; 2],
+    /// Number of live points.
+    pub count: usize,
+    /// Soft step: this contact's spring for the current step.
+    pub softness: Softness,
+}
+
+impl Contact {
+    /// The tangent direction: the normal turned clockwise, t = n x z (appendix, step 2).
+    #[inline]
+    pub fn tangent(&self) -> Vec2 {
+        Vec2::new(self.normal.y, -self.normal.x)
+    }
+}
+
+/// A read-only view of one contact point, for callers of `World::contacts`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactPointInfo {
+    /// World position (m).
+    pub point: Vec2,
+    /// Separation at the start of the last step (m); negative = overlap.
+    pub separation: Real,
+    /// Normal impulse applied in the last step (N s).
+    pub normal_impulse: Real,
+    /// Friction impulse applied in the last step (N s).
+    pub tangent_impulse: Real,
+}
+
+/// A read-only view of one contact between two bodies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactInfo {
+    /// Body A.
+    pub body_a: BodyId,
+    /// Body B.
+    pub body_b: BodyId,
+    /// Unit normal from A to B.
+    pub normal: Vec2,
+    /// Up to two points; the first `count` are live.
+    pub points: [ContactPointInfo; 2],
+    /// Number of live points.
+    pub count: usize,
+}

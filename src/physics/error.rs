@@ -1,0 +1,85 @@
+//! Typed errors for input the engine refuses.
+
+use super::math::Real;
+use thiserror::Error;
+
+/// Why the engine refused a call. Every variant names the field and the offending value,
+/// so a message built from it tells the user exactly what to fix.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum PhysicsError {
+    /// A number that must be finite was NaN or infinite.
+    #[error("{field} must be a finite number, got {value}")]
+    NotFinite {
+        /// The field, e.g. `position.x`.
+        field: &'static str,
+        /// The value that was given.
+        value: Real,
+    },
+    /// A number was outside the range the engine can simulate.
+    #[error("{field} = {value} is out of range: {expected}")]
+    OutOfRange {
+        /// The field, e.g. `friction`.
+        field: &'static str,
+        /// The value that was given.
+        value: Real,
+        /// The accepted range, in words, e.g. `must be >= 0`.
+        expected: &'static str,
+    },
+    /// A body id that does not (or no longer) name a body in this World.
+    #[error("no body with id {0}")]
+    UnknownBody(super::body::BodyId),
+    /// The World already holds as many bodies as a body id can address.
+    #[error("the world is full ({0} bodies)")]
+    Full(usize),
+}
+
+/// Check that `value` is finite, naming `field` if not.
+pub(crate) fn finite(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(PhysicsError::NotFinite { field, value })
+    }
+}
+
+/// Check that `value` is finite and strictly positive.
+pub(crate) fn positive(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
+    finite(field, value)?;
+    if value > 0.0 {
+        Ok(value)
+    } else {
+        Err(PhysicsError::OutOfRange {
+            field,
+            value,
+            expected: "must be > 0",
+        })
+    }
+}
+
+/// Check that `value` is finite and not negative.
+pub(crate) fn non_negative(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
+    finite(field, value)?;
+    if value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(PhysicsError::OutOfRange {
+            field,
+            value,
+            expected: "must be >= 0",
+        })
+    }
+}
+
+/// Check that `value` is finite and within `[0, 1]`.
+pub(crate) fn unit_interval(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
+    finite(field, value)?;
+    if (0.0..=1.0).contains(&value) {
+        Ok(value)
+    } else {
+        Err(PhysicsError::OutOfRange {
+            field,
+            value,
+            expected: "must be within [0, 1]",
+        })
+    }
+}

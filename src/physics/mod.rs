@@ -1,0 +1,23 @@
+//! The engine: a from-scratch 2D rigid-body World.
+//!
+//! No async, no networking, no I/O: this module builds with `--no-default-features` and
+//! depends on glam, serde and thiserror only. Units: metres, seconds, radians, kilograms.
+
+pub mod body;
+pub(crate) mod broad_phase;
+pub mod collide;
+pub mod contact;
+pub mod error;
+pub mod math;
+pub mod settings;
+pub mod shape;
+pub(crate) mod solver;
+pub mod world;
+
+pub use body::{Body, BodyDef, BodyId, MassSpec};
+pub use contact::{ContactInfo, ContactPointInfo};
+pub use error::PhysicsError;
+pub use math::{vec2, Real, Rot, Transform, Vec2};
+pub use settings::{Mixing, Settings, SolverKind};
+pub use shape::{Aabb, Shape};
+pub use world::World;

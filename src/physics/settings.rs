@@ -1,0 +1,187 @@
+//! Every tunable of the engine, in one place, with documented defaults.
+
+use super::error::{finite, non_negative, positive, PhysicsError};
+use super::math::Real;
+use serde::{Deserialize, Serialize};
+
+/// Which contact solver `World::step` runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SolverKind {
+    /// The appendix's solver (box2d-lite lineage): sequential impulses with a Baumgarte
+    /// velocity bias, `iterations` passes per step.
+    Sequential,
+    /// Box2D v3-style soft step: `substeps` substeps of soft contacts, a relax pass and a
+    /// restitution pass, with speculative contacts.
+    SoftStep,
+}
+
+/// How two bodies' coefficients combine into the pair's coefficient.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mixing {
+    /// sqrt(a b): Box2D's rule; zero if either is zero.
+    GeometricMean,
+    /// a b: the appendix's friction rule (P_tmax = muA muB Pn).
+    Product,
+    /// min(a, b).
+    Min,
+    /// max(a, b).
+    Max,
+}
+
+impl Mixing {
+    /// The pair coefficient for coefficients `a` and `b`.
+    #[inline]
+    pub fn mix(self, a: Real, b: Real) -> Real {
+        match self {
+            Mixing::GeometricMean => (a * b).sqrt(),
+            Mixing::Product => a * b,
+            Mixing::Min => a.min(b),
+            Mixing::Max => a.max(b),
+        }
+    }
+}
+
+/// The engine's tunables. `Settings::default()` is the soft-step solver with Box2D v3's
+/// defaults; `Settings::sequential()` is the appendix / box2d-lite configuration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Settings {
+    /// Which solver runs. Default: soft step.
+    pub solver: SolverKind,
+    /// Sequential solver: velocity iterations per step. Default 10 (the appendix suggests 8-10).
+    pub iterations: u32,
+    /// Soft step: substeps per step. Default 4 (Box2D v3).
+    pub substeps: u32,
+    /// Penetration allowed before position correction pushes back (m). Keeps resting contacts
+    /// alive from one step to the next. Default 0.005 (Box2D v3); box2d-lite uses 0.01.
+    pub linear_slop: Real,
+    /// Sequential solver: fraction of the penetration beyond the slop removed per step
+    /// (Baumgarte factor, bias = factor / dt * penetration). Default 0.2 (box2d-lite).
+    pub bias_factor: Real,
+    /// Start each step's solve from the previous step's impulses (matched by feature id).
+    pub warm_starting: bool,
+    /// Clamp the running total of each impulse rather than each increment (box2d-lite's
+    /// "accumulate impulses"). Sequential solver only; the soft step always accumulates.
+    pub accumulate_impulses: bool,
+    /// Friction mixing rule. Default: geometric mean.
+    pub friction_mixing: Mixing,
+    /// Restitution mixing rule. Default: geometric mean, e = sqrt(eA eB).
+    pub restitution_mixing: Mixing,
+    /// Approach speed below which restitution is ignored (m/s), so resting contacts do not
+    /// jitter. Default 1 m/s (Box2D).
+    pub restitution_threshold: Real,
+    /// Soft step: contact stiffness (Hz), capped at a quarter of the substep rate. Default 30.
+    pub contact_hertz: Real,
+    /// Soft step: stiffen a contact beyond `contact_hertz` when the load it carried last step
+    /// would sink it deeper than `linear_slop` (k >= F / slop), up to `max_contact_hertz_ratio`
+    /// times the substep rate. Keeps tall stacks from buckling on soft springs. Default on;
+    /// off gives Box2D v3's fixed-stiffness contacts.
+    pub load_aware_stiffness: bool,
+    /// Soft step: ceiling for load-aware stiffening, as a fraction of the substep rate. Default 0.5.
+    pub max_contact_hertz_ratio: Real,
+    /// Soft step: contact damping ratio (dimensionless). Default 10.
+    pub contact_damping_ratio: Real,
+    /// Soft step: the fastest overlap recovery (m/s). Default 3 (Box2D's contact push-out).
+    pub max_push_out_speed: Real,
+    /// Soft step: contacts are created this far before the surfaces touch (m), plus how far
+    /// the bodies can move in one step. Default 4 x linear slop = 0.02.
+    pub speculative_distance: Real,
+    /// Soft step: relax passes (no bias) after each substep's position update. Default 1.
+    pub relax_iterations: u32,
+    /// Speed cap for any body (m/s), so a bad impulse cannot run away. Default 400 (Box2D: 4 m per step at 100 Hz).
+    pub max_linear_speed: Real,
+    /// Largest rotation a body may make in one (sub)step (rad). Default 0.25 pi (Box2D).
+    pub max_rotation: Real,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings::soft_step()
+    }
+}
+
+impl Settings {
+    /// Box2D v3's soft-step defaults: 4 substeps, 30 Hz contacts, damping ratio 10, push-out 3 m/s.
+    pub fn soft_step() -> Settings {
+        Settings {
+            solver: SolverKind::SoftStep,
+            iterations: 10,
+            substeps: 4,
+            linear_slop: 0.005,
+            bias_factor: 0.2,
+            warm_starting: true,
+            accumulate_impulses: true,
+            friction_mixing: Mixing::GeometricMean,
+            restitution_mixing: Mixing::GeometricMean,
+            restitution_threshold: 1.0,
+            contact_hertz: 30.0,
+            load_aware_stiffness: true,
+            max_contact_hertz_ratio: 0.5,
+            contact_damping_ratio: 10.0,
+            max_push_out_speed: 3.0,
+            speculative_distance: 0.02,
+            relax_iterations: 1,
+            max_linear_speed: 400.0,
+            max_rotation: 0.25 * super::math::PI,
+        }
+    }
+
+    /// The appendix / box2d-lite configuration: sequential impulses, 10 iterations, allowed
+    /// penetration 0.01 m, bias factor 0.2, warm starting and accumulated impulses on.
+    pub fn sequential() -> Settings {
+        Settings {
+            solver: SolverKind::Sequential,
+            linear_slop: 0.01,
+            ..Settings::soft_step()
+        }
+    }
+
+    /// Refuse settings the solver cannot run with, naming the field and the value.
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        let count = |field: &'static str, v: u32, max: u32| {
+            if (1..=max).contains(&v) {
+                Ok(())
+            } else {
+                Err(PhysicsError::OutOfRange {
+                    field,
+                    value: v as Real,
+                    expected: if max == 64 {
+                        "must be within 1..=64"
+                    } else {
+                        "must be within 1..=1000"
+                    },
+                })
+            }
+        };
+        count("iterations", self.iterations, 1000)?;
+        count("substeps", self.substeps, 64)?;
+        if self.relax_iterations > 64 {
+            return Err(PhysicsError::OutOfRange {
+                field: "relax_iterations",
+                value: self.relax_iterations as Real,
+                expected: "must be within 0..=64",
+            });
+        }
+        non_negative("linear_slop", self.linear_slop)?;
+        non_negative("bias_factor", self.bias_factor)?;
+        if self.bias_factor > 1.0 {
+            return Err(PhysicsError::OutOfRange {
+                field: "bias_factor",
+                value: self.bias_factor,
+                expected: "must be within [0, 1]",
+            });
+        }
+        non_negative("restitution_threshold", self.restitution_threshold)?;
+        positive("contact_hertz", self.contact_hertz)?;
+        non_negative("contact_damping_ratio", self.contact_damping_ratio)?;
+        non_negative("max_contact_hertz_ratio", self.max_contact_hertz_ratio)?;
+        positive("max_push_out_speed", self.max_push_out_speed)?;
+        non_negative("speculative_distance", self.speculative_distance)?;
+        positive("max_linear_speed", self.max_linear_speed)?;
+        positive("max_rotation", self.max_rotation)?;
+        finite("max_rotation", self.max_rotation)?;
+        Ok(())
+    }
+}

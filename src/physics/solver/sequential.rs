@@ -1,0 +1,116 @@
+//! The appendix's solver (box2d-lite lineage): sequential impulses with a Baumgarte bias.
+//!
+//! Per step: compute each point's normal and tangent mass and its target normal velocity
+//! (position bias or restitution), warm start from last step's impulses, then sweep all
+//! points `iterations` times, each time solving the normal impulse (clamped so bodies only
+//! push) and the friction impulse (clamped to the Coulomb cone).
+
+use super::{apply_impulse, pair_mut, SolverBody};
+use crate::physics::contact::Contact;
+use crate::physics::math::{cross, cross_sv, Real};
+use crate::physics::settings::Settings;
+
+/// Effective mass 1 / (1/mA + 1/mB + (rA x d)^2 / IA + (rB x d)^2 / IB) along direction `d`
+/// (appendix eqs. 56-57, with r.r - (r.d)^2 = (r x d)^2 for unit d).
+#[inline]
+pub(crate) fn effective_mass(
+    a: &SolverBody,
+    b: &SolverBody,
+    ra: crate::physics::math::Vec2,
+    rb: crate::physics::math::Vec2,
+    d: crate::physics::math::Vec2,
+) -> Real {
+    let rna = cross(ra, d);
+    let rnb = cross(rb, d);
+    let k = a.inv_mass + b.inv_mass + a.inv_inertia * rna * rna + b.inv_inertia * rnb * rnb;
+    if k > 0.0 {
+        1.0 / k
+    } else {
+        0.0
+    }
+}
+
+/// Prepare, warm start and iterate. Velocities in `bodies` are updated in place.
+pub(crate) fn solve(
+    bodies: &mut [SolverBody],
+    contacts: &mut [Contact],
+    settings: &Settings,
+    dt: Real,
+) {
+    let inv_dt = 1.0 / dt;
+    for c in contacts.iter_mut() {
+        let n = c.normal;
+        let t = c.tangent();
+        let (a, b) = pair_mut(bodies, c.a, c.b);
+        for p in &mut c.points[..c.count] {
+            let (ra, rb) = (p.anchor_a, p.anchor_b);
+            p.normal_mass = effective_mass(a, b, ra, rb, n);
+            p.tangent_mass = effective_mass(a, b, ra, rb, t);
+            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
+            let vn = dv.dot(n);
+            p.relative_velocity = vn;
+            let mut bias = if p.separation > 0.0 {
+                // Speculative point: the bodies may close the gap this step, no more.
+                -p.separation * inv_dt
+            } else {
+                // Position correction (appendix eq. 70): bias = beta / dt * max(0, -separation - slop).
+                -settings.bias_factor * inv_dt * (p.separation + settings.linear_slop).min(0.0)
+            };
+            // Restitution: aim for -e times the approach speed when it is fast enough and the
+            // gap closes within this step.
+            if c.restitution > 0.0
+                && vn < -settings.restitution_threshold
+                && p.separation + vn * dt < 0.0
+            {
+                bias = bias.max(-c.restitution * vn);
+            }
+            p.bias = bias;
+            if settings.warm_starting {
+                apply_impulse(a, b, ra, rb, p.normal_impulse * n + p.tangent_impulse * t);
+            } else {
+                p.normal_impulse = 0.0;
+                p.tangent_impulse = 0.0;
+            }
+        }
+    }
+
+    for _ in 0..settings.iterations {
+        for c in contacts.iter_mut() {
+            let n = c.normal;
+            let t = c.tangent();
+            let (a, b) = pair_mut(bodies, c.a, c.b);
+            for p in &mut c.points[..c.count] {
+                let (ra, rb) = (p.anchor_a, p.anchor_b);
+
+                // Normal impulse: drive the normal velocity to the bias, only ever pushing.
+                let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
+                let vn = dv.dot(n);
+                let mut dpn = p.normal_mass * (-vn + p.bias);
+                if settings.accumulate_impulses {
+                    let old = p.normal_impulse;
+                    p.normal_impulse = (old + dpn).max(0.0);
+                    dpn = p.normal_impulse - old;
+                } else {
+                    dpn = dpn.max(0.0);
+                    p.normal_impulse = dpn;
+                }
+                apply_impulse(a, b, ra, rb, dpn * n);
+
+                // Friction impulse: stop sliding, within |Pt| <= mu Pn (appendix eq. 60).
+                let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
+                let vt = dv.dot(t);
+                let mut dpt = -p.tangent_mass * vt;
+                let max_pt = c.friction * p.normal_impulse;
+                if settings.accumulate_impulses {
+                    let old = p.tangent_impulse;
+                    p.tangent_impulse = (old + dpt).clamp(-max_pt, max_pt);
+                    dpt = p.tangent_impulse - old;
+                } else {
+                    dpt = dpt.clamp(-max_pt, max_pt);
+                    p.tangent_impulse = dpt;
+                }
+                apply_impulse(a, b, ra, rb, dpt * t);
+            }
+        }
+    }
+}

@@ -1,0 +1,307 @@
+//! The soft-step solver, after Erin Catto's Box2D v3 "Solver2D" write-ups.
+//!
+//! Per step: prepare contacts once; then for each of `substeps` substeps of length h:
+//! integrate velocities, warm start, solve contacts as soft constraints (with bias),
+//! integrate positions, relax (solve again without bias). After the substeps, one
+//! restitution pass. Contacts are springs tuned in hertz and damping ratio rather than a
+//! Baumgarte factor, so their stiffness does not depend on the step or iteration count; the
+//! push-out speed is capped; and speculative points (separation > 0) only let the bodies
+//! close the gap in one substep, which stops fast bodies at the surface.
+
+use super::sequential::effective_mass;
+use super::{
+    apply_impulse, integrate_positions, integrate_velocities, pair_mut, Limits, SolverBody,
+};
+use crate::physics::contact::Contact;
+use crate::physics::math::{cross_sv, Real, PI};
+use crate::physics::settings::Settings;
+
+/// Soft constraint coefficients for a spring of `hertz` with damping ratio `zeta`, stepped at h.
+///
+/// With omega = 2 pi f: bias_rate = omega / (2 zeta + h omega), and the impulse is
+/// -m_eff mass_scale (vn + bias_rate s) - impulse_scale P_accumulated, where
+/// mass_scale = h omega (2 zeta + h omega) / (1 + h omega (2 zeta + h omega)) and
+/// impulse_scale = 1 / (1 + h omega (2 zeta + h omega)) (Catto, "Solver2D", soft step).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Softness {
+    pub bias_rate: Real,
+    pub mass_scale: Real,
+    pub impulse_scale: Real,
+}
+
+impl Softness {
+    /// A rigid constraint: full correction, no compliance.
+    pub const RIGID: Softness = Softness {
+        bias_rate: 0.0,
+        mass_scale: 1.0,
+        impulse_scale: 0.0,
+    };
+
+    /// Coefficients for stiffness `hertz` (Hz), damping ratio `zeta`, substep `h` (s).
+    pub fn new(hertz: Real, zeta: Real, h: Real) -> Softness {
+        if hertz == 0.0 {
+            return Softness {
+                bias_rate: 0.0,
+                mass_scale: 1.0,
+                impulse_scale: 0.0,
+            };
+        }
+        let omega = 2.0 * PI * hertz;
+        let a1 = 2.0 * zeta + h * omega;
+        let a2 = h * omega * a1;
+        let a3 = 1.0 / (1.0 + a2);
+        Softness {
+            bias_rate: omega / a1,
+            mass_scale: a2 * a3,
+            impulse_scale: a3,
+        }
+    }
+}
+
+/// Run one full step of `dt` seconds on `bodies` and `contacts`.
+pub(crate) fn solve(
+    bodies: &mut [SolverBody],
+    contacts: &mut [Contact],
+    settings: &Settings,
+    dt: Real,
+    limits: Limits,
+) {
+    let substeps = settings.substeps.max(1);
+    let h = dt / substeps as Real;
+    let inv_h = 1.0 / h;
+    // A spring stiffer than a quarter of the substep rate is not resolved by the substep.
+    let hertz = settings.contact_hertz.min(0.25 * inv_h);
+    let stiffness = Stiffness {
+        hertz,
+        max_hertz: if settings.load_aware_stiffness {
+            settings.max_contact_hertz_ratio * inv_h
+        } else {
+            0.0
+        },
+        zeta: settings.contact_damping_ratio,
+        slop: settings.linear_slop.max(Real::EPSILON),
+        h,
+    };
+
+    prepare(bodies, contacts, settings.warm_starting, &stiffness);
+
+    for _ in 0..substeps {
+        integrate_velocities(bodies, h, limits);
+        if settings.warm_starting {
+            warm_start(bodies, contacts);
+        } else {
+            for c in contacts.iter_mut() {
+                for p in &mut c.points[..c.count] {
+                    p.normal_impulse = 0.0;
+                    p.tangent_impulse = 0.0;
+                }
+            }
+        }
+        solve_contacts(bodies, contacts, inv_h, true, settings.max_push_out_speed);
+        integrate_positions(bodies, h, limits);
+        for _ in 0..settings.relax_iterations {
+            solve_contacts(bodies, contacts, inv_h, false, settings.max_push_out_speed);
+        }
+    }
+    restitution(bodies, contacts, settings.restitution_threshold);
+}
+
+/// How stiff contacts are made this step.
+struct Stiffness {
+    /// Base stiffness (Hz); contacts with a static body get twice this.
+    hertz: Real,
+    /// Ceiling for load-aware stiffening (Hz); 0 disables it.
+    max_hertz: Real,
+    /// Damping ratio.
+    zeta: Real,
+    /// Penetration the load may cause at rest (m).
+    slop: Real,
+    /// Substep (s).
+    h: Real,
+}
+
+impl Stiffness {
+    /// The contact's spring. A spring of stiffness k = m_eff omega^2 carrying a steady force F
+    /// sinks s = F / k. Box2D fixes omega, so a contact under a tall stack sinks in proportion
+    /// to the weight above it, and a column of such springs buckles (a 20-box stack at 30 Hz
+    /// falls over). Load-aware stiffening raises omega just enough that last step's force sinks
+    /// the contact by no more than the slop: omega^2 >= F / (m_eff slop), within the ceiling.
+    fn softness(&self, c: &Contact) -> Softness {
+        let base = if c.touches_static {
+            2.0 * self.hertz
+        } else {
+            self.hertz
+        };
+        let mut hertz = base;
+        if self.max_hertz > base {
+            let mut force: Real = 0.0;
+            let mut mass = Real::INFINITY;
+            for p in &c.points[..c.count] {
+                force = force.max(p.normal_impulse / self.h);
+                mass = mass.min(p.normal_mass);
+            }
+            if force > 0.0 && mass > 0.0 && mass.is_finite() {
+                let omega = (force / (mass * self.slop)).sqrt();
+                hertz = (omega / (2.0 * PI)).clamp(base, self.max_hertz);
+            }
+        }
+        Softness::new(hertz, self.zeta, self.h)
+    }
+}
+
+/// Effective masses, adjusted separations, approach speeds and springs, once per step.
+fn prepare(
+    bodies: &mut [SolverBody],
+    contacts: &mut [Contact],
+    warm_starting: bool,
+    stiffness: &Stiffness,
+) {
+    for c in contacts.iter_mut() {
+        let n = c.normal;
+        let t = c.tangent();
+        let (a, b) = pair_mut(bodies, c.a, c.b);
+        for p in &mut c.points[..c.count] {
+            let (ra, rb) = (p.anchor_a, p.anchor_b);
+            p.normal_mass = effective_mass(a, b, ra, rb, n);
+            p.tangent_mass = effective_mass(a, b, ra, rb, t);
+            p.adjusted_separation = p.separation - (rb - ra).dot(n);
+            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
+            p.relative_velocity = dv.dot(n);
+            p.max_normal_impulse = 0.0;
+            if !warm_starting {
+                p.normal_impulse = 0.0;
+                p.tangent_impulse = 0.0;
+            }
+        }
+        c.softness = stiffness.softness(c);
+    }
+}
+
+/// Apply the accumulated impulses at the start of a substep.
+fn warm_start(bodies: &mut [SolverBody], contacts: &[Contact]) {
+    for c in contacts {
+        let n = c.normal;
+        let t = c.tangent();
+        let (a, b) = pair_mut(bodies, c.a, c.b);
+        for p in &c.points[..c.count] {
+            apply_impulse(
+                a,
+                b,
+                p.anchor_a,
+                p.anchor_b,
+                p.normal_impulse * n + p.tangent_impulse * t,
+            );
+        }
+    }
+}
+
+/// One pass over all contacts: with the soft bias (`use_bias`), or the relax pass without.
+fn solve_contacts(
+    bodies: &mut [SolverBody],
+    contacts: &mut [Contact],
+    inv_h: Real,
+    use_bias: bool,
+    max_push_out: Real,
+) {
+    for c in contacts.iter_mut() {
+        let n = c.normal;
+        let t = c.tangent();
+        let sf = c.softness;
+        let (a, b) = pair_mut(bodies, c.a, c.b);
+        let dp = b.dp - a.dp;
+
+        for p in &mut c.points[..c.count] {
+            let (ra, rb) = (p.anchor_a, p.anchor_b);
+            // Current separation from how far the bodies moved this step.
+            let d = dp + b.dq.rotate(rb) - a.dq.rotate(ra);
+            let s = d.dot(n) + p.adjusted_separation;
+
+            // Soft constraint (Catto): impulse = -m_eff (mass_scale vn + bias) - impulse_scale P,
+            // with bias = mass_scale bias_rate s, capped at the push-out speed.
+            let (bias, mass_scale, impulse_scale) = if s > 0.0 {
+                // Speculative: allow closing the gap in this substep, no more.
+                (s * inv_h, 1.0, 0.0)
+            } else if use_bias {
+                (
+                    (sf.mass_scale * sf.bias_rate * s).max(-max_push_out),
+                    sf.mass_scale,
+                    sf.impulse_scale,
+                )
+            } else {
+                (0.0, 1.0, 0.0)
+            };
+
+            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
+            let vn = dv.dot(n);
+            let impulse =
+                -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
+            let total = (p.normal_impulse + impulse).max(0.0);
+            let applied = total - p.normal_impulse;
+            p.normal_impulse = total;
+            p.max_normal_impulse = p.max_normal_impulse.max(applied);
+            apply_impulse(a, b, ra, rb, applied * n);
+        }
+
+        if c.friction == 0.0 {
+            continue;
+        }
+        for p in &mut c.points[..c.count] {
+            let (ra, rb) = (p.anchor_a, p.anchor_b);
+            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
+            let vt = dv.dot(t);
+            let max_f = c.friction * p.normal_impulse;
+            let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);
+            let applied = total - p.tangent_impulse;
+            p.tangent_impulse = total;
+            apply_impulse(a, b, ra, rb, applied * t);
+        }
+    }
+}
+
+/// Reverse e times the pre-solve approach speed where it exceeded the threshold and the
+/// contact pushed.
+fn restitution(bodies: &mut [SolverBody], contacts: &mut [Contact], threshold: Real) {
+    for c in contacts.iter_mut() {
+        if c.restitution == 0.0 {
+            continue;
+        }
+        let n = c.normal;
+        let e = c.restitution;
+        let (a, b) = pair_mut(bodies, c.a, c.b);
+        for p in &mut c.points[..c.count] {
+            if p.relative_velocity > -threshold || p.max_normal_impulse == 0.0 {
+                continue;
+            }
+            let (ra, rb) = (p.anchor_a, p.anchor_b);
+            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
+            let vn = dv.dot(n);
+            let impulse = -p.normal_mass * (vn + e * p.relative_velocity);
+            let total = (p.normal_impulse + impulse).max(0.0);
+            let applied = total - p.normal_impulse;
+            p.normal_impulse = total;
+            p.max_normal_impulse = p.max_normal_impulse.max(applied);
+            apply_impulse(a, b, ra, rb, applied * n);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn softness_matches_the_spring_damper_closed_form() {
+        // f = 30 Hz, zeta = 10, h = 1/240 s
+        let h: Real = 1.0 / 240.0;
+        let s = Softness::new(30.0, 10.0, h);
+        let omega = 2.0 * PI * 30.0;
+        let a1 = 2.0 * 10.0 + h * omega;
+        assert!((s.bias_rate - omega / a1).abs() < 1e-4);
+        let a2 = h * omega * a1;
+        assert!((s.mass_scale - a2 / (1.0 + a2)).abs() < 1e-6);
+        assert!((s.impulse_scale - 1.0 / (1.0 + a2)).abs() < 1e-6);
+        // a rigid limit: infinitely stiff springs have mass_scale -> 1, impulse_scale -> 0
+        let rigid = Softness::new(1e9, 1.0, h);
+        assert!(rigid.mass_scale > 0.999 && rigid.impulse_scale < 1e-3);
+    }
+}

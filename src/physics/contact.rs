@@ -23,6 +23,9 @@ pub(crate) struct ContactPoint {
     pub normal_impulse: Real,
     /// Accumulated friction impulse (N s); within the Coulomb cone +-mu Pn.
     pub tangent_impulse: Real,
+    /// Everything the normal constraint applied this step, warm start included (N s): the
+    /// contact force times dt, whatever the solver's substeps.
+    pub total_normal_impulse: Real,
     /// Largest normal impulse applied in this step (N s): restitution only acts where the
     /// contact actually pushed.
     pub max_normal_impulse: Real,
@@ -79,9 +82,9 @@ pub struct ContactPointInfo {
     pub point: Vec2,
     /// Separation at the start of the last step (m); negative = overlap.
     pub separation: Real,
-    /// Normal impulse applied in the last step (N s).
+    /// Normal impulse applied over the last step (N s): the contact force is this / dt.
     pub normal_impulse: Real,
-    /// Friction impulse applied in the last step (N s).
+    /// Accumulated friction impulse at the end of the last step (N s; per substep for the soft step).
     pub tangent_impulse: Real,
 }
 

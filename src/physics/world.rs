@@ -289,7 +289,7 @@ impl World {
                 *out = ContactPointInfo {
                     point: p.point,
                     separation: p.separation,
-                    normal_impulse: p.normal_impulse,
+                    normal_impulse: p.total_normal_impulse,
                     tangent_impulse: p.tangent_impulse,
                 };
             }

@@ -160,3 +160,60 @@ mod tests {
         assert_eq!(clamp_speed(Vec2::new(1.0, 2.0), 100.0), Vec2::new(1.0, 2.0));
     }
 }
+
+/// The 2x2 effective-mass matrix of a two-point manifold along the normal:
+/// K_ij = 1/mA + 1/mB + (rA_i x n)(rA_j x n)/IA + (rB_i x n)(rB_j x n)/IB.
+#[inline]
+pub(crate) fn normal_k(
+    a: &SolverBody,
+    b: &SolverBody,
+    ra: [Vec2; 2],
+    rb: [Vec2; 2],
+    n: Vec2,
+) -> [[Real; 2]; 2] {
+    use super::math::cross;
+    let rna = [cross(ra[0], n), cross(ra[1], n)];
+    let rnb = [cross(rb[0], n), cross(rb[1], n)];
+    let m = a.inv_mass + b.inv_mass;
+    let k =
+        |i: usize, j: usize| m + a.inv_inertia * rna[i] * rna[j] + b.inv_inertia * rnb[i] * rnb[j];
+    [[k(0, 0), k(0, 1)], [k(1, 0), k(1, 1)]]
+}
+
+/// Solve the two-point contact LCP exactly: find x >= 0 with w = K x + b >= 0 and x.w = 0,
+/// where x is the new accumulated normal impulse and w the excess normal velocity over the
+/// target. Enumerates the four cases (both active, only 1, only 2, none), as Box2D v2's
+/// block solver does. Solving both points together removes the left/right bias of solving
+/// them one after the other, which otherwise puts a spurious spin into every resting box.
+/// Returns None when K is too ill-conditioned (nearly coincident points); callers then fall
+/// back to solving the points one at a time.
+#[inline]
+pub(crate) fn solve_block_lcp(k: [[Real; 2]; 2], b: [Real; 2]) -> Option<[Real; 2]> {
+    let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+    // Condition check: k11^2 < 1000 det (Box2D's bound on the condition number).
+    if !(k[0][0] * k[0][0] < 1000.0 * det) {
+        return None;
+    }
+    // Case 1: both points push. x = -K^-1 b.
+    let inv_det = 1.0 / det;
+    let x0 = -inv_det * (k[1][1] * b[0] - k[0][1] * b[1]);
+    let x1 = -inv_det * (-k[1][0] * b[0] + k[0][0] * b[1]);
+    if x0 >= 0.0 && x1 >= 0.0 {
+        return Some([x0, x1]);
+    }
+    // Case 2: only point 0 pushes; point 1 separates (w1 >= 0).
+    let x0 = -b[0] / k[0][0];
+    if x0 >= 0.0 && k[1][0] * x0 + b[1] >= 0.0 {
+        return Some([x0, 0.0]);
+    }
+    // Case 3: only point 1 pushes.
+    let x1 = -b[1] / k[1][1];
+    if x1 >= 0.0 && k[0][1] * x1 + b[0] >= 0.0 {
+        return Some([0.0, x1]);
+    }
+    // Case 4: neither pushes.
+    if b[0] >= 0.0 && b[1] >= 0.0 {
+        return Some([0.0, 0.0]);
+    }
+    None
+}

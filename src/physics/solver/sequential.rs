@@ -5,21 +5,15 @@
 //! points `iterations` times, each time solving the normal impulse (clamped so bodies only
 //! push) and the friction impulse (clamped to the Coulomb cone).
 
-use super::{apply_impulse, pair_mut, SolverBody};
-use crate::physics::contact::Contact;
-use crate::physics::math::{cross, cross_sv, Real};
+use super::{apply_impulse, normal_k, pair_mut, solve_block_lcp, SolverBody};
+use crate::physics::contact::{Contact, ContactPoint};
+use crate::physics::math::{cross, cross_sv, Real, Vec2};
 use crate::physics::settings::Settings;
 
 /// Effective mass 1 / (1/mA + 1/mB + (rA x d)^2 / IA + (rB x d)^2 / IB) along direction `d`
 /// (appendix eqs. 56-57, with r.r - (r.d)^2 = (r x d)^2 for unit d).
 #[inline]
-pub(crate) fn effective_mass(
-    a: &SolverBody,
-    b: &SolverBody,
-    ra: crate::physics::math::Vec2,
-    rb: crate::physics::math::Vec2,
-    d: crate::physics::math::Vec2,
-) -> Real {
+pub(crate) fn effective_mass(a: &SolverBody, b: &SolverBody, ra: Vec2, rb: Vec2, d: Vec2) -> Real {
     let rna = cross(ra, d);
     let rnb = cross(rb, d);
     let k = a.inv_mass + b.inv_mass + a.inv_inertia * rna * rna + b.inv_inertia * rnb * rnb;
@@ -37,6 +31,19 @@ pub(crate) fn solve(
     settings: &Settings,
     dt: Real,
 ) {
+    prepare(bodies, contacts, settings, dt);
+    for _ in 0..settings.iterations {
+        iterate(bodies, contacts, settings);
+    }
+    for c in contacts.iter_mut() {
+        for p in &mut c.points[..c.count] {
+            p.total_normal_impulse = p.normal_impulse;
+        }
+    }
+}
+
+/// Effective masses and target velocities (bias), then the warm start.
+fn prepare(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Settings, dt: Real) {
     let inv_dt = 1.0 / dt;
     for c in contacts.iter_mut() {
         let n = c.normal;
@@ -73,15 +80,17 @@ pub(crate) fn solve(
             }
         }
     }
+}
 
-    for _ in 0..settings.iterations {
-        for c in contacts.iter_mut() {
-            let n = c.normal;
-            let t = c.tangent();
-            let (a, b) = pair_mut(bodies, c.a, c.b);
+/// One sweep over every contact point: normal impulse, then friction.
+fn iterate(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Settings) {
+    for c in contacts.iter_mut() {
+        let n = c.normal;
+        let t = c.tangent();
+        let (a, b) = pair_mut(bodies, c.a, c.b);
+        if !(settings.accumulate_impulses && c.count == 2 && block_normal(a, b, &mut c.points, n)) {
             for p in &mut c.points[..c.count] {
                 let (ra, rb) = (p.anchor_a, p.anchor_b);
-
                 // Normal impulse: drive the normal velocity to the bias, only ever pushing.
                 let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
                 let vn = dv.dot(n);
@@ -95,22 +104,53 @@ pub(crate) fn solve(
                     p.normal_impulse = dpn;
                 }
                 apply_impulse(a, b, ra, rb, dpn * n);
-
-                // Friction impulse: stop sliding, within |Pt| <= mu Pn (appendix eq. 60).
-                let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
-                let vt = dv.dot(t);
-                let mut dpt = -p.tangent_mass * vt;
-                let max_pt = c.friction * p.normal_impulse;
-                if settings.accumulate_impulses {
-                    let old = p.tangent_impulse;
-                    p.tangent_impulse = (old + dpt).clamp(-max_pt, max_pt);
-                    dpt = p.tangent_impulse - old;
-                } else {
-                    dpt = dpt.clamp(-max_pt, max_pt);
-                    p.tangent_impulse = dpt;
-                }
-                apply_impulse(a, b, ra, rb, dpt * t);
             }
         }
+        for p in &mut c.points[..c.count] {
+            let (ra, rb) = (p.anchor_a, p.anchor_b);
+
+            // Friction impulse: stop sliding, within |Pt| <= mu Pn (appendix eq. 60).
+            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
+            let vt = dv.dot(t);
+            let mut dpt = -p.tangent_mass * vt;
+            let max_pt = c.friction * p.normal_impulse;
+            if settings.accumulate_impulses {
+                let old = p.tangent_impulse;
+                p.tangent_impulse = (old + dpt).clamp(-max_pt, max_pt);
+                dpt = p.tangent_impulse - old;
+            } else {
+                dpt = dpt.clamp(-max_pt, max_pt);
+                p.tangent_impulse = dpt;
+            }
+            apply_impulse(a, b, ra, rb, dpt * t);
+        }
     }
+}
+
+/// Both normal impulses of a two-point contact at once, each aiming at its bias velocity
+/// (see `solve_block_lcp`). Returns false, having applied nothing, when ill-conditioned.
+fn block_normal(
+    a: &mut SolverBody,
+    b: &mut SolverBody,
+    points: &mut [ContactPoint; 2],
+    n: Vec2,
+) -> bool {
+    let ra = [points[0].anchor_a, points[1].anchor_a];
+    let rb = [points[0].anchor_b, points[1].anchor_b];
+    let k = normal_k(a, b, ra, rb, n);
+    let lambda = [points[0].normal_impulse, points[1].normal_impulse];
+    let mut rhs = [0.0; 2];
+    for i in 0..2 {
+        let vn = (b.v + cross_sv(b.w, rb[i]) - a.v - cross_sv(a.w, ra[i])).dot(n);
+        rhs[i] = vn - (k[i][0] * lambda[0] + k[i][1] * lambda[1]) - points[i].bias;
+    }
+    let Some(x) = solve_block_lcp(k, rhs) else {
+        return false;
+    };
+    for i in 0..2 {
+        let applied = x[i] - lambda[i];
+        points[i].normal_impulse = x[i];
+        apply_impulse(a, b, ra[i], rb[i], applied * n);
+    }
+    true
 }

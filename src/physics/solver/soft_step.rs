@@ -10,10 +10,11 @@
 
 use super::sequential::effective_mass;
 use super::{
-    apply_impulse, integrate_positions, integrate_velocities, pair_mut, Limits, SolverBody,
+    apply_impulse, integrate_positions, integrate_velocities, normal_k, pair_mut, solve_block_lcp,
+    Limits, SolverBody,
 };
-use crate::physics::contact::Contact;
-use crate::physics::math::{cross_sv, Real, PI};
+use crate::physics::contact::{Contact, ContactPoint};
+use crate::physics::math::{cross_sv, Real, Vec2, PI};
 use crate::physics::settings::Settings;
 
 /// Soft constraint coefficients for a spring of `hertz` with damping ratio `zeta`, stepped at h.
@@ -168,6 +169,7 @@ fn prepare(
             let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
             p.relative_velocity = dv.dot(n);
             p.max_normal_impulse = 0.0;
+            p.total_normal_impulse = 0.0;
             if !warm_starting {
                 p.normal_impulse = 0.0;
                 p.tangent_impulse = 0.0;
@@ -178,12 +180,13 @@ fn prepare(
 }
 
 /// Apply the accumulated impulses at the start of a substep.
-fn warm_start(bodies: &mut [SolverBody], contacts: &[Contact]) {
-    for c in contacts {
+fn warm_start(bodies: &mut [SolverBody], contacts: &mut [Contact]) {
+    for c in contacts.iter_mut() {
         let n = c.normal;
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
-        for p in &c.points[..c.count] {
+        for p in &mut c.points[..c.count] {
+            p.total_normal_impulse += p.normal_impulse;
             apply_impulse(
                 a,
                 b,
@@ -210,15 +213,15 @@ fn solve_contacts(
         let (a, b) = pair_mut(bodies, c.a, c.b);
         let dp = b.dp - a.dp;
 
-        for p in &mut c.points[..c.count] {
-            let (ra, rb) = (p.anchor_a, p.anchor_b);
+        // Per point: (velocity bias, mass scale, impulse scale) of the soft constraint (Catto):
+        // impulse = -m_eff (mass_scale vn + bias) - impulse_scale P, with
+        // bias = mass_scale bias_rate s capped at the push-out speed.
+        let mut coeffs = [(0.0, 1.0, 0.0); 2];
+        for (p, coeff) in c.points[..c.count].iter().zip(coeffs.iter_mut()) {
             // Current separation from how far the bodies moved this step.
-            let d = dp + b.dq.rotate(rb) - a.dq.rotate(ra);
+            let d = dp + b.dq.rotate(p.anchor_b) - a.dq.rotate(p.anchor_a);
             let s = d.dot(n) + p.adjusted_separation;
-
-            // Soft constraint (Catto): impulse = -m_eff (mass_scale vn + bias) - impulse_scale P,
-            // with bias = mass_scale bias_rate s, capped at the push-out speed.
-            let (bias, mass_scale, impulse_scale) = if s > 0.0 {
+            *coeff = if s > 0.0 {
                 // Speculative: allow closing the gap in this substep, no more.
                 (s * inv_h, 1.0, 0.0)
             } else if use_bias {
@@ -230,16 +233,23 @@ fn solve_contacts(
             } else {
                 (0.0, 1.0, 0.0)
             };
+        }
 
-            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
-            let vn = dv.dot(n);
-            let impulse =
-                -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
-            let total = (p.normal_impulse + impulse).max(0.0);
-            let applied = total - p.normal_impulse;
-            p.normal_impulse = total;
-            p.max_normal_impulse = p.max_normal_impulse.max(applied);
-            apply_impulse(a, b, ra, rb, applied * n);
+        if !(c.count == 2 && block_normal(a, b, &mut c.points, n, &coeffs)) {
+            for (p, &(bias, mass_scale, impulse_scale)) in
+                c.points[..c.count].iter_mut().zip(coeffs.iter())
+            {
+                let (ra, rb) = (p.anchor_a, p.anchor_b);
+                let vn = (b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra)).dot(n);
+                let impulse =
+                    -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
+                let total = (p.normal_impulse + impulse).max(0.0);
+                let applied = total - p.normal_impulse;
+                p.normal_impulse = total;
+                p.max_normal_impulse = p.max_normal_impulse.max(applied);
+                p.total_normal_impulse += applied;
+                apply_impulse(a, b, ra, rb, applied * n);
+            }
         }
 
         if c.friction == 0.0 {
@@ -247,8 +257,7 @@ fn solve_contacts(
         }
         for p in &mut c.points[..c.count] {
             let (ra, rb) = (p.anchor_a, p.anchor_b);
-            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
-            let vt = dv.dot(t);
+            let vt = (b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra)).dot(t);
             let max_f = c.friction * p.normal_impulse;
             let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);
             let applied = total - p.tangent_impulse;
@@ -256,6 +265,45 @@ fn solve_contacts(
             apply_impulse(a, b, ra, rb, applied * t);
         }
     }
+}
+
+/// Both normal impulses of a two-point contact at once (see `solve_block_lcp`).
+///
+/// Row i of the soft update asks for the new normal velocity
+/// vn_i' = impulse_scale_i (vn_i - (K P)_i) - bias_i, which is what
+/// impulse_i = -m_i (mass_scale_i vn_i + bias_i) - impulse_scale_i P_i gives for one point
+/// (using mass_scale + impulse_scale = 1), while both accumulated impulses stay >= 0.
+/// Returns false, having applied nothing, when the block is ill-conditioned.
+fn block_normal(
+    a: &mut SolverBody,
+    b: &mut SolverBody,
+    points: &mut [ContactPoint; 2],
+    n: Vec2,
+    coeffs: &[(Real, Real, Real); 2],
+) -> bool {
+    let ra = [points[0].anchor_a, points[1].anchor_a];
+    let rb = [points[0].anchor_b, points[1].anchor_b];
+    let k = normal_k(a, b, ra, rb, n);
+    let lambda = [points[0].normal_impulse, points[1].normal_impulse];
+    let mut rhs = [0.0; 2];
+    for i in 0..2 {
+        let vn = (b.v + cross_sv(b.w, rb[i]) - a.v - cross_sv(a.w, ra[i])).dot(n);
+        let k_lambda = k[i][0] * lambda[0] + k[i][1] * lambda[1];
+        let (bias, _, impulse_scale) = coeffs[i];
+        let target = impulse_scale * (vn - k_lambda) - bias;
+        rhs[i] = vn - k_lambda - target;
+    }
+    let Some(x) = solve_block_lcp(k, rhs) else {
+        return false;
+    };
+    for i in 0..2 {
+        let applied = x[i] - lambda[i];
+        points[i].normal_impulse = x[i];
+        points[i].max_normal_impulse = points[i].max_normal_impulse.max(applied);
+        points[i].total_normal_impulse += applied;
+        apply_impulse(a, b, ra[i], rb[i], applied * n);
+    }
+    true
 }
 
 /// Reverse e times the pre-solve approach speed where it exceeded the threshold and the
@@ -268,18 +316,31 @@ fn restitution(bodies: &mut [SolverBody], contacts: &mut [Contact], threshold: R
         let n = c.normal;
         let e = c.restitution;
         let (a, b) = pair_mut(bodies, c.a, c.b);
+        let bounces =
+            |p: &ContactPoint| p.relative_velocity < -threshold && p.max_normal_impulse > 0.0;
+        if c.count == 2 && bounces(&c.points[0]) && bounces(&c.points[1]) {
+            // Both points bounce: aim each at vn' = -e vn0 together, so a flat face hitting a
+            // flat face rebounds by exactly e instead of whatever order the points were solved in.
+            let coeffs = [
+                (e * c.points[0].relative_velocity, 1.0, 0.0),
+                (e * c.points[1].relative_velocity, 1.0, 0.0),
+            ];
+            if block_normal(a, b, &mut c.points, n, &coeffs) {
+                continue;
+            }
+        }
         for p in &mut c.points[..c.count] {
-            if p.relative_velocity > -threshold || p.max_normal_impulse == 0.0 {
+            if !bounces(p) {
                 continue;
             }
             let (ra, rb) = (p.anchor_a, p.anchor_b);
-            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
-            let vn = dv.dot(n);
+            let vn = (b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra)).dot(n);
             let impulse = -p.normal_mass * (vn + e * p.relative_velocity);
             let total = (p.normal_impulse + impulse).max(0.0);
             let applied = total - p.normal_impulse;
             p.normal_impulse = total;
             p.max_normal_impulse = p.max_normal_impulse.max(applied);
+            p.total_normal_impulse += applied;
             apply_impulse(a, b, ra, rb, applied * n);
         }
     }

@@ -6,7 +6,10 @@ use tiltbox::physics::collide::{collide, Manifold};
 use tiltbox::physics::{vec2, Real, Rot, Shape, Transform, Vec2};
 
 fn at(x: Real, y: Real, angle: Real) -> Transform {
-    Transform { p: vec2(x, y), q: Rot::from_angle(angle) }
+    Transform {
+        p: vec2(x, y),
+        q: Rot::from_angle(angle),
+    }
 }
 
 fn unit() -> Shape {
@@ -34,7 +37,10 @@ fn separated_boxes_have_no_contact_unless_within_the_margin() {
     assert_eq!(m.count, 2);
     assert!(close(m.normal, vec2(1.0, 0.0)), "{:?}", m.normal);
     let pts = sorted_points(&m);
-    assert!(close(pts[0].0, vec2(0.75, -0.5)) && close(pts[1].0, vec2(0.75, 0.5)), "{pts:?}");
+    assert!(
+        close(pts[0].0, vec2(0.75, -0.5)) && close(pts[1].0, vec2(0.75, 0.5)),
+        "{pts:?}"
+    );
     assert!(pts.iter().all(|p| (p.1 - 0.5).abs() < 1e-6));
 }
 
@@ -44,7 +50,10 @@ fn touching_boxes_have_zero_separation() {
     assert_eq!(m.count, 2);
     assert!(close(m.normal, vec2(0.0, 1.0)));
     let pts = sorted_points(&m);
-    assert!(close(pts[0].0, vec2(-0.5, 0.5)) && close(pts[1].0, vec2(0.5, 0.5)), "{pts:?}");
+    assert!(
+        close(pts[0].0, vec2(-0.5, 0.5)) && close(pts[1].0, vec2(0.5, 0.5)),
+        "{pts:?}"
+    );
     assert!(pts.iter().all(|p| p.1.abs() < 1e-6));
 }
 
@@ -52,7 +61,13 @@ fn touching_boxes_have_zero_separation() {
 fn overlapping_boxes_clip_the_incident_edge_to_the_reference_face() {
     // B overlaps A by 0.125 in x and is raised by 0.25: B's left edge spans y in [-0.25, 0.75],
     // clipped to A's right face y in [-0.5, 0.5].
-    let m = collide(&unit(), at(0.0, 0.0, 0.0), &unit(), at(0.875, 0.25, 0.0), 0.0);
+    let m = collide(
+        &unit(),
+        at(0.0, 0.0, 0.0),
+        &unit(),
+        at(0.875, 0.25, 0.0),
+        0.0,
+    );
     assert_eq!(m.count, 2);
     assert!(close(m.normal, vec2(1.0, 0.0)), "{:?}", m.normal);
     let pts = sorted_points(&m);
@@ -67,7 +82,11 @@ fn rotated_box_corner_into_a_face_gives_one_point_at_the_corner() {
     // B turned 45 degrees above A: its lowest corner sits half a diagonal below its centre.
     let half_diagonal = (0.5 as Real).sqrt();
     let depth = 0.05;
-    let b = at(0.25, 0.5 + half_diagonal - depth, std::f64::consts::FRAC_PI_4 as Real);
+    let b = at(
+        0.25,
+        0.5 + half_diagonal - depth,
+        std::f64::consts::FRAC_PI_4 as Real,
+    );
     let m = collide(&unit(), at(0.0, 0.0, 0.0), &unit(), b, 0.0);
     assert_eq!(m.count, 1, "{m:?}");
     assert!(close(m.normal, vec2(0.0, 1.0)), "{:?}", m.normal);
@@ -83,10 +102,18 @@ fn swapping_the_pair_flips_the_normal_and_keeps_the_points() {
     let ba = collide(&unit(), b, &unit(), a, 0.0);
     assert_eq!(ab.count, 2);
     assert_eq!(ba.count, ab.count);
-    assert!(close(ab.normal, -ba.normal), "{:?} vs {:?}", ab.normal, ba.normal);
+    assert!(
+        close(ab.normal, -ba.normal),
+        "{:?} vs {:?}",
+        ab.normal,
+        ba.normal
+    );
     let (p, q) = (sorted_points(&ab), sorted_points(&ba));
     for (x, y) in p.iter().zip(&q) {
-        assert!((x.0 - y.0).length() < 1e-4 && (x.1 - y.1).abs() < 1e-4, "{p:?} vs {q:?}");
+        assert!(
+            (x.0 - y.0).length() < 1e-4 && (x.1 - y.1).abs() < 1e-4,
+            "{p:?} vs {q:?}"
+        );
     }
 }
 
@@ -103,7 +130,10 @@ fn edge_on_corner_of_a_small_box_on_a_large_one() {
     let pts = sorted_points(&m);
     // The overlap in x is [-0.5, 0.5] (the small box's top face): both ends are clip points.
     let xs: Vec<Real> = pts.iter().map(|p| p.0.x).collect();
-    assert!(xs.iter().any(|x| (x + 0.5).abs() < 1e-5) && xs.iter().any(|x| (x - 0.5).abs() < 1e-5), "{pts:?}");
+    assert!(
+        xs.iter().any(|x| (x + 0.5).abs() < 1e-5) && xs.iter().any(|x| (x - 0.5).abs() < 1e-5),
+        "{pts:?}"
+    );
     assert!(pts.iter().all(|p| (p.1 + 0.01).abs() < 1e-5), "{pts:?}");
 }
 
@@ -113,7 +143,13 @@ fn feature_ids_survive_the_reference_face_switching_sides() {
     // reference face moves from A to B, but the ids of the two corners stay the same.
     let a = at(0.0, 0.0, 0.0);
     let m1 = collide(&unit(), a, &unit(), at(0.0, 0.995, 0.002), 0.0);
-    let m2 = collide(&unit(), at(0.0, 0.0, 0.002), &unit(), at(0.0, 0.995, 0.0), 0.0);
+    let m2 = collide(
+        &unit(),
+        at(0.0, 0.0, 0.002),
+        &unit(),
+        at(0.0, 0.995, 0.0),
+        0.0,
+    );
     assert_eq!(m1.count, 2);
     assert_eq!(m2.count, 2);
     let ids = |m: &Manifold| {

@@ -271,9 +271,16 @@ fn resting_box_does_not_sink_below_the_slop() {
 }
 
 /// A stack of `n` 1 m boxes with deterministic +-1 cm sideways jitter (so a solver cannot pass
-/// by symmetry alone). Returns the top box's horizontal drift after `seconds`.
+/// by symmetry alone). Returns the top box's horizontal drift after `seconds`. Sleep is off:
+/// a sleeping stack cannot drift, and this measures the solver.
 fn stack_drift(settings: Settings, n: usize, seconds: Real) -> Real {
-    let mut w = world(settings, vec2(0.0, -10.0));
+    let mut w = world(
+        Settings {
+            enable_sleep: false,
+            ..settings
+        },
+        vec2(0.0, -10.0),
+    );
     ground(&mut w, 0.0, 100.0, 2.0).unwrap();
     let ids: Vec<BodyId> = (0..n)
         .map(|i| {

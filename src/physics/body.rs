@@ -166,6 +166,12 @@ pub struct Body {
     pub(crate) inv_inertia: Real,
     pub(crate) friction: Real,
     pub(crate) restitution: Real,
+    /// False while the body sleeps (it then costs nothing per step).
+    pub(crate) awake: bool,
+    /// How long the body has been slower than the sleep threshold (s).
+    pub(crate) sleep_time: Real,
+    /// While asleep: the island it fell asleep with (a slot index), so it wakes with it.
+    pub(crate) sleep_island: u32,
 }
 
 impl Body {
@@ -204,6 +210,9 @@ impl Body {
             inv_inertia,
             friction: def.friction,
             restitution: def.restitution,
+            awake: true,
+            sleep_time: 0.0,
+            sleep_island: id.index,
         }
     }
 
@@ -273,6 +282,14 @@ impl Body {
     /// True for immovable bodies.
     pub fn is_static(&self) -> bool {
         self.inv_mass == 0.0
+    }
+    /// False while the body sleeps (resting with its island). Static bodies report true.
+    pub fn is_awake(&self) -> bool {
+        self.awake
+    }
+    /// True for dynamic bodies that are awake: the ones the solver moves this step.
+    pub(crate) fn is_active(&self) -> bool {
+        self.awake && self.inv_mass > 0.0
     }
     /// Kinetic energy, translational plus rotational (J).
     pub fn kinetic_energy(&self) -> Real {

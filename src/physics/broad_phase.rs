@@ -1,9 +1,12 @@
 //! Broad phase: which pairs of bodies might touch this step.
 //!
-//! Sort and sweep along x: bodies are kept in an order sorted by the left edge of their
-//! bounding box. The order barely changes between steps, so insertion sort restores it in
-//! close to linear time; the sweep then only tests boxes whose x intervals overlap.
-//! Static-static pairs are never examined.
+//! Sort and sweep along x over two lists: *active* bodies (awake and dynamic), whose boxes move
+//! every step, and *passive* ones (static or asleep), whose boxes do not. Both lists are kept
+//! sorted by the left edge of their boxes. The active list barely changes order between steps,
+//! so insertion sort restores it in close to linear time; the passive list is re-sorted only
+//! when a body joins it. Active-active pairs come from a sweep; active-passive pairs from a
+//! merge of the two sorted lists. Passive-passive pairs (static with static, or anything that
+//! sleeps) are never examined, so a world at rest costs almost nothing here.
 
 use super::shape::Aabb;
 
@@ -12,8 +15,6 @@ use super::shape::Aabb;
 pub(crate) struct Proxy {
     /// Bounding box, already grown by the body's contact margin (m).
     pub aabb: Aabb,
-    /// Immovable bodies never pair with each other.
-    pub is_static: bool,
 }
 
 /// A candidate pair as a sortable key: lower slot index in the high 32 bits.
@@ -29,57 +30,114 @@ pub(crate) fn pair_of(key: u64) -> (u32, u32) {
     ((key >> 32) as u32, key as u32)
 }
 
-/// Sort-and-sweep broad phase with a persistent order.
+/// Sort-and-sweep broad phase with persistent orders.
 #[derive(Debug, Default, Clone)]
 pub(crate) struct SweepAndPrune {
-    /// Slot indices of live bodies, sorted by `aabb.min.x` as of the last query.
-    order: Vec<u32>,
+    /// Awake dynamic bodies, sorted by `aabb.min.x` as of the last query.
+    active: Vec<u32>,
+    /// Static and sleeping bodies, sorted by `aabb.min.x` unless `passive_dirty`.
+    passive: Vec<u32>,
+    passive_dirty: bool,
 }
 
 impl SweepAndPrune {
-    /// A body slot came alive.
-    pub fn insert(&mut self, index: u32) {
-        self.order.push(index);
+    /// A body slot came alive; `passive` for static or sleeping bodies.
+    pub fn insert(&mut self, index: u32, passive: bool) {
+        if passive {
+            self.passive.push(index);
+            self.passive_dirty = true;
+        } else {
+            self.active.push(index);
+        }
     }
 
     /// A body slot was freed.
     pub fn remove(&mut self, index: u32) {
-        self.order.retain(|&i| i != index);
+        self.active.retain(|&i| i != index);
+        self.passive.retain(|&i| i != index);
+    }
+
+    /// Move bodies between the lists (they fell asleep, or woke up).
+    pub fn set_passive(&mut self, indices: &[u32], passive: bool) {
+        if indices.is_empty() {
+            return;
+        }
+        let (from, to) = if passive {
+            (&mut self.active, &mut self.passive)
+        } else {
+            (&mut self.passive, &mut self.active)
+        };
+        from.retain(|i| !indices.contains(i));
+        to.extend_from_slice(indices);
+        if passive {
+            self.passive_dirty = true;
+        }
     }
 
     /// Forget every body.
     pub fn clear(&mut self) {
-        self.order.clear();
+        self.active.clear();
+        self.passive.clear();
     }
 
-    /// Fill `out` with the keys of all pairs whose boxes overlap, sorted ascending.
-    /// `proxies` is indexed by slot; only slots in the order are read.
+    /// Fill `out` with the keys of all active-active and active-passive pairs whose boxes
+    /// overlap, sorted ascending. `proxies` is indexed by slot.
     pub fn find_pairs(&mut self, proxies: &[Proxy], out: &mut Vec<u64>) {
         out.clear();
-        // Insertion sort: nearly sorted input from last step makes this close to O(n).
-        let order = &mut self.order;
-        for i in 1..order.len() {
-            let item = order[i];
-            let x = proxies[item as usize].aabb.min.x;
-            let mut j = i;
-            while j > 0 && proxies[order[j - 1] as usize].aabb.min.x > x {
-                order[j] = order[j - 1];
-                j -= 1;
-            }
-            order[j] = item;
+        if self.active.is_empty() {
+            return;
         }
-        for (i, &a) in order.iter().enumerate() {
-            let pa = &proxies[a as usize];
-            for &b in &order[i + 1..] {
-                let pb = &proxies[b as usize];
-                if pb.aabb.min.x > pa.aabb.max.x {
+        let min_x = |i: u32| proxies[i as usize].aabb.min.x;
+        insertion_sort_by_min_x(&mut self.active, proxies);
+        if self.passive_dirty {
+            self.passive
+                .sort_unstable_by(|&a, &b| min_x(a).total_cmp(&min_x(b)).then(a.cmp(&b)));
+            self.passive_dirty = false;
+        }
+        let overlaps_y = |a: &Aabb, b: &Aabb| a.min.y <= b.max.y && b.min.y <= a.max.y;
+
+        // Active with active.
+        for (i, &a) in self.active.iter().enumerate() {
+            let pa = &proxies[a as usize].aabb;
+            for &b in &self.active[i + 1..] {
+                let pb = &proxies[b as usize].aabb;
+                if pb.min.x > pa.max.x {
                     break;
                 }
-                if pa.is_static && pb.is_static {
-                    continue;
-                }
-                if pa.aabb.min.y <= pb.aabb.max.y && pb.aabb.min.y <= pa.aabb.max.y {
+                if overlaps_y(pa, pb) {
                     out.push(pair_key(a, b));
+                }
+            }
+        }
+
+        // Active with passive: a pair overlaps in x exactly when one box's left edge lies within
+        // the other's interval. (1) passive left edges within an active box (strictly right of
+        // its left edge); (2) active left edges within a passive box (at or right of its left edge).
+        let passive = &self.passive;
+        for &a in &self.active {
+            let pa = &proxies[a as usize].aabb;
+            let start = passive.partition_point(|&p| min_x(p) <= pa.min.x);
+            for &p in &passive[start..] {
+                let pp = &proxies[p as usize].aabb;
+                if pp.min.x > pa.max.x {
+                    break;
+                }
+                if overlaps_y(pa, pp) {
+                    out.push(pair_key(a, p));
+                }
+            }
+        }
+        let active = &self.active;
+        for &p in passive {
+            let pp = &proxies[p as usize].aabb;
+            let start = active.partition_point(|&a| min_x(a) < pp.min.x);
+            for &a in &active[start..] {
+                let pa = &proxies[a as usize].aabb;
+                if pa.min.x > pp.max.x {
+                    break;
+                }
+                if overlaps_y(pa, pp) {
+                    out.push(pair_key(a, p));
                 }
             }
         }
@@ -87,37 +145,66 @@ impl SweepAndPrune {
     }
 }
 
+/// Insertion sort by the boxes' left edges: nearly sorted input makes this close to O(n).
+fn insertion_sort_by_min_x(order: &mut [u32], proxies: &[Proxy]) {
+    for i in 1..order.len() {
+        let item = order[i];
+        let x = proxies[item as usize].aabb.min.x;
+        let mut j = i;
+        while j > 0 && proxies[order[j - 1] as usize].aabb.min.x > x {
+            order[j] = order[j - 1];
+            j -= 1;
+        }
+        order[j] = item;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::math::vec2;
+    use crate::physics::math::{vec2, Real};
 
-    fn proxy(x0: f32, y0: f32, x1: f32, y1: f32, is_static: bool) -> Proxy {
+    fn proxy(x0: Real, y0: Real, x1: Real, y1: Real) -> Proxy {
         Proxy {
             aabb: Aabb {
-                min: vec2(x0 as _, y0 as _),
-                max: vec2(x1 as _, y1 as _),
+                min: vec2(x0, y0),
+                max: vec2(x1, y1),
             },
-            is_static,
         }
     }
 
     #[test]
-    fn finds_exactly_the_overlapping_non_static_pairs() {
+    fn finds_exactly_the_overlapping_pairs_that_involve_an_active_body() {
         let proxies = [
-            proxy(0.0, 0.0, 1.0, 1.0, false),    // 0 overlaps 1
-            proxy(0.5, 0.5, 1.5, 1.5, false),    // 1
-            proxy(0.2, 5.0, 0.8, 6.0, false),    // 2: same x range as 0, far in y
-            proxy(-10.0, -1.0, 10.0, 0.1, true), // 3: ground under 0 and 1
-            proxy(-10.0, -1.0, 10.0, 0.1, true), // 4: static on static: never a pair
+            proxy(0.0, 0.0, 1.0, 1.0),     // 0 active, overlaps 1, 3, 4
+            proxy(0.5, 0.5, 1.5, 1.5),     // 1 active, overlaps 0 and 5 (above the ground)
+            proxy(0.2, 5.0, 0.8, 6.0),     // 2 active: same x range as 0, far in y
+            proxy(-10.0, -1.0, 10.0, 0.1), // 3 passive ground under 0 and 1
+            proxy(-10.0, -1.0, 10.0, 0.1), // 4 passive: never paired with 3
+            proxy(1.2, 1.2, 2.0, 2.0),     // 5 passive, its left edge inside 1
+            proxy(3.0, 0.0, 4.0, 1.0),     // 6 passive, touches nothing
         ];
         let mut sap = SweepAndPrune::default();
-        for i in 0..5 {
-            sap.insert(i);
+        for i in 0..3 {
+            sap.insert(i, false);
+        }
+        for i in 3..7 {
+            sap.insert(i, true);
         }
         let mut out = Vec::new();
         sap.find_pairs(&proxies, &mut out);
         let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
-        assert_eq!(pairs, vec![(0, 1), (0, 3), (0, 4), (1, 3), (1, 4)]);
+        assert_eq!(pairs, vec![(0, 1), (0, 3), (0, 4), (1, 5)]);
+
+        // Body 1 falls asleep: its pair with the passive 5 is no longer examined.
+        sap.set_passive(&[1], true);
+        sap.find_pairs(&proxies, &mut out);
+        let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
+        assert_eq!(pairs, vec![(0, 1), (0, 3), (0, 4)]);
+
+        // Everything asleep: nothing at all.
+        sap.set_passive(&[0, 2], true);
+        sap.find_pairs(&proxies, &mut out);
+        assert!(out.is_empty());
     }
 }

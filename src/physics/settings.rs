@@ -92,6 +92,14 @@ pub struct Settings {
     pub speculative_distance: Real,
     /// Soft step: relax passes (no bias) after each substep's position update. Default 1.
     pub relax_iterations: u32,
+    /// Let bodies that rest with their island sleep, costing nothing until something touches
+    /// them, a force or impulse is applied, or gravity changes. Default on.
+    pub enable_sleep: bool,
+    /// Speed under which a body counts as resting (m/s): |v| + |w| x bounding radius. Default
+    /// 0.05 (Box2D).
+    pub sleep_threshold: Real,
+    /// How long a whole island must rest before it sleeps (s). Default 0.5 (Box2D).
+    pub time_to_sleep: Real,
     /// Speed cap for any body (m/s), so a bad impulse cannot run away. Default 400 (Box2D: 4 m per step at 100 Hz).
     pub max_linear_speed: Real,
     /// Largest rotation a body may make in one (sub)step (rad). Default 0.25 pi (Box2D).
@@ -126,6 +134,9 @@ impl Settings {
             max_push_out_speed: 3.0,
             speculative_distance: 0.02,
             relax_iterations: 1,
+            enable_sleep: true,
+            sleep_threshold: 0.05,
+            time_to_sleep: 0.5,
             max_linear_speed: 400.0,
             max_rotation: 0.25 * super::math::PI,
         }
@@ -182,6 +193,8 @@ impl Settings {
         non_negative("max_contact_hertz_ratio", self.max_contact_hertz_ratio)?;
         positive("max_push_out_speed", self.max_push_out_speed)?;
         non_negative("speculative_distance", self.speculative_distance)?;
+        non_negative("sleep_threshold", self.sleep_threshold)?;
+        non_negative("time_to_sleep", self.time_to_sleep)?;
         positive("max_linear_speed", self.max_linear_speed)?;
         positive("max_rotation", self.max_rotation)?;
         finite("max_rotation", self.max_rotation)?;

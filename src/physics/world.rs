@@ -36,7 +36,15 @@ pub struct World {
     pair_keys: Vec<u64>,
     contacts: Vec<Contact>,
     previous: Vec<Contact>,
+    /// Contacts between bodies that sleep (or sleep and static): kept for warm starting and to
+    /// wake islands, never solved.
+    sleeping_contacts: Vec<Contact>,
     solver_bodies: Vec<SolverBody>,
+    // Sleep bookkeeping, reused every step.
+    wake_queue: Vec<u32>,
+    island_parent: Vec<u32>,
+    island_rest: Vec<Real>,
+    changed: Vec<u32>,
 }
 
 impl Default for World {
@@ -68,7 +76,12 @@ impl World {
             pair_keys: Vec::new(),
             contacts: Vec::new(),
             previous: Vec::new(),
+            sleeping_contacts: Vec::new(),
             solver_bodies: Vec::new(),
+            wake_queue: Vec::new(),
+            island_parent: Vec::new(),
+            island_rest: Vec::new(),
+            changed: Vec::new(),
         }
     }
 
@@ -81,6 +94,7 @@ impl World {
     pub fn set_settings(&mut self, settings: Settings) -> Result<(), PhysicsError> {
         settings.validate()?;
         self.settings = settings;
+        self.wake_all();
         Ok(())
     }
 
@@ -93,6 +107,10 @@ impl World {
     pub fn set_gravity(&mut self, gravity: Vec2) -> Result<(), PhysicsError> {
         finite("gravity.x", gravity.x)?;
         finite("gravity.y", gravity.y)?;
+        if gravity != self.gravity {
+            // A tilt changes what "at rest" means for everything.
+            self.wake_all();
+        }
         self.gravity = gravity;
         Ok(())
     }
@@ -127,15 +145,26 @@ impl World {
             index,
             generation: slot.generation,
         };
-        slot.body = Some(Body::from_def(id, def));
+        let body = Body::from_def(id, def);
+        let passive = body.is_static();
+        slot.body = Some(body);
         self.body_count += 1;
-        self.broad_phase.insert(index);
+        self.broad_phase.insert(index, passive);
         Ok(id)
     }
 
     /// Remove a body and every contact it had; returns the removed body.
     pub fn remove_body(&mut self, id: BodyId) -> Result<Body, PhysicsError> {
         self.body(id).ok_or(PhysicsError::UnknownBody(id))?;
+        // Whatever rested on this body must notice it is gone.
+        let i = id.index;
+        for c in self.contacts.iter().chain(&self.sleeping_contacts) {
+            if c.a == i || c.b == i {
+                self.wake_queue.push(if c.a == i { c.b } else { c.a });
+            }
+        }
+        self.wake_queued();
+        self.sleeping_contacts.retain(|c| c.a != i && c.b != i);
         let slot = &mut self.slots[id.index as usize];
         let body = slot.body.take().ok_or(PhysicsError::UnknownBody(id))?;
         slot.generation = slot.generation.wrapping_add(1);
@@ -154,6 +183,7 @@ impl World {
         self.broad_phase.clear();
         self.contacts.clear();
         self.previous.clear();
+        self.sleeping_contacts.clear();
     }
 
     /// The body with this id, if it is still in the world.
@@ -164,7 +194,12 @@ impl World {
             .and_then(|s| s.body.as_ref())
     }
 
+    /// A body by id, woken (with its island) first: anything that pushes a body wakes it.
     fn body_mut(&mut self, id: BodyId) -> Result<&mut Body, PhysicsError> {
+        if self.body(id).is_some_and(|b| !b.awake) {
+            self.wake_queue.push(id.index);
+            self.wake_queued();
+        }
         self.slots
             .get_mut(id.index as usize)
             .filter(|s| s.generation == id.generation)
@@ -180,6 +215,22 @@ impl World {
     /// Number of bodies.
     pub fn body_count(&self) -> usize {
         self.body_count
+    }
+
+    /// Number of dynamic bodies that are awake (the ones a step moves).
+    pub fn awake_count(&self) -> usize {
+        self.bodies().filter(|b| b.is_active()).count()
+    }
+
+    /// Wake every sleeping body.
+    pub fn wake_all(&mut self) {
+        let sleeping = self
+            .slots
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.body.as_ref().is_some_and(|b| !b.awake));
+        self.wake_queue.extend(sleeping.map(|(i, _)| i as u32));
+        self.wake_queued();
     }
 
     /// Add a force (N) through the centre of mass for the next step.
@@ -267,40 +318,43 @@ impl World {
         Ok(())
     }
 
-    /// Number of contacts (touching or speculative pairs) found in the last step.
+    /// Number of contacts (touching or speculative pairs), sleeping ones included.
     pub fn contact_count(&self) -> usize {
-        self.contacts.len()
+        self.contacts.len() + self.sleeping_contacts.len()
     }
 
     /// The contacts found in the last step, with the impulses the solver applied.
     pub fn contacts(&self) -> impl Iterator<Item = ContactInfo> + '_ {
-        self.contacts.iter().map(move |c| {
-            let id = |i: u32| BodyId {
-                index: i,
-                generation: self.slots[i as usize].generation,
-            };
-            let mut points = [ContactPointInfo {
-                point: Vec2::ZERO,
-                separation: 0.0,
-                normal_impulse: 0.0,
-                tangent_impulse: 0.0,
-            }; 2];
-            for (out, p) in points.iter_mut().zip(&c.points[..c.count]) {
-                *out = ContactPointInfo {
-                    point: p.point,
-                    separation: p.separation,
-                    normal_impulse: p.total_normal_impulse,
-                    tangent_impulse: p.tangent_impulse,
+        self.contacts
+            .iter()
+            .chain(&self.sleeping_contacts)
+            .map(move |c| {
+                let id = |i: u32| BodyId {
+                    index: i,
+                    generation: self.slots[i as usize].generation,
                 };
-            }
-            ContactInfo {
-                body_a: id(c.a),
-                body_b: id(c.b),
-                normal: c.normal,
-                points,
-                count: c.count,
-            }
-        })
+                let mut points = [ContactPointInfo {
+                    point: Vec2::ZERO,
+                    separation: 0.0,
+                    normal_impulse: 0.0,
+                    tangent_impulse: 0.0,
+                }; 2];
+                for (out, p) in points.iter_mut().zip(&c.points[..c.count]) {
+                    *out = ContactPointInfo {
+                        point: p.point,
+                        separation: p.separation,
+                        normal_impulse: p.total_normal_impulse,
+                        tangent_impulse: p.tangent_impulse,
+                    };
+                }
+                ContactInfo {
+                    body_a: id(c.a),
+                    body_b: id(c.b),
+                    normal: c.normal,
+                    points,
+                    count: c.count,
+                }
+            })
     }
 
     /// Total kinetic energy (J).
@@ -319,19 +373,21 @@ impl World {
     /// Advance the world by `dt` seconds.
     ///
     /// The pipeline of the appendix: (1) integrate forces and gravity into velocities,
-    /// (2) find contacts, (3) solve contact impulses, (4) integrate positions. The soft-step
-    /// solver runs (1), (3) and (4) inside each substep. Forces and torques are cleared after.
+    /// (2) find contacts, (3) solve contact impulses, (4) integrate positions. Contacts depend
+    /// on positions only, so they are found first (which also wakes whatever an awake body is
+    /// about to touch); the soft-step solver runs (1), (3) and (4) inside each substep. Then
+    /// resting islands fall asleep. Forces and torques are cleared after the step.
     pub fn step(&mut self, dt: Real) -> Result<(), PhysicsError> {
         positive("dt", dt)?;
         let limits = Limits {
             max_linear_speed: self.settings.max_linear_speed,
             max_rotation: self.settings.max_rotation,
         };
+        self.find_contacts(dt, self.settings.speculative_distance);
         self.load_solver_bodies();
         match self.settings.solver {
             SolverKind::Sequential => {
                 solver::integrate_velocities(&mut self.solver_bodies, dt, limits);
-                self.find_contacts(dt, self.settings.speculative_distance);
                 solver::sequential::solve(
                     &mut self.solver_bodies,
                     &mut self.contacts,
@@ -341,7 +397,6 @@ impl World {
                 solver::integrate_positions(&mut self.solver_bodies, dt, limits);
             }
             SolverKind::SoftStep => {
-                self.find_contacts(dt, self.settings.speculative_distance);
                 solver::soft_step::solve(
                     &mut self.solver_bodies,
                     &mut self.contacts,
@@ -352,18 +407,22 @@ impl World {
             }
         }
         self.store_solver_bodies();
+        if self.settings.enable_sleep {
+            self.update_sleep(dt);
+        }
         self.time += dt as f64;
         self.steps += 1;
         Ok(())
     }
 
-    /// Copy what the solver needs into the compact solver array.
+    /// Copy what the solver needs into the compact solver array (awake dynamic bodies only;
+    /// everything else is fixed).
     fn load_solver_bodies(&mut self) {
         let g = self.gravity;
         self.solver_bodies.clear();
         self.solver_bodies
             .extend(self.slots.iter().map(|slot| match &slot.body {
-                Some(b) if !b.is_static() => SolverBody {
+                Some(b) if b.is_active() => SolverBody {
                     v: b.linear_velocity,
                     w: b.angular_velocity,
                     inv_mass: b.inv_mass,
@@ -384,7 +443,9 @@ impl World {
             let Some(b) = slot.body.as_mut() else {
                 continue;
             };
-            if b.is_static() {
+            b.force = Vec2::ZERO;
+            b.torque = 0.0;
+            if !b.is_active() {
                 continue;
             }
             b.linear_velocity = sb.v;
@@ -392,8 +453,141 @@ impl World {
             b.position += sb.dp;
             b.angle += sb.dtheta;
             b.rot = Rot::from_angle(b.angle);
-            b.force = Vec2::ZERO;
-            b.torque = 0.0;
+        }
+    }
+
+    /// Islands and sleep: bodies joined by contacts form islands; an island whose every body
+    /// has rested (|v| + |w| r below the threshold) for `time_to_sleep` falls asleep together.
+    fn update_sleep(&mut self, dt: Real) {
+        let threshold = self.settings.sleep_threshold;
+        let n = self.slots.len();
+        self.island_parent.clear();
+        self.island_parent.extend(0..n as u32);
+        for slot in self.slots.iter_mut() {
+            if let Some(b) = slot.body.as_mut().filter(|b| b.is_active()) {
+                let speed = b.linear_velocity.length()
+                    + b.angular_velocity.abs() * b.shape.bounding_radius();
+                b.sleep_time = if speed > threshold {
+                    0.0
+                } else {
+                    b.sleep_time + dt
+                };
+            }
+        }
+        // Union-find over contacts between awake dynamic bodies (static bodies join nothing).
+        let active =
+            |slots: &[Slot], i: u32| slots[i as usize].body.as_ref().is_some_and(Body::is_active);
+        for c in &self.contacts {
+            if active(&self.slots, c.a) && active(&self.slots, c.b) {
+                let (ra, rb) = (
+                    find(&mut self.island_parent, c.a),
+                    find(&mut self.island_parent, c.b),
+                );
+                if ra != rb {
+                    // Deterministic: the lower root wins.
+                    let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+                    self.island_parent[hi as usize] = lo;
+                }
+            }
+        }
+        // The island rests as long as its most restless body.
+        self.island_rest.clear();
+        self.island_rest.resize(n, Real::INFINITY);
+        for i in 0..n as u32 {
+            if let Some(b) = self.slots[i as usize]
+                .body
+                .as_ref()
+                .filter(|b| b.is_active())
+            {
+                let root = find(&mut self.island_parent, i) as usize;
+                self.island_rest[root] = self.island_rest[root].min(b.sleep_time);
+            }
+        }
+        self.changed.clear();
+        for i in 0..n as u32 {
+            let root = find(&mut self.island_parent, i);
+            if let Some(b) = self.slots[i as usize]
+                .body
+                .as_mut()
+                .filter(|b| b.is_active())
+            {
+                if self.island_rest[root as usize] >= self.settings.time_to_sleep {
+                    b.awake = false;
+                    b.linear_velocity = Vec2::ZERO;
+                    b.angular_velocity = 0.0;
+                    b.sleep_island = root;
+                    self.changed.push(i);
+                }
+            }
+        }
+        if self.changed.is_empty() {
+            return;
+        }
+        self.broad_phase.set_passive(&self.changed, true);
+        // Contacts with no awake body left are kept aside, unsolved, for when the island wakes.
+        let slots = &self.slots;
+        let mut kept = 0;
+        for k in 0..self.contacts.len() {
+            let c = self.contacts[k];
+            if !active(slots, c.a) && !active(slots, c.b) {
+                self.sleeping_contacts.push(c);
+            } else {
+                self.contacts[kept] = c;
+                kept += 1;
+            }
+        }
+        self.contacts.truncate(kept);
+    }
+
+    /// Wake the islands of the bodies in the wake queue: their bodies rejoin the active list
+    /// and their contacts (with the impulses they slept with) rejoin the solver.
+    fn wake_queued(&mut self) {
+        if self.wake_queue.is_empty() {
+            return;
+        }
+        self.changed.clear();
+        for k in 0..self.wake_queue.len() {
+            let i = self.wake_queue[k] as usize;
+            let Some(island) = self.slots[i]
+                .body
+                .as_ref()
+                .filter(|b| !b.awake)
+                .map(|b| b.sleep_island)
+            else {
+                continue;
+            };
+            for (j, slot) in self.slots.iter_mut().enumerate() {
+                if let Some(b) = slot
+                    .body
+                    .as_mut()
+                    .filter(|b| !b.awake && b.sleep_island == island)
+                {
+                    b.awake = true;
+                    b.sleep_time = 0.0;
+                    self.changed.push(j as u32);
+                }
+            }
+        }
+        self.wake_queue.clear();
+        if self.changed.is_empty() {
+            return;
+        }
+        self.broad_phase.set_passive(&self.changed, false);
+        let slots = &self.slots;
+        let active = |i: u32| slots[i as usize].body.as_ref().is_some_and(Body::is_active);
+        let before = self.contacts.len();
+        let mut k = 0;
+        while k < self.sleeping_contacts.len() {
+            let c = self.sleeping_contacts[k];
+            if active(c.a) || active(c.b) {
+                self.contacts.push(c);
+                self.sleeping_contacts.swap_remove(k);
+            } else {
+                k += 1;
+            }
+        }
+        if self.contacts.len() != before {
+            self.contacts.sort_unstable_by_key(|c| c.key);
         }
     }
 
@@ -401,6 +595,7 @@ impl World {
     ///
     /// `speculative` > 0 also keeps points that are up to that far apart, plus however far
     /// the pair can close in `dt` (so fast bodies meet the surface instead of tunnelling).
+    /// A sleeping body that an awake one is about to touch wakes with its island.
     fn find_contacts(&mut self, dt: Real, speculative: Real) {
         // Proxies: each body's box grown by half the speculative distance plus how far it can
         // travel this step.
@@ -409,17 +604,12 @@ impl World {
         self.proxies
             .extend(self.slots.iter().map(|slot| match &slot.body {
                 Some(b) => {
-                    let reach = if speculative > 0.0 && !b.is_static() {
-                        travel(b, g, dt)
-                    } else {
-                        0.0
-                    };
+                    let reach = if b.is_active() { travel(b, g, dt) } else { 0.0 };
                     Proxy {
                         aabb: b
                             .shape
                             .aabb(b.transform())
                             .inflated(0.5 * speculative + reach),
-                        is_static: b.is_static(),
                     }
                 }
                 None => Proxy {
@@ -427,7 +617,6 @@ impl World {
                         min: Vec2::ZERO,
                         max: Vec2::ZERO,
                     },
-                    is_static: true,
                 },
             }));
         self.broad_phase
@@ -444,14 +633,22 @@ impl World {
             else {
                 continue;
             };
-            let margin = if speculative > 0.0 {
-                speculative + travel(a, g, dt) + travel(b, g, dt)
-            } else {
-                0.0
+            let reach = |body: &Body| {
+                if body.is_active() {
+                    travel(body, g, dt)
+                } else {
+                    0.0
+                }
             };
+            let margin = speculative + reach(a) + reach(b);
             let manifold = collide(&a.shape, a.transform(), &b.shape, b.transform(), margin);
             if manifold.count == 0 {
                 continue;
+            }
+            for (i, body) in [(ia, a), (ib, b)] {
+                if !body.awake {
+                    self.wake_queue.push(i);
+                }
             }
             // Both lists are sorted by key: advance the cursor in the old one.
             while old < self.previous.len() && self.previous[old].key < key {
@@ -485,7 +682,19 @@ impl World {
             }
             self.contacts.push(contact);
         }
+        self.wake_queued();
     }
+}
+
+/// Union-find root of `i`, halving paths as it goes.
+#[inline]
+fn find(parent: &mut [u32], mut i: u32) -> u32 {
+    while parent[i as usize] != i {
+        let p = parent[i as usize];
+        parent[i as usize] = parent[p as usize];
+        i = p;
+    }
+    i
 }
 
 /// How far any point of body `b` can move in `dt` (m): linear plus rotational reach, plus

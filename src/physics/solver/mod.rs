@@ -147,20 +147,6 @@ pub(crate) fn pair_mut(
     (&mut lo[a], &mut hi[0])
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn clamp_speed_caps_length_and_removes_infinities() {
-        let v = clamp_speed(Vec2::new(300.0, 400.0), 100.0);
-        assert!((v.length() - 100.0).abs() < 1e-3);
-        let v = clamp_speed(Vec2::new(Real::INFINITY, 0.0), 100.0);
-        assert!(v.is_finite() && (v.x - 100.0).abs() < 1e-3);
-        assert_eq!(clamp_speed(Vec2::new(1.0, 2.0), 100.0), Vec2::new(1.0, 2.0));
-    }
-}
-
 /// The 2x2 effective-mass matrix of a two-point manifold along the normal:
 /// K_ij = 1/mA + 1/mB + (rA_i x n)(rA_j x n)/IA + (rB_i x n)(rB_j x n)/IB.
 #[inline]
@@ -191,7 +177,8 @@ pub(crate) fn normal_k(
 pub(crate) fn solve_block_lcp(k: [[Real; 2]; 2], b: [Real; 2]) -> Option<[Real; 2]> {
     let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
     // Condition check: k11^2 < 1000 det (Box2D's bound on the condition number).
-    if !(k[0][0] * k[0][0] < 1000.0 * det) {
+    let well_conditioned = k[0][0] * k[0][0] < 1000.0 * det;
+    if !well_conditioned {
         return None;
     }
     // Case 1: both points push. x = -K^-1 b.
@@ -216,4 +203,18 @@ pub(crate) fn solve_block_lcp(k: [[Real; 2]; 2], b: [Real; 2]) -> Option<[Real; 
         return Some([0.0, 0.0]);
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clamp_speed_caps_length_and_removes_infinities() {
+        let v = clamp_speed(Vec2::new(300.0, 400.0), 100.0);
+        assert!((v.length() - 100.0).abs() < 1e-3);
+        let v = clamp_speed(Vec2::new(Real::INFINITY, 0.0), 100.0);
+        assert!(v.is_finite() && (v.x - 100.0).abs() < 1e-3);
+        assert_eq!(clamp_speed(Vec2::new(1.0, 2.0), 100.0), Vec2::new(1.0, 2.0));
+    }
 }

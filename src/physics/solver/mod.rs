@@ -77,12 +77,10 @@ pub(crate) fn integrate_positions(bodies: &mut [SolverBody], h: Real, limits: Li
             continue;
         }
         b.v = clamp_speed(b.v, limits.max_linear_speed);
-        if !(b.w.abs() <= max_w) {
-            b.w = if b.w.is_nan() {
-                0.0
-            } else {
-                max_w.copysign(b.w)
-            };
+        if b.w.is_nan() {
+            b.w = 0.0;
+        } else if b.w.abs() > max_w {
+            b.w = max_w.copysign(b.w);
         }
         b.dp += h * b.v;
         b.dtheta += h * b.w;

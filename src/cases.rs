@@ -65,24 +65,165 @@ pub fn closed_box(
     height: Real,
     thickness: Real,
 ) -> Result<[BodyId; 4], PhysicsError> {
+    let defs = closed_box_defs(width, height, thickness);
+    Ok([
+        world.add_body(&defs[0])?,
+        world.add_body(&defs[1])?,
+        world.add_body(&defs[2])?,
+        world.add_body(&defs[3])?,
+    ])
+}
+
+/// A benchmark scene as plain body definitions, so that any engine can build it (the rapier2d
+/// comparison in `benchmarks/vs-rapier` builds the same list).
+#[derive(Clone, Debug)]
+pub struct Setup {
+    /// Scene name, e.g. `large_pyramid`.
+    pub name: &'static str,
+    /// Gravity (m/s^2).
+    pub gravity: Vec2,
+    /// Every body, static ones included.
+    pub bodies: Vec<BodyDef>,
+    /// Steps to run at dt = 1/60 s.
+    pub steps: usize,
+    /// Whether bodies may sleep.
+    pub sleep: bool,
+    /// Steps to run before timing starts (0 = time from the first step).
+    pub warm_up: usize,
+}
+
+impl Setup {
+    /// A World with this scene, the default (soft-step) settings and the scene's sleep flag.
+    pub fn build(&self) -> Result<World, PhysicsError> {
+        let settings = crate::physics::Settings {
+            enable_sleep: self.sleep,
+            ..Default::default()
+        };
+        let mut world = World::new(settings, self.gravity)?;
+        for def in &self.bodies {
+            world.add_body(def)?;
+        }
+        Ok(world)
+    }
+}
+
+fn boxes_pyramid(base: usize, x: Real, y0: Real, out: &mut Vec<BodyDef>) {
+    for row in 0..base {
+        let count = base - row;
+        let y = y0 + 0.5 + row as Real;
+        let x0 = x - 0.5 * (count as Real - 1.0);
+        for j in 0..count {
+            out.push(
+                BodyDef::dynamic(Shape::rect(1.0, 1.0), Vec2::new(x0 + j as Real, y))
+                    .with_friction(0.6),
+            );
+        }
+    }
+}
+
+/// The benchmark scenes, defined as in Box2D v3's public benchmark (dt 1/60):
+/// - `large_pyramid`: ground 200 m x 2 m (top at y = 0), pyramid of base 100 (5,050 boxes of 1 m,
+///   density 1, friction 0.6), 500 steps, sleep off;
+/// - `pyramid_20`: the same with base 20 (210 boxes), 500 steps, sleep off;
+/// - `falling_bricks`: the original app: a closed 8 m x 6 m box and six bricks, 600 steps, sleep off;
+/// - `many_boxes`: 2,000 boxes of 0.5 m rained from a 40 x 50 grid into a 40 m wide container, 500 steps, sleep off;
+/// - `resting_pyramid`: `pyramid_20` with sleep on, timed after 300 steps of settling.
+pub fn benchmark_setups() -> Vec<Setup> {
+    let g = Vec2::new(0.0, -10.0);
+    let ground = |width: Real| BodyDef::fixed(Shape::rect(width, 2.0), Vec2::new(0.0, -1.0));
+
+    let mut large = vec![ground(200.0)];
+    boxes_pyramid(100, 0.0, 0.0, &mut large);
+    let mut small = vec![ground(200.0)];
+    boxes_pyramid(20, 0.0, 0.0, &mut small);
+
+    let mut bricks = closed_box_defs(8.0, 6.0, 0.5);
+    for (i, (w, h, x, y, angle)) in [
+        (1.6, 0.4, -2.0, 4.5, 0.3),
+        (1.2, 0.6, 1.5, 5.0, -0.2),
+        (0.8, 0.4, 0.0, 3.5, 0.8),
+        (1.0, 0.5, -1.0, 2.0, 0.1),
+        (0.6, 0.3, 2.5, 2.5, 1.2),
+        (1.4, 0.5, 0.5, 1.0, -0.5),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let restitution = if i % 3 == 0 { 0.2 } else { 0.0 };
+        bricks.push(
+            BodyDef::dynamic(Shape::rect(w, h), Vec2::new(x, y))
+                .with_angle(angle)
+                .with_friction(0.6)
+                .with_restitution(restitution),
+        );
+    }
+
+    let mut many = closed_box_defs(40.0, 80.0, 1.0);
+    for i in 0..2000 {
+        let (col, row) = (i % 40, i / 40);
+        let x = -19.5 + col as Real + 0.1 * ((row % 3) as Real - 1.0);
+        let y = 20.0 + row as Real;
+        many.push(BodyDef::dynamic(Shape::rect(0.5, 0.5), Vec2::new(x, y)).with_friction(0.6));
+    }
+
+    vec![
+        Setup {
+            name: "large_pyramid",
+            gravity: g,
+            bodies: large,
+            steps: 500,
+            sleep: false,
+            warm_up: 0,
+        },
+        Setup {
+            name: "pyramid_20",
+            gravity: g,
+            bodies: small.clone(),
+            steps: 500,
+            sleep: false,
+            warm_up: 0,
+        },
+        Setup {
+            name: "falling_bricks",
+            gravity: g,
+            bodies: bricks,
+            steps: 600,
+            sleep: false,
+            warm_up: 0,
+        },
+        Setup {
+            name: "many_boxes",
+            gravity: g,
+            bodies: many,
+            steps: 500,
+            sleep: false,
+            warm_up: 0,
+        },
+        Setup {
+            name: "resting_pyramid",
+            gravity: g,
+            bodies: small,
+            steps: 300,
+            sleep: true,
+            warm_up: 300,
+        },
+    ]
+}
+
+/// The four walls of `closed_box` as definitions (floor, ceiling, left, right).
+pub fn closed_box_defs(width: Real, height: Real, thickness: Real) -> Vec<BodyDef> {
     let t = thickness;
     let outer = width + 2.0 * t;
-    Ok([
-        world.add_body(&BodyDef::fixed(
-            Shape::rect(outer, t),
-            Vec2::new(0.0, -0.5 * t),
-        ))?,
-        world.add_body(&BodyDef::fixed(
-            Shape::rect(outer, t),
-            Vec2::new(0.0, height + 0.5 * t),
-        ))?,
-        world.add_body(&BodyDef::fixed(
+    vec![
+        BodyDef::fixed(Shape::rect(outer, t), Vec2::new(0.0, -0.5 * t)),
+        BodyDef::fixed(Shape::rect(outer, t), Vec2::new(0.0, height + 0.5 * t)),
+        BodyDef::fixed(
             Shape::rect(t, height),
             Vec2::new(-0.5 * (width + t), 0.5 * height),
-        ))?,
-        world.add_body(&BodyDef::fixed(
+        ),
+        BodyDef::fixed(
             Shape::rect(t, height),
             Vec2::new(0.5 * (width + t), 0.5 * height),
-        ))?,
-    ])
+        ),
+    ]
 }

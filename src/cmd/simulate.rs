@@ -1,12 +1,260 @@
-//! `tiltbox simulate` (placeholder until its issue lands).
+//! `tiltbox simulate`: step a scene headless and print the dynamic bodies' poses.
 
+use anyhow::{bail, Context};
+use clap::ValueEnum;
+use serde::Serialize;
+use std::io::{self, BufWriter, Write};
+use std::path::PathBuf;
 use std::process::ExitCode;
+use tiltbox::physics::{BodyId, Real, SolverKind, World};
+use tiltbox::scene::{Scene, SceneError};
+
+/// The most steps one run may take (seconds / dt), so a typo cannot hang the terminal.
+const MAX_STEPS: f64 = 1e5;
 
 /// Arguments of `tiltbox simulate`.
-#[derive(clap::Args, Default, Debug)]
-pub struct SimulateArgs {}
+#[derive(clap::Args, Debug)]
+pub struct SimulateArgs {
+    /// Scene file (TOML; see docs/scenes.md), e.g. config/scenes/falling_bricks.toml.
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+    /// Simulated time to run, in seconds (at most 100,000 steps of --dt).
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    pub seconds: f64,
+    /// Fixed time step, in seconds.
+    #[arg(long, default_value_t = 1.0 / 60.0, allow_negative_numbers = true)]
+    pub dt: f64,
+    /// Print every N-th step (frame 0 and the last frame are always printed).
+    #[arg(long, default_value_t = 60, allow_negative_numbers = true)]
+    pub every: i64,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    pub format: Format,
+    /// Override the scene's solver.
+    #[arg(long, value_enum)]
+    pub solver: Option<SolverArg>,
+}
+
+/// How frames are printed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    /// An aligned, human-readable table per printed frame.
+    Table,
+    /// One JSON object per printed frame: {"frame","time","bodies":[{"id","name","x","y","angle","vx","vy","omega"}]}.
+    Jsonl,
+}
+
+/// The `--solver` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SolverArg {
+    /// Sequential impulses with Baumgarte bias (the appendix, box2d-lite).
+    Sequential,
+    /// Box2D v3-style soft step with substeps.
+    #[value(alias = "soft_step")]
+    SoftStep,
+}
+
+impl From<SolverArg> for SolverKind {
+    fn from(s: SolverArg) -> SolverKind {
+        match s {
+            SolverArg::Sequential => SolverKind::Sequential,
+            SolverArg::SoftStep => SolverKind::SoftStep,
+        }
+    }
+}
+
+/// The checked run plan.
+struct Plan {
+    steps: u64,
+    /// The step as asked for (s); the engine steps by it rounded to `Real`.
+    dt: f64,
+    every: u64,
+}
+
+/// Check the flags, naming the flag and the value on refusal.
+fn plan(args: &SimulateArgs) -> anyhow::Result<Plan> {
+    if !(args.dt.is_finite() && args.dt > 0.0) {
+        bail!("--dt {}: must be a finite number of seconds > 0", args.dt);
+    }
+    if (args.dt as Real) <= 0.0 {
+        bail!("--dt {}: too small for the engine's precision", args.dt);
+    }
+    if !(args.seconds.is_finite() && args.seconds > 0.0) {
+        bail!(
+            "--seconds {}: must be a finite number of seconds > 0",
+            args.seconds
+        );
+    }
+    if args.every < 1 {
+        bail!("--every {}: must be >= 1", args.every);
+    }
+    let steps = (args.seconds / args.dt).round();
+    if steps < 1.0 {
+        bail!(
+            "--seconds {} is shorter than one step of --dt {}",
+            args.seconds,
+            args.dt
+        );
+    }
+    if steps > MAX_STEPS {
+        bail!(
+            "--seconds {} with --dt {} is {steps} steps: at most {MAX_STEPS} per run",
+            args.seconds,
+            args.dt
+        );
+    }
+    Ok(Plan {
+        steps: steps as u64,
+        dt: args.dt,
+        every: args.every as u64,
+    })
+}
 
 /// Run `tiltbox simulate`.
-pub fn run(_args: SimulateArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("tiltbox simulate is not built yet")
+pub fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
+    let plan = plan(&args)?;
+    let mut scene = Scene::load(&args.scene).map_err(|e| match e {
+        // already names the file
+        SceneError::Io { .. } => anyhow::Error::new(e),
+        e => anyhow::Error::new(e).context(format!("scene {}", args.scene.display())),
+    })?;
+    if let Some(solver) = args.solver {
+        scene.settings.solver = solver.into();
+    }
+    let (mut world, ids) = scene
+        .build_world()
+        .with_context(|| format!("scene {}", args.scene.display()))?;
+    let tracked: Vec<(BodyId, &str)> = scene
+        .dynamic_bodies()
+        .map(|(i, b)| (ids[i], b.name.as_str()))
+        .collect();
+
+    let stdout = io::stdout();
+    let mut out = BufWriter::new(stdout.lock());
+    let result = simulate(&mut world, &tracked, &plan, args.format, &mut out)
+        .and_then(|()| out.flush().context("writing to stdout"));
+    match result {
+        Ok(()) => Ok(ExitCode::SUCCESS),
+        // The reader went away (`| head`): that ends the run, it is not a failure.
+        Err(e) if is_broken_pipe(&e) => Ok(ExitCode::SUCCESS),
+        Err(e) => Err(e),
+    }
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|cause| {
+        cause
+            .downcast_ref::<io::Error>()
+            .is_some_and(|io| io.kind() == io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// Step and print.
+fn simulate(
+    world: &mut World,
+    tracked: &[(BodyId, &str)],
+    plan: &Plan,
+    format: Format,
+    out: &mut impl Write,
+) -> anyhow::Result<()> {
+    let name_width = tracked
+        .iter()
+        .map(|(_, n)| n.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(4);
+    for frame in 0..=plan.steps {
+        if frame > 0 {
+            world
+                .step(plan.dt as Real)
+                .with_context(|| format!("step {frame}"))?;
+        }
+        if frame % plan.every == 0 || frame == plan.steps {
+            // frame x dt as asked for, rather than the engine's sum of rounded steps
+            let time = frame as f64 * plan.dt;
+            let rows = rows(world, tracked);
+            match format {
+                Format::Jsonl => {
+                    let line = FrameJson {
+                        frame,
+                        time,
+                        bodies: rows,
+                    };
+                    serde_json::to_writer(&mut *out, &line)
+                        .map_err(io::Error::from)
+                        .and_then(|()| writeln!(out))
+                        .context("writing to stdout")?;
+                }
+                Format::Table => {
+                    write_table(out, frame, time, &rows, name_width).context("writing to stdout")?
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// One printed frame in `jsonl`.
+#[derive(Serialize)]
+struct FrameJson<'a> {
+    frame: u64,
+    /// Simulated time, s.
+    time: f64,
+    bodies: Vec<Row<'a>>,
+}
+
+/// One dynamic body's state: position (m), angle (rad), velocity (m/s), angular velocity (rad/s).
+#[derive(Serialize)]
+struct Row<'a> {
+    id: String,
+    name: &'a str,
+    x: Real,
+    y: Real,
+    angle: Real,
+    vx: Real,
+    vy: Real,
+    omega: Real,
+}
+
+fn rows<'a>(world: &World, tracked: &[(BodyId, &'a str)]) -> Vec<Row<'a>> {
+    tracked
+        .iter()
+        .filter_map(|&(id, name)| {
+            let b = world.body(id)?;
+            let (p, v) = (b.position(), b.linear_velocity());
+            Some(Row {
+                id: id.to_string(),
+                name,
+                x: p.x,
+                y: p.y,
+                angle: b.angle(),
+                vx: v.x,
+                vy: v.y,
+                omega: b.angular_velocity(),
+            })
+        })
+        .collect()
+}
+
+fn write_table(
+    out: &mut impl Write,
+    frame: u64,
+    time: f64,
+    rows: &[Row<'_>],
+    name_width: usize,
+) -> io::Result<()> {
+    writeln!(out, "frame {frame}  t = {time:.3} s")?;
+    writeln!(
+        out,
+        "  {:<6} {:<name_width$} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
+        "id", "name", "x [m]", "y [m]", "angle", "vx [m/s]", "vy [m/s]", "w [rad/s]"
+    )?;
+    for r in rows {
+        writeln!(
+            out,
+            "  {:<6} {:<name_width$} {:>10.4} {:>10.4} {:>10.4} {:>10.4} {:>10.4} {:>10.4}",
+            r.id, r.name, r.x, r.y, r.angle, r.vx, r.vy, r.omega
+        )?;
+    }
+    writeln!(out)
 }

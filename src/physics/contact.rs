@@ -5,6 +5,7 @@ use super::body::BodyId;
 use super::collide::FeatureId;
 use super::math::{Real, Vec2};
 use super::solver::soft_step::Softness;
+use super::solver::BlockMass;
 
 /// One contact point and the solver state attached to it.
 #[derive(Clone, Copy, Debug, Default)]
@@ -65,6 +66,9 @@ pub(crate) struct Contact {
     pub count: usize,
     /// Soft step: this contact's spring for the current step.
     pub softness: Softness,
+    /// Two-point contacts: the normal block and its inverse for this step (None: solve the
+    /// points one at a time).
+    pub block: Option<BlockMass>,
 }
 
 impl Contact {

@@ -666,6 +666,7 @@ impl World {
                 points: [ContactPoint::default(); 2],
                 count: manifold.count,
                 softness: Softness::RIGID,
+                block: None,
             };
             for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {
                 cp.id = mp.id;

@@ -145,23 +145,54 @@ pub(crate) fn pair_mut(
     (&mut lo[a], &mut hi[0])
 }
 
-/// The 2x2 effective-mass matrix of a two-point manifold along the normal:
+/// The 2x2 effective-mass matrix of a two-point manifold along the normal and its inverse:
 /// K_ij = 1/mA + 1/mB + (rA_i x n)(rA_j x n)/IA + (rB_i x n)(rB_j x n)/IB.
-#[inline]
-pub(crate) fn normal_k(
-    a: &SolverBody,
-    b: &SolverBody,
-    ra: [Vec2; 2],
-    rb: [Vec2; 2],
-    n: Vec2,
-) -> [[Real; 2]; 2] {
-    use super::math::cross;
-    let rna = [cross(ra[0], n), cross(ra[1], n)];
-    let rnb = [cross(rb[0], n), cross(rb[1], n)];
-    let m = a.inv_mass + b.inv_mass;
-    let k =
-        |i: usize, j: usize| m + a.inv_inertia * rna[i] * rna[j] + b.inv_inertia * rnb[i] * rnb[j];
-    [[k(0, 0), k(0, 1)], [k(1, 0), k(1, 1)]]
+/// Constant through a step (the anchors are), so it is built once in the prepare stage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BlockMass {
+    pub k: [[Real; 2]; 2],
+    pub inv: [[Real; 2]; 2],
+}
+
+impl BlockMass {
+    /// The block for anchors `ra`, `rb` along `n`, or None when it is too ill-conditioned to
+    /// invert safely (nearly coincident points): k11^2 < 1000 det, Box2D's bound.
+    pub fn new(
+        a: &SolverBody,
+        b: &SolverBody,
+        ra: [Vec2; 2],
+        rb: [Vec2; 2],
+        n: Vec2,
+    ) -> Option<BlockMass> {
+        use super::math::cross;
+        let rna = [cross(ra[0], n), cross(ra[1], n)];
+        let rnb = [cross(rb[0], n), cross(rb[1], n)];
+        let m = a.inv_mass + b.inv_mass;
+        let kij = |i: usize, j: usize| {
+            m + a.inv_inertia * rna[i] * rna[j] + b.inv_inertia * rnb[i] * rnb[j]
+        };
+        let k = [[kij(0, 0), kij(0, 1)], [kij(1, 0), kij(1, 1)]];
+        let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+        let well_conditioned = k[0][0] * k[0][0] < 1000.0 * det;
+        if !well_conditioned {
+            return None;
+        }
+        let inv_det = 1.0 / det;
+        let inv = [
+            [inv_det * k[1][1], -inv_det * k[0][1]],
+            [-inv_det * k[1][0], inv_det * k[0][0]],
+        ];
+        Some(BlockMass { k, inv })
+    }
+
+    /// K lambda.
+    #[inline]
+    pub fn mul(&self, l: [Real; 2]) -> [Real; 2] {
+        [
+            self.k[0][0] * l[0] + self.k[0][1] * l[1],
+            self.k[1][0] * l[0] + self.k[1][1] * l[1],
+        ]
+    }
 }
 
 /// Solve the two-point contact LCP exactly: find x >= 0 with w = K x + b >= 0 and x.w = 0,
@@ -169,20 +200,13 @@ pub(crate) fn normal_k(
 /// target. Enumerates the four cases (both active, only 1, only 2, none), as Box2D v2's
 /// block solver does. Solving both points together removes the left/right bias of solving
 /// them one after the other, which otherwise puts a spurious spin into every resting box.
-/// Returns None when K is too ill-conditioned (nearly coincident points); callers then fall
-/// back to solving the points one at a time.
+/// Returns None in the (round-off only) case that no case fits.
 #[inline]
-pub(crate) fn solve_block_lcp(k: [[Real; 2]; 2], b: [Real; 2]) -> Option<[Real; 2]> {
-    let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
-    // Condition check: k11^2 < 1000 det (Box2D's bound on the condition number).
-    let well_conditioned = k[0][0] * k[0][0] < 1000.0 * det;
-    if !well_conditioned {
-        return None;
-    }
+pub(crate) fn solve_block_lcp(m: &BlockMass, b: [Real; 2]) -> Option<[Real; 2]> {
+    let (k, inv) = (&m.k, &m.inv);
     // Case 1: both points push. x = -K^-1 b.
-    let inv_det = 1.0 / det;
-    let x0 = -inv_det * (k[1][1] * b[0] - k[0][1] * b[1]);
-    let x1 = -inv_det * (-k[1][0] * b[0] + k[0][0] * b[1]);
+    let x0 = -(inv[0][0] * b[0] + inv[0][1] * b[1]);
+    let x1 = -(inv[1][0] * b[0] + inv[1][1] * b[1]);
     if x0 >= 0.0 && x1 >= 0.0 {
         return Some([x0, x1]);
     }

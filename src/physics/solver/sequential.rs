@@ -5,7 +5,7 @@
 //! points `iterations` times, each time solving the normal impulse (clamped so bodies only
 //! push) and the friction impulse (clamped to the Coulomb cone).
 
-use super::{apply_impulse, normal_k, pair_mut, solve_block_lcp, SolverBody};
+use super::{apply_impulse, pair_mut, solve_block_lcp, BlockMass, SolverBody};
 use crate::physics::contact::{Contact, ContactPoint};
 use crate::physics::math::{cross, cross_sv, Real, Vec2};
 use crate::physics::settings::Settings;
@@ -79,6 +79,13 @@ fn prepare(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
                 p.tangent_impulse = 0.0;
             }
         }
+        c.block = if c.count == 2 {
+            let ra = [c.points[0].anchor_a, c.points[1].anchor_a];
+            let rb = [c.points[0].anchor_b, c.points[1].anchor_b];
+            BlockMass::new(a, b, ra, rb, n)
+        } else {
+            None
+        };
     }
 }
 
@@ -88,7 +95,13 @@ fn iterate(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
         let n = c.normal;
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
-        if !(settings.accumulate_impulses && c.count == 2 && block_normal(a, b, &mut c.points, n)) {
+        let solved = match &c.block {
+            Some(block) if settings.accumulate_impulses && c.count == 2 => {
+                block_normal(a, b, &mut c.points, n, block)
+            }
+            _ => false,
+        };
+        if !solved {
             for p in &mut c.points[..c.count] {
                 let (ra, rb) = (p.anchor_a, p.anchor_b);
                 // Normal impulse: drive the normal velocity to the bias, only ever pushing.
@@ -134,17 +147,18 @@ fn block_normal(
     b: &mut SolverBody,
     points: &mut [ContactPoint; 2],
     n: Vec2,
+    block: &BlockMass,
 ) -> bool {
     let ra = [points[0].anchor_a, points[1].anchor_a];
     let rb = [points[0].anchor_b, points[1].anchor_b];
-    let k = normal_k(a, b, ra, rb, n);
     let lambda = [points[0].normal_impulse, points[1].normal_impulse];
+    let k_lambda = block.mul(lambda);
     let mut rhs = [0.0; 2];
     for i in 0..2 {
         let vn = (b.v + cross_sv(b.w, rb[i]) - a.v - cross_sv(a.w, ra[i])).dot(n);
-        rhs[i] = vn - (k[i][0] * lambda[0] + k[i][1] * lambda[1]) - points[i].bias;
+        rhs[i] = vn - k_lambda[i] - points[i].bias;
     }
-    let Some(x) = solve_block_lcp(k, rhs) else {
+    let Some(x) = solve_block_lcp(block, rhs) else {
         return false;
     };
     for i in 0..2 {

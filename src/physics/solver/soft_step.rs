@@ -10,7 +10,7 @@
 
 use super::sequential::effective_mass;
 use super::{
-    apply_impulse, integrate_positions, integrate_velocities, normal_k, pair_mut, solve_block_lcp,
+    apply_impulse, integrate_positions, integrate_velocities, pair_mut, solve_block_lcp, BlockMass,
     Limits, SolverBody,
 };
 use crate::physics::contact::{Contact, ContactPoint};
@@ -176,6 +176,13 @@ fn prepare(
             }
         }
         c.softness = stiffness.softness(c);
+        c.block = if c.count == 2 {
+            let ra = [c.points[0].anchor_a, c.points[1].anchor_a];
+            let rb = [c.points[0].anchor_b, c.points[1].anchor_b];
+            BlockMass::new(a, b, ra, rb, n)
+        } else {
+            None
+        };
     }
 }
 
@@ -235,7 +242,11 @@ fn solve_contacts(
             };
         }
 
-        if !(c.count == 2 && block_normal(a, b, &mut c.points, n, &coeffs)) {
+        let solved = match &c.block {
+            Some(block) if c.count == 2 => block_normal(a, b, &mut c.points, n, block, &coeffs),
+            _ => false,
+        };
+        if !solved {
             for (p, &(bias, mass_scale, impulse_scale)) in
                 c.points[..c.count].iter_mut().zip(coeffs.iter())
             {
@@ -279,21 +290,22 @@ fn block_normal(
     b: &mut SolverBody,
     points: &mut [ContactPoint; 2],
     n: Vec2,
+    block: &BlockMass,
     coeffs: &[(Real, Real, Real); 2],
 ) -> bool {
     let ra = [points[0].anchor_a, points[1].anchor_a];
     let rb = [points[0].anchor_b, points[1].anchor_b];
-    let k = normal_k(a, b, ra, rb, n);
     let lambda = [points[0].normal_impulse, points[1].normal_impulse];
+    let k_lambda = block.mul(lambda);
     let mut rhs = [0.0; 2];
     for i in 0..2 {
         let vn = (b.v + cross_sv(b.w, rb[i]) - a.v - cross_sv(a.w, ra[i])).dot(n);
-        let k_lambda = k[i][0] * lambda[0] + k[i][1] * lambda[1];
+        let k_lambda = k_lambda[i];
         let (bias, _, impulse_scale) = coeffs[i];
         let target = impulse_scale * (vn - k_lambda) - bias;
         rhs[i] = vn - k_lambda - target;
     }
-    let Some(x) = solve_block_lcp(k, rhs) else {
+    let Some(x) = solve_block_lcp(block, rhs) else {
         return false;
     };
     for i in 0..2 {
@@ -325,7 +337,9 @@ fn restitution(bodies: &mut [SolverBody], contacts: &mut [Contact], threshold: R
                 (e * c.points[0].relative_velocity, 1.0, 0.0),
                 (e * c.points[1].relative_velocity, 1.0, 0.0),
             ];
-            if block_normal(a, b, &mut c.points, n, &coeffs) {
+            if c.block
+                .is_some_and(|block| block_normal(a, b, &mut c.points, n, &block, &coeffs))
+            {
                 continue;
             }
         }

@@ -1,0 +1,39 @@
+//! Steps one benchmark scene and prints ms/step: a target for `perf record` while optimising.
+//! Usage: cargo run --release --no-default-features --example profile_step [SCENE] [STEPS]
+use std::time::Instant;
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let name = args.next().unwrap_or_else(|| "large_pyramid".to_string());
+    let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(500);
+    let Some(setup) = tiltbox::cases::benchmark_setups().into_iter().find(|s| s.name == name) else {
+        eprintln!("unknown scene {name}");
+        std::process::exit(2);
+    };
+    let mut world = match setup.build() {
+        Ok(w) => w,
+        Err(e) => {
+            eprintln!("{e}");
+            std::process::exit(1);
+        }
+    };
+    for _ in 0..setup.warm_up {
+        let _ = world.step(1.0 / 60.0);
+    }
+    let mut times = Vec::with_capacity(steps);
+    for _ in 0..steps {
+        let t = Instant::now();
+        let _ = world.step(1.0 / 60.0);
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    let top = world.bodies().map(|b| b.position().y).fold(f32::MIN as f64, |a, y| a.max(y as f64));
+    println!(
+        "{name}: {} bodies, median {:.3} ms/step, min {:.3}, contacts {}, awake {}, top y {top:.2}",
+        world.body_count(),
+        times[times.len() / 2],
+        times[0],
+        world.contact_count(),
+        world.awake_count()
+    );
+}

@@ -1,0 +1,89 @@
+//! Why a scene file was refused.
+
+use crate::physics::PhysicsError;
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// Why a scene could not be loaded, validated or built. Every message says where (file, line,
+/// body or table), which field, and what value was wrong.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// The file could not be read; the OS error is the [`std::error::Error::source`].
+    #[error("cannot read scene file {}", path.display())]
+    Io {
+        /// The path as given.
+        path: PathBuf,
+        /// What the OS said.
+        source: std::io::Error,
+    },
+    /// The text is not TOML, or a table does not fit the schema (unknown field, wrong type,
+    /// missing field). `message` is toml's, with its line and column.
+    #[error("{}{message}", entry_prefix(.entry))]
+    Parse {
+        /// The body or generator table the error is in, e.g. `body "brick 3" (#5) at line 40`,
+        /// when it is known.
+        entry: Option<String>,
+        /// toml's message.
+        message: String,
+    },
+    /// A value is out of range or inconsistent, e.g.
+    /// `body "brick 3" (#5): friction = -1: must be >= 0`.
+    #[error("{body}: {field}{}: {message}", value_suffix(.value))]
+    Invalid {
+        /// Where: `body "NAME" (#INDEX)` (INDEX is the body's position in [`super::Scene::bodies`]),
+        /// `body #INDEX` when unnamed, `stack "NAME" ([[stack]] #K)`, `[settings]` or `scene`.
+        body: String,
+        /// The field, as written in the scene file, e.g. `friction` or `shape.width`.
+        field: String,
+        /// The offending value as written, when there is one.
+        value: Option<String>,
+        /// What is expected, e.g. `must be >= 0`.
+        message: String,
+    },
+}
+
+fn entry_prefix(entry: &Option<String>) -> String {
+    entry.as_ref().map(|e| format!("{e}: ")).unwrap_or_default()
+}
+
+fn value_suffix(value: &Option<String>) -> String {
+    value
+        .as_ref()
+        .map(|v| format!(" = {v}"))
+        .unwrap_or_default()
+}
+
+impl SceneError {
+    /// An [`SceneError::Invalid`] for `body`.
+    pub(crate) fn invalid(
+        body: impl Into<String>,
+        field: impl Into<String>,
+        value: Option<String>,
+        message: impl Into<String>,
+    ) -> SceneError {
+        SceneError::Invalid {
+            body: body.into(),
+            field: field.into(),
+            value,
+            message: message.into(),
+        }
+    }
+
+    /// Wrap the engine's refusal (which names field and value) with where it happened.
+    pub(crate) fn physics(body: impl Into<String>, error: PhysicsError) -> SceneError {
+        let (field, value, message) = match error {
+            PhysicsError::NotFinite { field, value } => {
+                (field, Some(value.to_string()), "must be a finite number")
+            }
+            PhysicsError::OutOfRange {
+                field,
+                value,
+                expected,
+            } => (field, Some(value.to_string()), expected),
+            other => {
+                return SceneError::invalid(body, "body", None, other.to_string());
+            }
+        };
+        SceneError::invalid(body, field, value, message)
+    }
+}

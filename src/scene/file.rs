@@ -1,0 +1,531 @@
+//! The TOML schema (what serde reads) and its translation into validated [`Scene`] bodies.
+//!
+//! Reading happens in two layers so that every error can say which body it is about:
+//! the document is parsed once with each `[[body]]`, `[[stack]]` and `[[pyramid]]` table kept
+//! as a loose, spanned TOML table; each table is then read into its typed entry on its own,
+//! in document order, with its name, index and line at hand for the message.
+
+use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
+use crate::physics::{BodyDef, MassSpec, Real, Settings, Shape, Vec2};
+use serde::Deserialize;
+use toml::{Spanned, Table};
+
+/// Default friction coefficient of bodies and generated boxes (the engine's default).
+const DEFAULT_FRICTION: Real = 0.6;
+/// Default density of generated boxes, kg/m^2.
+const DEFAULT_DENSITY: Real = 1.0;
+
+fn default_friction() -> Real {
+    DEFAULT_FRICTION
+}
+fn default_density() -> Real {
+    DEFAULT_DENSITY
+}
+fn default_gravity() -> [Real; 2] {
+    [0.0, -9.81]
+}
+fn default_name() -> String {
+    "untitled".to_owned()
+}
+
+/// The top level of a scene file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    #[serde(default = "default_name")]
+    name: String,
+    #[serde(default = "default_gravity")]
+    gravity: [Real; 2],
+    #[serde(default)]
+    settings: Settings,
+    #[serde(default)]
+    body: Vec<Spanned<Table>>,
+    #[serde(default)]
+    stack: Vec<Spanned<Table>>,
+    #[serde(default)]
+    pyramid: Vec<Spanned<Table>>,
+}
+
+/// `shape = { type = "rect", width = W, height = H }`, metres.
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum ShapeEntry {
+    Rect { width: Real, height: Real },
+}
+
+/// One `[[body]]` table.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BodyEntry {
+    name: Option<String>,
+    shape: ShapeEntry,
+    position: [Real; 2],
+    #[serde(default)]
+    angle: Real,
+    #[serde(default)]
+    velocity: [Real; 2],
+    #[serde(default)]
+    angular_velocity: Real,
+    density: Option<Real>,
+    mass: Option<Real>,
+    #[serde(default, rename = "static")]
+    is_static: bool,
+    #[serde(default = "default_friction")]
+    friction: Real,
+    #[serde(default)]
+    restitution: Real,
+    #[serde(alias = "color")]
+    colour: Option<String>,
+}
+
+/// One `[[stack]]` table: `count` boxes of side `size`, bottom one resting on y = `base_y`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StackEntry {
+    name: Option<String>,
+    count: u32,
+    size: Real,
+    #[serde(default)]
+    x: Real,
+    #[serde(default)]
+    base_y: Real,
+    #[serde(default)]
+    gap: Real,
+    #[serde(default = "default_density")]
+    density: Real,
+    #[serde(default = "default_friction")]
+    friction: Real,
+    #[serde(default)]
+    restitution: Real,
+    #[serde(alias = "color")]
+    colour: Option<String>,
+}
+
+/// One `[[pyramid]]` table: `base` boxes of side `size` in the bottom row, one fewer per row.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PyramidEntry {
+    name: Option<String>,
+    base: u32,
+    size: Real,
+    #[serde(default)]
+    x: Real,
+    #[serde(default)]
+    base_y: Real,
+    #[serde(default = "default_density")]
+    density: Real,
+    #[serde(default = "default_friction")]
+    friction: Real,
+    #[serde(default)]
+    restitution: Real,
+    #[serde(alias = "color")]
+    colour: Option<String>,
+}
+
+/// Which array a table came from.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Body,
+    Stack,
+    Pyramid,
+}
+
+impl Kind {
+    fn table_name(self) -> &'static str {
+        match self {
+            Kind::Body => "body",
+            Kind::Stack => "stack",
+            Kind::Pyramid => "pyramid",
+        }
+    }
+}
+
+/// How an error names a body: `body "NAME" (#INDEX)`, or `body #INDEX` when unnamed.
+pub(crate) fn body_label(name: Option<&str>, index: usize) -> String {
+    match name {
+        Some(name) => format!("body {name:?} (#{index})"),
+        None => format!("body #{index}"),
+    }
+}
+
+/// How an error names a generator: `stack "NAME" ([[stack]] #K)`, or `[[stack]] #K`.
+fn generator_label(kind: Kind, name: Option<&str>, k: usize) -> String {
+    let table = kind.table_name();
+    match name {
+        Some(name) => format!("{table} {name:?} ([[{table}]] #{k})"),
+        None => format!("[[{table}]] #{k}"),
+    }
+}
+
+/// 1-based line of byte offset `at` in `text`.
+fn line_of(text: &str, at: usize) -> usize {
+    text.get(..at).map_or(0, |t| t.matches('\n').count()) + 1
+}
+
+/// Parse and validate a scene document.
+pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
+    let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+        entry: None,
+        message: e.to_string().trim_end().to_owned(),
+    })?;
+
+    let gravity = Vec2::new(file.gravity[0], file.gravity[1]);
+    check_finite("scene", "gravity.x", gravity.x)?;
+    check_finite("scene", "gravity.y", gravity.y)?;
+    file.settings
+        .validate()
+        .map_err(|e| SceneError::physics("[settings]", e))?;
+
+    // Every entry table in document order (by where it starts), so bodies keep the order
+    // in which the file lists them whatever kind of table they come from.
+    let mut tables: Vec<(usize, Kind, usize, Table)> = Vec::new();
+    for (kind, list) in [
+        (Kind::Body, file.body),
+        (Kind::Stack, file.stack),
+        (Kind::Pyramid, file.pyramid),
+    ] {
+        for (k, spanned) in list.into_iter().enumerate() {
+            let start = spanned.span().start;
+            tables.push((start, kind, k, spanned.into_inner()));
+        }
+    }
+    tables.sort_by_key(|&(start, kind, k, _)| (start, kind as u8, k));
+
+    let mut bodies: Vec<SceneBody> = Vec::new();
+    for (start, kind, k, table) in tables {
+        let name = table
+            .get("name")
+            .and_then(|v| v.as_str())
+            .map(str::to_owned);
+        let line = line_of(text, start);
+        let next_index = bodies.len();
+        let entry_label = || {
+            let label = match kind {
+                Kind::Body => body_label(name.as_deref(), next_index),
+                _ => generator_label(kind, name.as_deref(), k),
+            };
+            format!("{label} at line {line}")
+        };
+        let parse_error = |e: toml::de::Error| SceneError::Parse {
+            entry: Some(entry_label()),
+            message: describe(&e),
+        };
+        match kind {
+            Kind::Body => {
+                let entry: BodyEntry = table.try_into().map_err(parse_error)?;
+                reserve(&bodies, 1)?;
+                let index = bodies.len();
+                bodies.push(entry.into_body(index)?);
+            }
+            Kind::Stack => {
+                let entry: StackEntry = table.try_into().map_err(parse_error)?;
+                entry.expand(&generator_label(kind, name.as_deref(), k), &mut bodies)?;
+            }
+            Kind::Pyramid => {
+                let entry: PyramidEntry = table.try_into().map_err(parse_error)?;
+                entry.expand(&generator_label(kind, name.as_deref(), k), &mut bodies)?;
+            }
+        }
+    }
+
+    Ok(Scene {
+        name: file.name,
+        gravity,
+        settings: file.settings,
+        bodies,
+    })
+}
+
+/// toml's message for a table read on its own, with the key path (when there is one) in
+/// front: `density: invalid type: string "heavy", expected f32`.
+fn describe(e: &toml::de::Error) -> String {
+    let text = e.to_string();
+    let text = text.trim_end();
+    match text.rsplit_once("\nin `") {
+        Some((message, keys)) => format!("{}: {message}", keys.trim_end_matches('`')),
+        None => text.to_owned(),
+    }
+}
+
+/// Refuse a scene that would grow past [`MAX_BODIES`].
+fn reserve(bodies: &[SceneBody], more: u64) -> Result<(), SceneError> {
+    let total = bodies.len() as u64 + more;
+    if total > MAX_BODIES as u64 {
+        return Err(SceneError::invalid(
+            "scene",
+            "bodies",
+            Some(total.to_string()),
+            format!("a scene holds at most {MAX_BODIES} bodies"),
+        ));
+    }
+    Ok(())
+}
+
+fn check_finite(at: &str, field: &str, v: Real) -> Result<(), SceneError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            at,
+            field,
+            Some(v.to_string()),
+            "must be a finite number",
+        ))
+    }
+}
+
+fn check_positive(at: &str, field: &str, v: Real) -> Result<(), SceneError> {
+    check_finite(at, field, v)?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            at,
+            field,
+            Some(v.to_string()),
+            "must be > 0",
+        ))
+    }
+}
+
+fn check_non_negative(at: &str, field: &str, v: Real) -> Result<(), SceneError> {
+    check_finite(at, field, v)?;
+    if v >= 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            at,
+            field,
+            Some(v.to_string()),
+            "must be >= 0",
+        ))
+    }
+}
+
+fn check_unit(at: &str, field: &str, v: Real) -> Result<(), SceneError> {
+    check_finite(at, field, v)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            at,
+            field,
+            Some(v.to_string()),
+            "must be within [0, 1]",
+        ))
+    }
+}
+
+/// Parse an optional `"#rrggbb"`, defaulting to [`Colour::GREY`].
+fn parse_colour(at: &str, colour: Option<&str>) -> Result<Colour, SceneError> {
+    match colour {
+        None => Ok(Colour::GREY),
+        Some(s) => s.parse().map_err(|_| {
+            SceneError::invalid(
+                at,
+                "colour",
+                Some(format!("{s:?}")),
+                "expected \"#rrggbb\" (a '#' and six hex digits)",
+            )
+        }),
+    }
+}
+
+impl BodyEntry {
+    /// Validate and translate; `index` is the body's position in the scene.
+    fn into_body(self, index: usize) -> Result<SceneBody, SceneError> {
+        let at = body_label(self.name.as_deref(), index);
+        let value = |v: Real| Some(v.to_string());
+        let mass = match (self.is_static, self.density, self.mass) {
+            (true, None, None) => MassSpec::Static,
+            (true, Some(d), _) => {
+                return Err(SceneError::invalid(
+                    at,
+                    "density",
+                    value(d),
+                    "a static body has neither density nor mass (remove it, or drop static = true)",
+                ))
+            }
+            (true, None, Some(m)) => {
+                return Err(SceneError::invalid(
+                    at,
+                    "mass",
+                    value(m),
+                    "a static body has neither density nor mass (remove it, or drop static = true)",
+                ))
+            }
+            (false, Some(d), None) => MassSpec::Density(d),
+            (false, None, Some(m)) => MassSpec::Mass(m),
+            (false, Some(d), Some(m)) => {
+                return Err(SceneError::invalid(
+                    at,
+                    "density",
+                    value(d),
+                    format!("give exactly one of density (kg/m^2) or mass (kg), not both (mass = {m})"),
+                ))
+            }
+            (false, None, None) => {
+                return Err(SceneError::invalid(
+                    at,
+                    "density",
+                    None,
+                    "missing: a dynamic body needs density (kg/m^2) or mass (kg); walls and grounds need static = true",
+                ))
+            }
+        };
+        if self.is_static {
+            let [vx, vy] = self.velocity;
+            if vx != 0.0 || vy != 0.0 {
+                return Err(SceneError::invalid(
+                    at,
+                    "velocity",
+                    Some(format!("[{vx}, {vy}]")),
+                    "a static body does not move",
+                ));
+            }
+            if self.angular_velocity != 0.0 {
+                return Err(SceneError::invalid(
+                    at,
+                    "angular_velocity",
+                    value(self.angular_velocity),
+                    "a static body does not move",
+                ));
+            }
+        }
+        let colour = parse_colour(&at, self.colour.as_deref())?;
+        let ShapeEntry::Rect { width, height } = self.shape;
+        let def = BodyDef {
+            shape: Shape::rect(width, height),
+            position: Vec2::new(self.position[0], self.position[1]),
+            angle: self.angle,
+            linear_velocity: Vec2::new(self.velocity[0], self.velocity[1]),
+            angular_velocity: self.angular_velocity,
+            mass,
+            friction: self.friction,
+            restitution: self.restitution,
+        };
+        def.validate()
+            .map_err(|e| SceneError::physics(at.clone(), e))?;
+        Ok(SceneBody {
+            name: self.name.unwrap_or_else(|| format!("body {index}")),
+            def,
+            colour,
+            is_static: self.is_static,
+        })
+    }
+}
+
+/// Checks shared by the generators.
+fn check_common(
+    at: &str,
+    size: Real,
+    x: Real,
+    base_y: Real,
+    density: Real,
+    friction: Real,
+    restitution: Real,
+) -> Result<(), SceneError> {
+    check_positive(at, "size", size)?;
+    check_finite(at, "x", x)?;
+    check_finite(at, "base_y", base_y)?;
+    check_positive(at, "density", density)?;
+    check_non_negative(at, "friction", friction)?;
+    check_unit(at, "restitution", restitution)
+}
+
+/// Validate a generated box and add it.
+fn push_box(
+    bodies: &mut Vec<SceneBody>,
+    name: String,
+    def: BodyDef,
+    colour: Colour,
+) -> Result<(), SceneError> {
+    let index = bodies.len();
+    def.validate()
+        .map_err(|e| SceneError::physics(body_label(Some(&name), index), e))?;
+    bodies.push(SceneBody {
+        name,
+        def,
+        colour,
+        is_static: false,
+    });
+    Ok(())
+}
+
+impl StackEntry {
+    /// Box i (from 0 at the bottom) is centred at (x, base_y + size/2 + i (size + gap)).
+    fn expand(self, at: &str, bodies: &mut Vec<SceneBody>) -> Result<(), SceneError> {
+        if self.count == 0 {
+            return Err(SceneError::invalid(
+                at,
+                "count",
+                Some("0".into()),
+                "must be >= 1",
+            ));
+        }
+        check_common(
+            at,
+            self.size,
+            self.x,
+            self.base_y,
+            self.density,
+            self.friction,
+            self.restitution,
+        )?;
+        check_non_negative(at, "gap", self.gap)?;
+        let colour = parse_colour(at, self.colour.as_deref())?;
+        reserve(bodies, self.count as u64)?;
+        let prefix = self.name.as_deref().unwrap_or("stack");
+        for i in 0..self.count {
+            let y = self.base_y + 0.5 * self.size + i as Real * (self.size + self.gap);
+            let def = BodyDef::dynamic(Shape::rect(self.size, self.size), Vec2::new(self.x, y))
+                .with_density(self.density)
+                .with_friction(self.friction)
+                .with_restitution(self.restitution);
+            push_box(bodies, format!("{prefix}[{i}]"), def, colour)?;
+        }
+        Ok(())
+    }
+}
+
+impl PyramidEntry {
+    /// Row r (from 0 at the bottom) has base - r boxes, centred on x, at y = base_y + (r + 1/2) size;
+    /// box c of the row is at x - (base - r - 1) size / 2 + c size (Box2D's benchmark layout).
+    fn expand(self, at: &str, bodies: &mut Vec<SceneBody>) -> Result<(), SceneError> {
+        if self.base == 0 {
+            return Err(SceneError::invalid(
+                at,
+                "base",
+                Some("0".into()),
+                "must be >= 1",
+            ));
+        }
+        check_common(
+            at,
+            self.size,
+            self.x,
+            self.base_y,
+            self.density,
+            self.friction,
+            self.restitution,
+        )?;
+        let colour = parse_colour(at, self.colour.as_deref())?;
+        let base = self.base as u64;
+        reserve(bodies, base * (base + 1) / 2)?;
+        let prefix = self.name.as_deref().unwrap_or("pyramid");
+        for row in 0..self.base {
+            let count = self.base - row;
+            let y = self.base_y + (0.5 + row as Real) * self.size;
+            let x0 = self.x - 0.5 * (count as Real - 1.0) * self.size;
+            for col in 0..count {
+                let position = Vec2::new(x0 + col as Real * self.size, y);
+                let def = BodyDef::dynamic(Shape::rect(self.size, self.size), position)
+                    .with_density(self.density)
+                    .with_friction(self.friction)
+                    .with_restitution(self.restitution);
+                push_box(bodies, format!("{prefix}[{row},{col}]"), def, colour)?;
+            }
+        }
+        Ok(())
+    }
+}

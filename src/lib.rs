@@ -4,3 +4,5 @@
 //! - [`physics`]: the engine (no async, no network).
 pub mod cases;
 pub mod physics;
+#[cfg(feature = "scene")]
+pub mod scene;

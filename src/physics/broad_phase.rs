@@ -74,6 +74,11 @@ impl SweepAndPrune {
         }
     }
 
+    /// True when no body is awake and dynamic.
+    pub fn active_is_empty(&self) -> bool {
+        self.active.is_empty()
+    }
+
     /// Forget every body.
     pub fn clear(&mut self) {
         self.active.clear();

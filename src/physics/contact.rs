@@ -30,6 +30,10 @@ pub(crate) struct ContactPoint {
     /// Largest normal impulse applied in this step (N s): restitution only acts where the
     /// contact actually pushed.
     pub max_normal_impulse: Real,
+    /// Lever arms, precomputed once per step: rA x n, rB x n, rA x t, rB x t, rA . n, rB . n.
+    /// With them a point's normal velocity is (vB - vA) . n + wB (rB x n) - wA (rA x n), and
+    /// an impulse's torque is lambda (r x n): no cross products in the inner loop.
+    pub arms: Arms,
     /// Effective mass along the normal, 1 / (1/mA + 1/mB + (rA x n)^2/IA + (rB x n)^2/IB) (appendix eq. 56).
     pub normal_mass: Real,
     /// Effective mass along the tangent (appendix eq. 57).
@@ -41,6 +45,33 @@ pub(crate) struct ContactPoint {
     pub relative_velocity: Real,
     /// Sequential solver: target normal velocity (m/s) from position bias or restitution.
     pub bias: Real,
+}
+
+/// A point's lever arms along the normal n and tangent t (see `ContactPoint::arms`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Arms {
+    pub rn_a: Real,
+    pub rn_b: Real,
+    pub rt_a: Real,
+    pub rt_b: Real,
+    pub ra_n: Real,
+    pub rb_n: Real,
+}
+
+impl Arms {
+    /// The arms of anchors `ra`, `rb` for normal `n` and tangent `t`.
+    #[inline]
+    pub fn new(ra: Vec2, rb: Vec2, n: Vec2, t: Vec2) -> Arms {
+        use super::math::cross;
+        Arms {
+            rn_a: cross(ra, n),
+            rn_b: cross(rb, n),
+            rt_a: cross(ra, t),
+            rt_b: cross(rb, t),
+            ra_n: ra.dot(n),
+            rb_n: rb.dot(n),
+        }
+    }
 }
 
 /// A contact between two bodies: a manifold plus solver state.

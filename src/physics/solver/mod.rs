@@ -132,6 +132,36 @@ pub(crate) fn apply_impulse(a: &mut SolverBody, b: &mut SolverBody, ra: Vec2, rb
     b.w += b.inv_inertia * cross(rb, p);
 }
 
+/// Relative velocity of B over A at a point along a direction d, from the point's arms
+/// rd_a = rA x d and rd_b = rB x d: (vB - vA) . d + wB rd_b - wA rd_a.
+#[inline]
+pub(crate) fn relative_velocity(
+    a: &SolverBody,
+    b: &SolverBody,
+    d: Vec2,
+    rd_a: Real,
+    rd_b: Real,
+) -> Real {
+    (b.v - a.v).dot(d) + b.w * rd_b - a.w * rd_a
+}
+
+/// Apply impulse lambda along d at a point with arms rd_a, rd_b: B gets +lambda d, A -lambda d.
+#[inline]
+pub(crate) fn apply_along(
+    a: &mut SolverBody,
+    b: &mut SolverBody,
+    d: Vec2,
+    rd_a: Real,
+    rd_b: Real,
+    lambda: Real,
+) {
+    let p = lambda * d;
+    a.v -= a.inv_mass * p;
+    a.w -= a.inv_inertia * lambda * rd_a;
+    b.v += b.inv_mass * p;
+    b.w += b.inv_inertia * lambda * rd_b;
+}
+
 /// Mutable references to two distinct bodies of the solver array.
 #[inline]
 pub(crate) fn pair_mut(

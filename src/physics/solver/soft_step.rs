@@ -10,11 +10,11 @@
 
 use super::sequential::effective_mass;
 use super::{
-    apply_impulse, integrate_positions, integrate_velocities, pair_mut, solve_block_lcp, BlockMass,
-    Limits, SolverBody,
+    apply_along, integrate_positions, integrate_velocities, pair_mut, relative_velocity,
+    solve_block_lcp, BlockMass, Limits, SolverBody,
 };
-use crate::physics::contact::{Contact, ContactPoint};
-use crate::physics::math::{cross_sv, Real, Vec2, PI};
+use crate::physics::contact::{Arms, Contact, ContactPoint};
+use crate::physics::math::{Real, Vec2, PI};
 use crate::physics::settings::Settings;
 
 /// Soft constraint coefficients for a spring of `hertz` with damping ratio `zeta`, stepped at h.
@@ -163,11 +163,11 @@ fn prepare(
         let (a, b) = pair_mut(bodies, c.a, c.b);
         for p in &mut c.points[..c.count] {
             let (ra, rb) = (p.anchor_a, p.anchor_b);
+            p.arms = Arms::new(ra, rb, n, t);
             p.normal_mass = effective_mass(a, b, ra, rb, n);
             p.tangent_mass = effective_mass(a, b, ra, rb, t);
-            p.adjusted_separation = p.separation - (rb - ra).dot(n);
-            let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
-            p.relative_velocity = dv.dot(n);
+            p.adjusted_separation = p.separation - (p.arms.rb_n - p.arms.ra_n);
+            p.relative_velocity = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
             p.max_normal_impulse = 0.0;
             p.total_normal_impulse = 0.0;
             if !warm_starting {
@@ -189,18 +189,12 @@ fn prepare(
 /// Apply the accumulated impulses at the start of a substep.
 fn warm_start(bodies: &mut [SolverBody], contacts: &mut [Contact]) {
     for c in contacts.iter_mut() {
-        let n = c.normal;
-        let t = c.tangent();
+        let (n, t) = (c.normal, c.tangent());
         let (a, b) = pair_mut(bodies, c.a, c.b);
         for p in &mut c.points[..c.count] {
             p.total_normal_impulse += p.normal_impulse;
-            apply_impulse(
-                a,
-                b,
-                p.anchor_a,
-                p.anchor_b,
-                p.normal_impulse * n + p.tangent_impulse * t,
-            );
+            apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, p.normal_impulse);
+            apply_along(a, b, t, p.arms.rt_a, p.arms.rt_b, p.tangent_impulse);
         }
     }
 }
@@ -218,16 +212,20 @@ fn solve_contacts(
         let t = c.tangent();
         let sf = c.softness;
         let (a, b) = pair_mut(bodies, c.a, c.b);
-        let dp = b.dp - a.dp;
+        let dp_n = (b.dp - a.dp).dot(n);
 
         // Per point: (velocity bias, mass scale, impulse scale) of the soft constraint (Catto):
         // impulse = -m_eff (mass_scale vn + bias) - impulse_scale P, with
         // bias = mass_scale bias_rate s capped at the push-out speed.
         let mut coeffs = [(0.0, 1.0, 0.0); 2];
         for (p, coeff) in c.points[..c.count].iter().zip(coeffs.iter_mut()) {
-            // Current separation from how far the bodies moved this step.
-            let d = dp + b.dq.rotate(p.anchor_b) - a.dq.rotate(p.anchor_a);
-            let s = d.dot(n) + p.adjusted_separation;
+            // Current separation from how far the bodies moved this step:
+            // s = s0 + (dpB - dpA) . n + (qB rB - rB) . n - (qA rA - rA) . n, where for a
+            // rotation q = (c, s): (q r) . n = c (r . n) + s (r x n).
+            let arms = &p.arms;
+            let rot_b = b.dq.c * arms.rb_n + b.dq.s * arms.rn_b;
+            let rot_a = a.dq.c * arms.ra_n + a.dq.s * arms.rn_a;
+            let s = dp_n + rot_b - rot_a + p.adjusted_separation;
             *coeff = if s > 0.0 {
                 // Speculative: allow closing the gap in this substep, no more.
                 (s * inv_h, 1.0, 0.0)
@@ -250,8 +248,7 @@ fn solve_contacts(
             for (p, &(bias, mass_scale, impulse_scale)) in
                 c.points[..c.count].iter_mut().zip(coeffs.iter())
             {
-                let (ra, rb) = (p.anchor_a, p.anchor_b);
-                let vn = (b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra)).dot(n);
+                let vn = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
                 let impulse =
                     -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
                 let total = (p.normal_impulse + impulse).max(0.0);
@@ -259,7 +256,7 @@ fn solve_contacts(
                 p.normal_impulse = total;
                 p.max_normal_impulse = p.max_normal_impulse.max(applied);
                 p.total_normal_impulse += applied;
-                apply_impulse(a, b, ra, rb, applied * n);
+                apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, applied);
             }
         }
 
@@ -267,13 +264,12 @@ fn solve_contacts(
             continue;
         }
         for p in &mut c.points[..c.count] {
-            let (ra, rb) = (p.anchor_a, p.anchor_b);
-            let vt = (b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra)).dot(t);
+            let vt = relative_velocity(a, b, t, p.arms.rt_a, p.arms.rt_b);
             let max_f = c.friction * p.normal_impulse;
             let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);
             let applied = total - p.tangent_impulse;
             p.tangent_impulse = total;
-            apply_impulse(a, b, ra, rb, applied * t);
+            apply_along(a, b, t, p.arms.rt_a, p.arms.rt_b, applied);
         }
     }
 }
@@ -284,7 +280,8 @@ fn solve_contacts(
 /// vn_i' = impulse_scale_i (vn_i - (K P)_i) - bias_i, which is what
 /// impulse_i = -m_i (mass_scale_i vn_i + bias_i) - impulse_scale_i P_i gives for one point
 /// (using mass_scale + impulse_scale = 1), while both accumulated impulses stay >= 0.
-/// Returns false, having applied nothing, when the block is ill-conditioned.
+/// Returns false, having applied nothing, when no LCP case fits (round-off).
+#[inline]
 fn block_normal(
     a: &mut SolverBody,
     b: &mut SolverBody,
@@ -293,27 +290,25 @@ fn block_normal(
     block: &BlockMass,
     coeffs: &[(Real, Real, Real); 2],
 ) -> bool {
-    let ra = [points[0].anchor_a, points[1].anchor_a];
-    let rb = [points[0].anchor_b, points[1].anchor_b];
     let lambda = [points[0].normal_impulse, points[1].normal_impulse];
     let k_lambda = block.mul(lambda);
     let mut rhs = [0.0; 2];
     for i in 0..2 {
-        let vn = (b.v + cross_sv(b.w, rb[i]) - a.v - cross_sv(a.w, ra[i])).dot(n);
-        let k_lambda = k_lambda[i];
+        let vn = relative_velocity(a, b, n, points[i].arms.rn_a, points[i].arms.rn_b);
         let (bias, _, impulse_scale) = coeffs[i];
-        let target = impulse_scale * (vn - k_lambda) - bias;
-        rhs[i] = vn - k_lambda - target;
+        let target = impulse_scale * (vn - k_lambda[i]) - bias;
+        rhs[i] = vn - k_lambda[i] - target;
     }
     let Some(x) = solve_block_lcp(block, rhs) else {
         return false;
     };
     for i in 0..2 {
+        let p = &mut points[i];
         let applied = x[i] - lambda[i];
-        points[i].normal_impulse = x[i];
-        points[i].max_normal_impulse = points[i].max_normal_impulse.max(applied);
-        points[i].total_normal_impulse += applied;
-        apply_impulse(a, b, ra[i], rb[i], applied * n);
+        p.normal_impulse = x[i];
+        p.max_normal_impulse = p.max_normal_impulse.max(applied);
+        p.total_normal_impulse += applied;
+        apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, applied);
     }
     true
 }
@@ -347,15 +342,14 @@ fn restitution(bodies: &mut [SolverBody], contacts: &mut [Contact], threshold: R
             if !bounces(p) {
                 continue;
             }
-            let (ra, rb) = (p.anchor_a, p.anchor_b);
-            let vn = (b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra)).dot(n);
+            let vn = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
             let impulse = -p.normal_mass * (vn + e * p.relative_velocity);
             let total = (p.normal_impulse + impulse).max(0.0);
             let applied = total - p.normal_impulse;
             p.normal_impulse = total;
             p.max_normal_impulse = p.max_normal_impulse.max(applied);
             p.total_normal_impulse += applied;
-            apply_impulse(a, b, ra, rb, applied * n);
+            apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, applied);
         }
     }
 }

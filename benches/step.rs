@@ -1,0 +1,66 @@
+//! Criterion benchmarks of one `World::step` (dt 1/60, default soft-step settings) on the
+//! benchmark scenes of `tiltbox::cases::benchmark_setups()`.
+//!
+//! ```text
+//! cargo bench --no-default-features --bench step          # engine only: quickest build
+//! cargo bench --no-default-features --bench step -- pyramid_20
+//! ```
+//!
+//! Each benchmark steps one World over and over (the scene keeps evolving, as in a game), after
+//! the scene's own warm-up steps (`resting_pyramid`: 300 steps, so it is asleep). Sample sizes
+//! and times are set so the whole file runs in under a minute; the side-by-side
+//! comparison with rapier2d lives in `benchmarks/vs-rapier`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use std::hint::black_box;
+use std::time::Duration;
+use tiltbox::cases::{benchmark_setups, Setup};
+use tiltbox::physics::{Real, World};
+
+const DT: Real = 1.0 / 60.0;
+
+fn setup(name: &str) -> Setup {
+    benchmark_setups()
+        .into_iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no benchmark set-up named {name}"))
+}
+
+/// The scene built and run through its warm-up steps.
+fn warmed_up(setup: &Setup) -> World {
+    let mut world = setup.build().expect("benchmark set-up refused");
+    for _ in 0..setup.warm_up {
+        world.step(DT).expect("step failed");
+    }
+    world
+}
+
+fn bench_scene(c: &mut Criterion, name: &str, samples: usize, warm_up: f64, measure: f64) {
+    let setup = setup(name);
+    let mut world = warmed_up(&setup);
+    let mut group = c.benchmark_group("step");
+    group
+        .sample_size(samples)
+        .warm_up_time(Duration::from_secs_f64(warm_up))
+        .measurement_time(Duration::from_secs_f64(measure));
+    group.bench_function(name, |b| {
+        b.iter(|| world.step(black_box(DT)).expect("step failed"))
+    });
+    group.finish();
+}
+
+fn small_scenes(c: &mut Criterion) {
+    // About 5 s each: 1 s warm-up, 4 s of samples.
+    bench_scene(c, "pyramid_20", 50, 1.0, 4.0);
+    bench_scene(c, "falling_bricks", 50, 1.0, 4.0);
+    bench_scene(c, "many_boxes", 30, 1.0, 4.0);
+    bench_scene(c, "resting_pyramid", 50, 1.0, 4.0);
+}
+
+fn large_pyramid(c: &mut Criterion) {
+    // 5,050 boxes at some 10-20 ms/step: 10 samples (criterion's minimum) of a few steps each.
+    bench_scene(c, "large_pyramid", 10, 1.0, 8.0);
+}
+
+criterion_group!(benches, small_scenes, large_pyramid);
+criterion_main!(benches);

@@ -43,6 +43,9 @@ pub(crate) struct ContactPoint {
     pub adjusted_separation: Real,
     /// Normal relative velocity before the solve (m/s): the approach speed restitution reverses.
     pub relative_velocity: Real,
+    /// Sequential solver: the normal velocity with which a speculative point closed its gap
+    /// last step (m/s), for restitution when the surfaces meet; 0 otherwise.
+    pub approach_velocity: Real,
     /// Sequential solver: target normal velocity (m/s) from position bias or restitution.
     pub bias: Real,
 }

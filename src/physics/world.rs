@@ -679,6 +679,7 @@ impl World {
                 {
                     cp.normal_impulse = prev.normal_impulse;
                     cp.tangent_impulse = prev.tangent_impulse;
+                    cp.approach_velocity = prev.approach_velocity;
                 }
             }
             self.contacts.push(contact);

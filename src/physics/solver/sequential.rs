@@ -63,13 +63,20 @@ fn prepare(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
                 // Position correction (appendix eq. 70): bias = beta / dt * max(0, -separation - slop).
                 -settings.bias_factor * inv_dt * (p.separation + settings.linear_slop).min(0.0)
             };
-            // Restitution: aim for -e times the approach speed when it is fast enough and the
-            // gap closes within this step.
-            if c.restitution > 0.0
-                && vn < -settings.restitution_threshold
-                && p.separation + vn * dt < 0.0
-            {
-                bias = bias.max(-c.restitution * vn);
+            // Restitution: aim for -e times the approach speed. A speculative point that closes
+            // its gap this step only stops the bodies at the surface and remembers how fast they
+            // came; they bounce next step, when the surfaces meet. Bouncing at once would turn
+            // them around up to a step's travel short of the surface.
+            let approach = p.approach_velocity.min(vn);
+            p.approach_velocity = 0.0;
+            if c.restitution > 0.0 && approach < -settings.restitution_threshold {
+                if p.separation > 0.25 * settings.linear_slop {
+                    if p.separation + vn * dt < 0.0 {
+                        p.approach_velocity = approach;
+                    }
+                } else {
+                    bias = bias.max(-c.restitution * approach);
+                }
             }
             p.bias = bias;
             if settings.warm_starting {

@@ -6,3 +6,7 @@ pub mod cases;
 pub mod physics;
 #[cfg(feature = "scene")]
 pub mod scene;
+#[cfg(feature = "net")]
+pub mod protocol;
+#[cfg(feature = "net")]
+pub mod service;

@@ -1,12 +1,209 @@
-//! `tiltbox serve` (placeholder until its issue lands).
+//! `tiltbox serve` (and plain `tiltbox`): run the daemon until Ctrl-C / SIGTERM.
+//!
+//! Configuration: embedded defaults, then `--config FILE` (TOML, see `config/server.toml`),
+//! then flags. A bad value is reported with its key and exit code 2.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
+use tiltbox::service::{bench, Server, ServerConfig, ServerOptions, ServiceError};
 
-/// Arguments of `tiltbox serve`.
+/// Arguments of `tiltbox serve`. Every config value has a flag; a flag overrides the file.
 #[derive(clap::Args, Default, Debug)]
-pub struct ServeArgs {}
+pub struct ServeArgs {
+    /// Config file (TOML, like config/server.toml). Without it the embedded defaults apply.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// World name [config: world; default bricks].
+    #[arg(long)]
+    pub world: Option<String>,
+    /// Key prefix [config: prefix; default tiltbox/<world>].
+    #[arg(long)]
+    pub prefix: Option<String>,
+    /// Steps per second [config: tick_hz; default 60].
+    #[arg(long, value_name = "HZ")]
+    pub tick_hz: Option<f64>,
+    /// Scene file [config: scene; default: the embedded Falling Bricks].
+    #[arg(long, value_name = "FILE")]
+    pub scene: Option<PathBuf>,
+    /// Keyframe interval in frames [config: keyframe_every; default 60].
+    #[arg(long, value_name = "FRAMES")]
+    pub keyframe_every: Option<u32>,
+    /// Late steps run back to back before time is dropped [config: max_catch_up; default 4].
+    #[arg(long, value_name = "STEPS")]
+    pub max_catch_up: Option<u32>,
+    /// Command channel capacity [config: command_queue; default 256].
+    #[arg(long, value_name = "N")]
+    pub command_queue: Option<u32>,
+    /// [config: limits.max_bodies; default 1000]
+    #[arg(long, value_name = "N")]
+    pub max_bodies: Option<u32>,
+    /// [config: limits.max_spawns_per_second; default 20]
+    #[arg(long, value_name = "N")]
+    pub max_spawns_per_second: Option<u32>,
+    /// [config: limits.max_bodies_per_spawn; default 64]
+    #[arg(long, value_name = "N")]
+    pub max_bodies_per_spawn: Option<u32>,
+    /// [config: limits.max_payload_bytes; default 65536]
+    #[arg(long, value_name = "BYTES")]
+    pub max_payload_bytes: Option<u32>,
+    /// Largest gravity / accelerometer magnitude, m/s^2 [config: limits.max_gravity; default 100]
+    #[arg(long, value_name = "M_S2")]
+    pub max_gravity: Option<f32>,
+    /// Spawn positions and sizes within +-this, metres [config: limits.max_coordinate; default 1000]
+    #[arg(long, value_name = "M")]
+    pub max_coordinate: Option<f32>,
+    /// Zenoh mode: peer, client or router [config: zenoh.mode; default peer].
+    #[arg(long)]
+    pub mode: Option<String>,
+    /// Listen endpoint, repeatable; replaces the configured list [config: zenoh.listen;
+    /// default tcp/127.0.0.1:7447].
+    #[arg(long, value_name = "ENDPOINT")]
+    pub listen: Vec<String>,
+    /// Connect endpoint, repeatable; replaces the configured list [config: zenoh.connect].
+    #[arg(long, value_name = "ENDPOINT")]
+    pub connect: Vec<String>,
+    /// UDP multicast scouting [config: zenoh.multicast_scouting; default false].
+    #[arg(long, value_name = "BOOL")]
+    pub multicast_scouting: Option<bool>,
+    /// A full Zenoh json5 config, used as it is [config: zenoh.config_file].
+    #[arg(long, value_name = "FILE")]
+    pub zenoh_config: Option<PathBuf>,
+    /// Log filter (tracing EnvFilter syntax; RUST_LOG wins) [default info,zenoh=warn].
+    #[arg(long, value_name = "FILTER")]
+    pub log: Option<String>,
+    /// Instead of serving: run the daemon with an in-process client for SECONDS and print
+    /// tick lateness, publish-to-receive latency and snapshot sizes.
+    #[arg(long, value_name = "SECONDS")]
+    pub bench_net: Option<f64>,
+}
+
+impl ServeArgs {
+    /// The config: the file (or the embedded defaults), then every flag given.
+    pub fn config(&self) -> Result<ServerConfig, tiltbox::service::ConfigError> {
+        let mut c = match &self.config {
+            Some(path) => ServerConfig::load(path)?,
+            None => ServerConfig::default(),
+        };
+        fn set<T: Clone>(slot: &mut T, v: &Option<T>) {
+            if let Some(v) = v {
+                *slot = v.clone();
+            }
+        }
+        set(&mut c.world, &self.world);
+        if self.prefix.is_some() {
+            c.prefix = self.prefix.clone();
+        }
+        set(&mut c.tick_hz, &self.tick_hz);
+        if self.scene.is_some() {
+            c.scene = self.scene.clone();
+        }
+        set(&mut c.keyframe_every, &self.keyframe_every);
+        set(&mut c.max_catch_up, &self.max_catch_up);
+        set(&mut c.command_queue, &self.command_queue);
+        let l = &mut c.limits;
+        set(&mut l.max_bodies, &self.max_bodies);
+        set(&mut l.max_spawns_per_second, &self.max_spawns_per_second);
+        set(&mut l.max_bodies_per_spawn, &self.max_bodies_per_spawn);
+        set(&mut l.max_payload_bytes, &self.max_payload_bytes);
+        set(&mut l.max_gravity, &self.max_gravity);
+        set(&mut l.max_coordinate, &self.max_coordinate);
+        let z = &mut c.zenoh;
+        set(&mut z.mode, &self.mode);
+        if !self.listen.is_empty() {
+            z.listen = self.listen.clone();
+        }
+        if !self.connect.is_empty() {
+            z.connect = self.connect.clone();
+        }
+        set(&mut z.multicast_scouting, &self.multicast_scouting);
+        if self.zenoh_config.is_some() {
+            z.config_file = self.zenoh_config.clone();
+        }
+        c.validate()?;
+        Ok(c)
+    }
+}
+
+fn init_logging(filter: Option<&str>) {
+    use tracing_subscriber::EnvFilter;
+    let filter = EnvFilter::try_from_default_env()
+        .or_else(|_| EnvFilter::try_new(filter.unwrap_or("info,zenoh=warn")))
+        .unwrap_or_else(|_| EnvFilter::new("info"));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .try_init();
+}
 
 /// Run `tiltbox serve`.
-pub fn run(_args: ServeArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("tiltbox serve is not built yet")
+pub fn run(args: ServeArgs) -> anyhow::Result<ExitCode> {
+    init_logging(args.log.as_deref());
+    let config = match args.config() {
+        Ok(c) => c,
+        Err(e) => {
+            tracing::error!("bad config: {e}");
+            return Ok(ExitCode::from(2));
+        }
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()?;
+    let code = runtime.block_on(async {
+        if let Some(seconds) = args.bench_net {
+            return match bench::bench_net(&config, seconds).await {
+                Ok(report) => {
+                    println!("{report}");
+                    Ok(ExitCode::SUCCESS)
+                }
+                Err(e) => fail(e),
+            };
+        }
+        let server = match Server::start(&config, ServerOptions::default()).await {
+            Ok(s) => s,
+            Err(e) => return fail(e),
+        };
+        wait_for_signal().await;
+        tracing::info!("stopping");
+        match tokio::time::timeout(Duration::from_millis(1900), server.shutdown()).await {
+            Ok(Ok(_)) => {}
+            Ok(Err(e)) => tracing::warn!("shutdown: {e}"),
+            Err(_) => tracing::warn!("shutdown took more than 2 s; exiting anyway"),
+        }
+        Ok(ExitCode::SUCCESS)
+    });
+    runtime.shutdown_timeout(Duration::from_millis(100));
+    code
+}
+
+/// Config and scene problems exit with 2, anything else with 1.
+fn fail(e: ServiceError) -> anyhow::Result<ExitCode> {
+    tracing::error!("{e}");
+    Ok(match e {
+        ServiceError::Config(_) | ServiceError::Start(_) => ExitCode::from(2),
+        _ => ExitCode::from(1),
+    })
+}
+
+async fn wait_for_signal() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{signal, SignalKind};
+        match signal(SignalKind::terminate()) {
+            Ok(mut term) => {
+                tokio::select! {
+                    _ = tokio::signal::ctrl_c() => {}
+                    _ = term.recv() => {}
+                }
+            }
+            Err(_) => {
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+    }
 }

@@ -1,0 +1,309 @@
+//! The wire messages of protocol v1. Field order is wire order: see `docs/protocol.md`.
+//!
+//! Numbers on the wire are `f32` whatever the engine's [`crate::physics::Real`] is, and times
+//! are `f64` seconds. Body ids are the engine's generational ids, `(index, generation)`.
+
+use crate::physics::BodyId;
+use serde::{Deserialize, Serialize};
+
+/// A 2D vector of `f32` (metres, m/s or m/s^2 depending on the field). 8 bytes on the wire.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Vector {
+    /// x component (to the right).
+    pub x: f32,
+    /// y component (up).
+    pub y: f32,
+}
+
+impl Vector {
+    /// A vector from its components.
+    pub const fn new(x: f32, y: f32) -> Vector {
+        Vector { x, y }
+    }
+}
+
+/// A body id on the wire: the engine's [`BodyId`], two varints.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct BodyRef {
+    /// Slot index.
+    pub index: u32,
+    /// Slot generation (how many times the slot was reused).
+    pub generation: u32,
+}
+
+impl From<BodyId> for BodyRef {
+    fn from(id: BodyId) -> BodyRef {
+        BodyRef {
+            index: id.index,
+            generation: id.generation,
+        }
+    }
+}
+
+impl From<BodyRef> for BodyId {
+    fn from(id: BodyRef) -> BodyId {
+        BodyId {
+            index: id.index,
+            generation: id.generation,
+        }
+    }
+}
+
+impl std::fmt::Display for BodyRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}v{}", self.index, self.generation)
+    }
+}
+
+/// An sRGB colour, three bytes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Colour {
+    /// Red.
+    pub r: u8,
+    /// Green.
+    pub g: u8,
+    /// Blue.
+    pub b: u8,
+}
+
+/// A collision shape, in the body's frame (metres).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ShapeSpec {
+    /// Variant 0: a `width` x `height` rectangle centred on the centre of mass.
+    Rect {
+        /// Full width, metres.
+        width: f32,
+        /// Full height, metres.
+        height: f32,
+    },
+}
+
+/// One body's pose in a [`Snapshot`]. 14 bytes for a body with index < 128 and generation 0.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    /// The body.
+    pub id: BodyRef,
+    /// Centre of mass x (m).
+    pub x: f32,
+    /// Centre of mass y (m).
+    pub y: f32,
+    /// Orientation (rad, counter-clockwise), accumulated: not wrapped to (-pi, pi].
+    pub angle: f32,
+}
+
+/// `…/poses`: published after every step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Snapshot {
+    /// Frame number: steps since the daemon started (1 for the first step; never reset).
+    pub frame: u64,
+    /// Simulated time (s) since the daemon started: `frame * dt`.
+    pub time: f64,
+    /// Gravity in force during this step (m/s^2, world frame).
+    pub gravity: Vector,
+    /// True when `poses` holds every dynamic body (every `keyframe_every` frames and after a
+    /// reset); false when it holds only the bodies that moved since the last snapshot.
+    pub keyframe: bool,
+    /// Poses of dynamic bodies, in slot order. Static bodies never appear here.
+    pub poses: Vec<Pose>,
+}
+
+/// `…/gravity`: set gravity (m/s^2, world frame: x right, y up).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SetGravity {
+    /// x component.
+    pub x: f32,
+    /// y component.
+    pub y: f32,
+}
+
+/// A discrete device orientation (the names of iOS's `UIDeviceOrientation`). The screen is the
+/// world: world x is the screen's right, world y the screen's top.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Orientation {
+    /// 0: upright, home button (or bottom edge) down: gravity points to the screen's bottom.
+    Portrait,
+    /// 1: upside down: gravity points to the screen's top.
+    PortraitUpsideDown,
+    /// 2: turned 90 degrees counter-clockwise (home button on the right): gravity points to
+    /// the screen's left.
+    LandscapeLeft,
+    /// 3: turned 90 degrees clockwise (home button on the left): gravity points to the
+    /// screen's right.
+    LandscapeRight,
+    /// 4: lying flat, screen up: no gravity in the screen's plane.
+    FaceUp,
+    /// 5: lying flat, screen down: no gravity in the screen's plane.
+    FaceDown,
+}
+
+/// `…/tilt`: a device's tilt, which the daemon turns into gravity (see [`super::tilt`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Tilt {
+    /// 0: a discrete orientation; gravity has the scene's gravity magnitude.
+    Orientation(Orientation),
+    /// 1: a raw accelerometer reading in the device frame, m/s^2, Android's convention
+    /// (x right, y up the screen, z out of the screen; at rest it reads +9.81 upwards).
+    Accelerometer {
+        /// Along the screen's right edge.
+        x: f32,
+        /// Along the screen's up edge.
+        y: f32,
+        /// Out of the screen.
+        z: f32,
+    },
+}
+
+/// One body asked for on `…/spawn`: always dynamic.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SpawnBody {
+    /// A name for viewers and logs (optional).
+    pub name: Option<String>,
+    /// Shape.
+    pub shape: ShapeSpec,
+    /// Centre of mass (m).
+    pub position: Vector,
+    /// Orientation (rad).
+    pub angle: f32,
+    /// Linear velocity (m/s).
+    pub velocity: Vector,
+    /// Angular velocity (rad/s).
+    pub angular_velocity: f32,
+    /// Density (kg/m^2), > 0.
+    pub density: f32,
+    /// Friction coefficient, >= 0.
+    pub friction: f32,
+    /// Restitution, within [0, 1].
+    pub restitution: f32,
+    /// Colour for viewers.
+    pub colour: Colour,
+}
+
+/// `…/spawn`: add bodies, all or nothing.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Spawn {
+    /// The bodies, at least one.
+    pub bodies: Vec<SpawnBody>,
+}
+
+/// `…/remove`: remove bodies by id, all or nothing.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Remove {
+    /// The bodies, at least one.
+    pub ids: Vec<BodyRef>,
+}
+
+/// `…/reset`: reload the scene. No fields: the payload is the version byte alone.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Reset;
+
+/// Everything about one body: what `…/scene` and the `Added`/`Reset` events carry.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BodyInfo {
+    /// Id.
+    pub id: BodyRef,
+    /// Name (may be empty).
+    pub name: String,
+    /// Shape.
+    pub shape: ShapeSpec,
+    /// Immovable.
+    pub is_static: bool,
+    /// Colour.
+    pub colour: Colour,
+    /// Centre of mass (m).
+    pub position: Vector,
+    /// Orientation (rad).
+    pub angle: f32,
+    /// Linear velocity (m/s).
+    pub velocity: Vector,
+    /// Angular velocity (rad/s).
+    pub angular_velocity: f32,
+    /// Mass (kg); 0 for static bodies.
+    pub mass: f32,
+    /// Friction coefficient.
+    pub friction: f32,
+    /// Restitution.
+    pub restitution: f32,
+}
+
+/// What an [`Event`] reports.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum EventKind {
+    /// 0: bodies were added by one `…/spawn` command.
+    Added {
+        /// The new bodies.
+        bodies: Vec<BodyInfo>,
+    },
+    /// 1: bodies were removed by one `…/remove` command.
+    Removed {
+        /// Their ids.
+        ids: Vec<BodyRef>,
+    },
+    /// 2: the scene was reloaded; every body before it is gone.
+    Reset {
+        /// The scene's name.
+        scene: String,
+        /// Gravity after the reset (m/s^2).
+        gravity: Vector,
+        /// Every body of the new world.
+        bodies: Vec<BodyInfo>,
+    },
+    /// 3: a command was refused and nothing was changed.
+    Rejected {
+        /// The key it arrived on (full key expression).
+        key: String,
+        /// Why, naming the field and value where there is one.
+        reason: String,
+    },
+}
+
+/// `…/events`: what changed, stamped with the frame of the step it preceded.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Event {
+    /// The frame of the first snapshot that includes the change (commands are applied at
+    /// the tick boundary just before that step).
+    pub frame: u64,
+    /// What happened.
+    pub kind: EventKind,
+}
+
+/// `…/scene` reply: the full state after a step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneState {
+    /// World name.
+    pub world: String,
+    /// Scene name.
+    pub scene: String,
+    /// The frame this state is from (same numbering as [`Snapshot::frame`]).
+    pub frame: u64,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Gravity (m/s^2).
+    pub gravity: Vector,
+    /// Every body, static ones included, in slot order.
+    pub bodies: Vec<BodyInfo>,
+}
+
+/// `…/stats`: once a second. Durations are microseconds over the last second.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Stats {
+    /// Latest frame.
+    pub frame: u64,
+    /// Bodies in the world.
+    pub bodies: u32,
+    /// Dynamic bodies that are awake (sleeping ones do not move and are not stepped).
+    pub awake: u32,
+    /// Contact pairs after the latest step.
+    pub contacts: u32,
+    /// Median `World::step` time over the window (us).
+    pub step_us_median: u32,
+    /// Longest `World::step` time over the window (us).
+    pub step_us_max: u32,
+    /// Worst tick lateness over the window: how long after its deadline a tick started (us).
+    pub lateness_us_max: u32,
+    /// Commands applied since start.
+    pub commands_applied: u64,
+    /// Commands rejected since start.
+    pub commands_rejected: u64,
+    /// Steps skipped since start because the loop fell too far behind.
+    pub steps_dropped: u64,
+}

@@ -1,0 +1,210 @@
+//! `tiltbox serve --bench-net SECONDS`: run the daemon with an in-process client on a second
+//! Zenoh session over TCP loopback, and measure tick lateness, publish-to-receive latency of
+//! snapshots and snapshot sizes.
+
+use super::config::ServerConfig;
+use super::net::{Server, ServerOptions, ServiceError};
+use crate::protocol::{decode, Snapshot};
+use std::fmt;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use zenoh::Wait;
+
+const SLOTS: usize = 4096;
+
+/// What a benchmark run measured. Times in microseconds.
+#[derive(Clone, Debug, Default)]
+pub struct BenchReport {
+    /// Seconds measured.
+    pub seconds: f64,
+    /// Frames stepped.
+    pub frames: u64,
+    /// Snapshots received by the client.
+    pub received: u64,
+    /// Steps dropped by the loop.
+    pub steps_dropped: u64,
+    /// Dynamic bodies in the last keyframe.
+    pub bodies: usize,
+    /// Tick lateness p50, p99, max (us).
+    pub lateness_us: [u32; 3],
+    /// `World::step` time p50, p99, max (us).
+    pub step_us: [u32; 3],
+    /// Publish (just before `put`) to receive (callback entry) p50, p99, max (us).
+    pub latency_us: [u32; 3],
+    /// Median keyframe size (bytes) and the poses it carried.
+    pub keyframe: (usize, usize),
+    /// Median delta size (bytes) and the median number of poses in a delta.
+    pub delta: (usize, usize),
+    /// Median delta size among deltas that carried at least one pose, and their median poses.
+    pub moving_delta: (usize, usize),
+}
+
+fn percentiles(mut v: Vec<u32>) -> [u32; 3] {
+    if v.is_empty() {
+        return [0; 3];
+    }
+    v.sort_unstable();
+    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+    [at(0.5), at(0.99), *v.last().unwrap()]
+}
+
+fn median_pair(mut v: Vec<(usize, usize)>) -> (usize, usize) {
+    if v.is_empty() {
+        return (0, 0);
+    }
+    v.sort_unstable();
+    v[v.len() / 2]
+}
+
+impl fmt::Display for BenchReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let per = |(bytes, n): (usize, usize)| {
+            if n == 0 {
+                "-".to_string()
+            } else {
+                format!("{:.1}", bytes as f64 / n as f64)
+            }
+        };
+        let p = |v: [u32; 3]| format!("p50 {} us, p99 {} us, max {} us", v[0], v[1], v[2]);
+        writeln!(
+            f,
+            "bench-net: {:.1} s, {} frames stepped, {} snapshots received, {} steps dropped, {} dynamic bodies",
+            self.seconds, self.frames, self.received, self.steps_dropped, self.bodies
+        )?;
+        writeln!(f, "tick lateness:            {}", p(self.lateness_us))?;
+        writeln!(f, "World::step time:         {}", p(self.step_us))?;
+        writeln!(f, "publish -> receive:       {}", p(self.latency_us))?;
+        writeln!(
+            f,
+            "keyframe:                 {} bytes, {} poses, {} bytes/body",
+            self.keyframe.0,
+            self.keyframe.1,
+            per(self.keyframe)
+        )?;
+        writeln!(
+            f,
+            "delta (median):           {} bytes, {} poses",
+            self.delta.0, self.delta.1
+        )?;
+        write!(
+            f,
+            "delta with motion (med.): {} bytes, {} poses, {} bytes/body",
+            self.moving_delta.0,
+            self.moving_delta.1,
+            per(self.moving_delta)
+        )
+    }
+}
+
+struct Received {
+    latency_us: u32,
+    bytes: usize,
+    poses: usize,
+    keyframe: bool,
+}
+
+/// Run the daemon configured by `config` for `seconds` with a client connected to its first
+/// listen endpoint, and report.
+pub async fn bench_net(config: &ServerConfig, seconds: f64) -> Result<BenchReport, ServiceError> {
+    let epoch = Instant::now();
+    let published: Arc<Vec<AtomicU64>> = Arc::new((0..SLOTS).map(|_| AtomicU64::new(0)).collect());
+    let hook = {
+        let published = published.clone();
+        Arc::new(move |frame: u64| {
+            published[frame as usize % SLOTS]
+                .store(epoch.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        })
+    };
+    let options = ServerOptions {
+        record: true,
+        on_publish: Some(hook),
+        ..Default::default()
+    };
+    let server = Server::start(config, options).await?;
+
+    let endpoint = config
+        .zenoh
+        .listen
+        .first()
+        .cloned()
+        .unwrap_or_else(|| "tcp/127.0.0.1:7447".into());
+    let mut client = zenoh::Config::default();
+    let set = |c: &mut zenoh::Config, k: &str, v: &str| {
+        c.insert_json5(k, v)
+            .map_err(|e| ServiceError::Zenoh(format!("client config {k}: {e}")))
+    };
+    set(&mut client, "mode", "\"peer\"")?;
+    set(
+        &mut client,
+        "connect/endpoints",
+        &format!("[\"{endpoint}\"]"),
+    )?;
+    set(&mut client, "listen/endpoints", "[]")?;
+    set(&mut client, "scouting/multicast/enabled", "false")?;
+    let session = zenoh::open(client)
+        .await
+        .map_err(|e| ServiceError::Zenoh(format!("client session: {e}")))?;
+    let samples: Arc<Mutex<Vec<Received>>> = Arc::default();
+    let sub = {
+        let samples = samples.clone();
+        let published = published.clone();
+        session
+            .declare_subscriber(server.keys().poses())
+            .callback(move |sample| {
+                let now = epoch.elapsed().as_nanos() as u64;
+                let bytes = sample.payload().to_bytes();
+                if let Ok(s) = decode::<Snapshot>(&bytes) {
+                    let sent = published[s.frame as usize % SLOTS].load(Ordering::Relaxed);
+                    let latency_us = (now.saturating_sub(sent) / 1000).min(u32::MAX as u64) as u32;
+                    if let Ok(mut v) = samples.lock() {
+                        v.push(Received {
+                            latency_us,
+                            bytes: bytes.len(),
+                            poses: s.poses.len(),
+                            keyframe: s.keyframe,
+                        });
+                    }
+                }
+            })
+            .await
+            .map_err(|e| ServiceError::Zenoh(format!("client subscriber: {e}")))?
+    };
+    tokio::time::sleep(Duration::from_secs_f64(seconds)).await;
+    let _ = sub.undeclare().wait();
+    let _ = session.close().await;
+    let summary = server.shutdown().await?;
+    let samples = std::mem::take(&mut *samples.lock().unwrap_or_else(|e| e.into_inner()));
+
+    let keyframes: Vec<_> = samples
+        .iter()
+        .filter(|s| s.keyframe)
+        .map(|s| (s.bytes, s.poses))
+        .collect();
+    let bodies = samples
+        .iter()
+        .rev()
+        .find(|s| s.keyframe)
+        .map_or(0, |s| s.poses);
+    let deltas: Vec<_> = samples.iter().filter(|s| !s.keyframe).collect();
+    let delta_bytes = median_pair(deltas.iter().map(|s| (s.bytes, 0)).collect()).0;
+    let delta_poses = median_pair(deltas.iter().map(|s| (s.poses, 0)).collect()).0;
+    let moving: Vec<_> = deltas
+        .iter()
+        .filter(|s| s.poses > 0)
+        .map(|s| (s.bytes, s.poses))
+        .collect();
+    Ok(BenchReport {
+        seconds,
+        frames: summary.frames,
+        received: samples.len() as u64,
+        steps_dropped: summary.steps_dropped,
+        bodies,
+        lateness_us: percentiles(summary.lateness_us),
+        step_us: percentiles(summary.step_us),
+        latency_us: percentiles(samples.iter().map(|s| s.latency_us).collect()),
+        keyframe: median_pair(keyframes),
+        delta: (delta_bytes, delta_poses),
+        moving_delta: median_pair(moving),
+    })
+}

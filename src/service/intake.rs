@@ -1,0 +1,287 @@
+//! From a payload on a command key to a validated [`Command`]: what the Zenoh callbacks run.
+//! Pure and non-blocking: decode, check every field, `try_send` into the tick thread's channel.
+
+#![allow(clippy::unnecessary_cast)] // Real <-> f32 casts matter with the `f64` feature.
+
+use super::config::Limits;
+use crate::physics::{BodyDef, BodyId, MassSpec, Real, Shape, Vec2};
+use crate::protocol::{
+    decode, Colour, CommandKey, Remove, Reset, SetGravity, ShapeSpec, Spawn, SpawnBody, Tilt,
+    Vector,
+};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{SyncSender, TrySendError};
+use std::sync::Arc;
+
+/// A body to add, validated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpawnDef {
+    /// The engine's definition (passed `BodyDef::validate`).
+    pub def: BodyDef,
+    /// Name (may be empty).
+    pub name: String,
+    /// Colour.
+    pub colour: Colour,
+}
+
+/// A validated command for the tick thread.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    /// Set gravity (m/s^2).
+    SetGravity(Vector),
+    /// Set gravity from a device's tilt.
+    Tilt(Tilt),
+    /// Add bodies, all or nothing.
+    Spawn(Vec<SpawnDef>),
+    /// Remove bodies, all or nothing.
+    Remove(Vec<BodyId>),
+    /// Reload the scene.
+    Reset,
+}
+
+/// What a callback hands the tick thread: a command, or the reason it was refused.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Incoming {
+    /// The key it arrived on.
+    pub key: CommandKey,
+    /// The command, or why it was refused.
+    pub command: Result<Command, String>,
+}
+
+fn finite(field: &str, v: f32) -> Result<(), String> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(format!("{field} must be a finite number, got {v}"))
+    }
+}
+
+fn magnitude(field: &str, v: f32, max: f32) -> Result<(), String> {
+    if v <= max {
+        Ok(())
+    } else {
+        Err(format!(
+            "{field} = {v} is out of range: must be <= {max} m/s^2"
+        ))
+    }
+}
+
+/// Decode and validate a payload that arrived on `key`.
+pub fn parse(key: CommandKey, payload: &[u8], limits: &Limits) -> Result<Command, String> {
+    if payload.len() > limits.max_payload_bytes as usize {
+        return Err(format!(
+            "payload of {} bytes is larger than limits.max_payload_bytes = {}",
+            payload.len(),
+            limits.max_payload_bytes
+        ));
+    }
+    let bad = |e: crate::protocol::DecodeError| e.to_string();
+    match key {
+        CommandKey::Gravity => {
+            let g: SetGravity = decode(payload).map_err(bad)?;
+            finite("gravity.x", g.x)?;
+            finite("gravity.y", g.y)?;
+            magnitude("|gravity|", g.x.hypot(g.y), limits.max_gravity)?;
+            Ok(Command::SetGravity(Vector::new(g.x, g.y)))
+        }
+        CommandKey::Tilt => {
+            let t: Tilt = decode(payload).map_err(bad)?;
+            if let Tilt::Accelerometer { x, y, z } = t {
+                finite("tilt.x", x)?;
+                finite("tilt.y", y)?;
+                finite("tilt.z", z)?;
+                let m = (x * x + y * y + z * z).sqrt();
+                magnitude("|tilt|", m, limits.max_gravity)?;
+            }
+            Ok(Command::Tilt(t))
+        }
+        CommandKey::Spawn => {
+            let s: Spawn = decode(payload).map_err(bad)?;
+            if s.bodies.is_empty() {
+                return Err("bodies is empty: nothing to spawn".into());
+            }
+            let max = limits.max_bodies_per_spawn;
+            if s.bodies.len() > max as usize {
+                return Err(format!(
+                    "{} bodies in one spawn, more than limits.max_bodies_per_spawn = {max}",
+                    s.bodies.len()
+                ));
+            }
+            let defs = s
+                .bodies
+                .into_iter()
+                .enumerate()
+                .map(|(i, b)| spawn_def(b, limits).map_err(|e| format!("bodies[{i}]: {e}")))
+                .collect::<Result<Vec<_>, String>>()?;
+            Ok(Command::Spawn(defs))
+        }
+        CommandKey::Remove => {
+            let r: Remove = decode(payload).map_err(bad)?;
+            if r.ids.is_empty() {
+                return Err("ids is empty: nothing to remove".into());
+            }
+            Ok(Command::Remove(
+                r.ids.into_iter().map(BodyId::from).collect(),
+            ))
+        }
+        CommandKey::Reset => {
+            let Reset = decode(payload).map_err(bad)?;
+            Ok(Command::Reset)
+        }
+    }
+}
+
+fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, String> {
+    let ShapeSpec::Rect { width, height } = b.shape;
+    let def = BodyDef {
+        shape: Shape::rect(width as Real, height as Real),
+        position: Vec2::new(b.position.x as Real, b.position.y as Real),
+        angle: b.angle as Real,
+        linear_velocity: Vec2::new(b.velocity.x as Real, b.velocity.y as Real),
+        angular_velocity: b.angular_velocity as Real,
+        mass: MassSpec::Density(b.density as Real),
+        friction: b.friction as Real,
+        restitution: b.restitution as Real,
+    };
+    def.validate().map_err(|e| e.to_string())?;
+    let max = limits.max_coordinate;
+    for (field, v) in [
+        ("position.x", b.position.x),
+        ("position.y", b.position.y),
+        ("shape.width", width),
+        ("shape.height", height),
+    ] {
+        if v.abs() > max {
+            return Err(format!(
+                "{field} = {v} is out of range: must be within +-{max} (limits.max_coordinate)"
+            ));
+        }
+    }
+    Ok(SpawnDef {
+        def,
+        name: b.name.unwrap_or_default(),
+        colour: b.colour,
+    })
+}
+
+/// The callbacks' side of the command channel. Cloned into each subscriber's callback.
+#[derive(Clone)]
+pub struct Intake {
+    tx: SyncSender<Incoming>,
+    limits: Arc<Limits>,
+    dropped: Arc<[AtomicU64; 5]>,
+}
+
+impl Intake {
+    /// An intake sending into `tx`; `dropped` counts, per command key, what a full channel refused.
+    pub fn new(tx: SyncSender<Incoming>, limits: Limits, dropped: Arc<[AtomicU64; 5]>) -> Intake {
+        Intake {
+            tx,
+            limits: Arc::new(limits),
+            dropped,
+        }
+    }
+
+    /// Decode, validate and queue. Never blocks: a full channel is counted and reported by the
+    /// tick thread as a rejection.
+    pub fn handle(&self, key: CommandKey, payload: &[u8]) {
+        let command = parse(key, payload, &self.limits);
+        match self.tx.try_send(Incoming { key, command }) {
+            Ok(()) => {}
+            Err(TrySendError::Full(_)) => {
+                self.dropped[key.index()].fetch_add(1, Ordering::Relaxed);
+            }
+            Err(TrySendError::Disconnected(_)) => {} // shutting down
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::{encode, Orientation};
+
+    fn body() -> SpawnBody {
+        SpawnBody {
+            name: None,
+            shape: ShapeSpec::Rect {
+                width: 1.0,
+                height: 0.5,
+            },
+            position: Vector::new(0.0, 3.0),
+            angle: 0.0,
+            velocity: Vector::default(),
+            angular_velocity: 0.0,
+            density: 1.0,
+            friction: 0.5,
+            restitution: 0.0,
+            colour: Colour::default(),
+        }
+    }
+
+    #[test]
+    fn valid_commands_parse() {
+        let l = Limits::default();
+        let p = encode(&SetGravity { x: 3.0, y: 0.0 }).unwrap();
+        assert_eq!(
+            parse(CommandKey::Gravity, &p, &l),
+            Ok(Command::SetGravity(Vector::new(3.0, 0.0)))
+        );
+        let p = encode(&Tilt::Orientation(Orientation::FaceUp)).unwrap();
+        assert!(parse(CommandKey::Tilt, &p, &l).is_ok());
+        let p = encode(&Spawn {
+            bodies: vec![body(), body()],
+        })
+        .unwrap();
+        assert!(matches!(parse(CommandKey::Spawn, &p, &l), Ok(Command::Spawn(v)) if v.len() == 2));
+        assert_eq!(parse(CommandKey::Reset, &[1], &l), Ok(Command::Reset));
+    }
+
+    #[test]
+    fn bad_fields_are_named_with_their_value() {
+        let l = Limits::default();
+        let p = encode(&SetGravity {
+            x: f32::NAN,
+            y: 0.0,
+        })
+        .unwrap();
+        let e = parse(CommandKey::Gravity, &p, &l).unwrap_err();
+        assert!(e.contains("gravity.x") && e.contains("NaN"), "{e}");
+        let p = encode(&SetGravity { x: 1e6, y: 0.0 }).unwrap();
+        assert!(parse(CommandKey::Gravity, &p, &l)
+            .unwrap_err()
+            .contains("|gravity| = 1000000"));
+        let p = encode(&Tilt::Accelerometer {
+            x: 0.0,
+            y: f32::INFINITY,
+            z: 0.0,
+        })
+        .unwrap();
+        assert!(parse(CommandKey::Tilt, &p, &l)
+            .unwrap_err()
+            .contains("tilt.y"));
+        let mut b = body();
+        b.density = -2.0;
+        let p = encode(&Spawn {
+            bodies: vec![body(), b],
+        })
+        .unwrap();
+        let e = parse(CommandKey::Spawn, &p, &l).unwrap_err();
+        assert!(e.starts_with("bodies[1]: density = -2"), "{e}");
+        let mut b = body();
+        b.position.x = 5e4;
+        let p = encode(&Spawn { bodies: vec![b] }).unwrap();
+        let e = parse(CommandKey::Spawn, &p, &l).unwrap_err();
+        assert!(e.contains("position.x = 50000"), "{e}");
+        let p = encode(&Spawn {
+            bodies: vec![body(); 65],
+        })
+        .unwrap();
+        let e = parse(CommandKey::Spawn, &p, &l).unwrap_err();
+        assert!(e.contains("max_bodies_per_spawn = 64"), "{e}");
+        let e = parse(CommandKey::Spawn, &vec![1; 70000], &l).unwrap_err();
+        assert!(e.contains("max_payload_bytes"), "{e}");
+        let e = parse(CommandKey::Tilt, &[1, 7], &l).unwrap_err();
+        assert!(e.contains("unknown variant"), "{e}");
+    }
+}

@@ -1,0 +1,21 @@
+//! The daemon: one World stepped at a fixed rate on its own thread, served over Zenoh.
+//!
+//! - [`config`]: `config/server.toml`, flags and embedded defaults.
+//! - [`intake`]: what the Zenoh callbacks do with a payload (decode, validate, queue).
+//! - [`sim`]: the World and how commands are applied; snapshot deltas; the shared scene view.
+//! - [`tick`]: the fixed-rate loop.
+//! - [`net`]: the Zenoh session, declarations and shutdown ([`Server`]).
+//! - [`mod@bench`]: the `bench-net` measurement.
+
+pub mod bench;
+pub mod config;
+pub mod intake;
+pub mod net;
+pub mod sim;
+pub mod tick;
+
+pub use config::{ConfigError, Limits, ServerConfig, ZenohSettings};
+pub use intake::{Command, Incoming, SpawnDef};
+pub use net::{PublishHook, Server, ServerOptions, ServiceError};
+pub use sim::{SceneSource, SceneView, Simulation, StartError, POSE_EPSILON};
+pub use tick::RunSummary;

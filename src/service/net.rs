@@ -1,0 +1,300 @@
+//! The Zenoh side of the daemon: one session, the command subscribers (callbacks that only
+//! decode, validate and `try_send`), the publishers, the `…/scene` queryable and the liveliness
+//! token. The tick thread is started here and stopped by [`Server::shutdown`].
+
+use super::config::{ConfigError, ServerConfig};
+use super::intake::{Incoming, Intake};
+use super::sim::{SceneSource, Simulation, StartError};
+use super::tick::{self, Outputs, RunSummary, SharedView, TickConfig};
+use crate::protocol::{encode, CommandKey, Keys};
+use std::sync::atomic::{AtomicBool, AtomicU64};
+use std::sync::mpsc::sync_channel;
+use std::sync::Arc;
+use std::time::Duration;
+use zenoh::liveliness::LivelinessToken;
+use zenoh::pubsub::{Publisher, Subscriber};
+use zenoh::qos::CongestionControl;
+use zenoh::query::{Query, Queryable};
+use zenoh::{Session, Wait};
+
+/// Why the daemon could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum ServiceError {
+    /// The configuration is invalid.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// The scene could not be loaded.
+    #[error(transparent)]
+    Start(#[from] StartError),
+    /// Zenoh refused (e.g. the listen port is taken).
+    #[error("zenoh: {0}")]
+    Zenoh(String),
+    /// The tick thread could not be started or panicked.
+    #[error("tick thread: {0}")]
+    Thread(String),
+}
+
+fn zerr(what: &str) -> impl FnOnce(zenoh::Error) -> ServiceError + '_ {
+    move |e| ServiceError::Zenoh(format!("{what}: {e}"))
+}
+
+/// A hook called with the frame number just before each snapshot is put (benchmarks).
+pub type PublishHook = Arc<dyn Fn(u64) + Send + Sync>;
+
+/// Extra knobs for embedding the daemon (tests, benchmarks).
+#[derive(Clone, Default)]
+pub struct ServerOptions {
+    /// Where the scene comes from; `None` means the config's `scene` (or the embedded one).
+    pub source: Option<SceneSource>,
+    /// Keep every tick's lateness and step time for the [`RunSummary`].
+    pub record: bool,
+    /// Called just before each snapshot is put.
+    pub on_publish: Option<PublishHook>,
+}
+
+enum Outgoing {
+    Event(Vec<u8>),
+    Stats(Vec<u8>),
+}
+
+struct ZenohOutputs {
+    poses: Publisher<'static>,
+    tx: tokio::sync::mpsc::Sender<Outgoing>,
+    on_publish: Option<PublishHook>,
+}
+
+impl ZenohOutputs {
+    fn queue(&mut self, what: &str, msg: Outgoing) {
+        if self.tx.try_send(msg).is_err() {
+            tracing::warn!("{what} dropped: the publisher task is behind or gone");
+        }
+    }
+}
+
+impl Outputs for ZenohOutputs {
+    fn poses(&mut self, frame: u64, payload: Vec<u8>) {
+        if let Some(hook) = &self.on_publish {
+            hook(frame);
+        }
+        // CongestionControl::Drop: never blocks the loop.
+        if let Err(e) = self.poses.put(payload).wait() {
+            tracing::warn!(frame, "snapshot not published: {e}");
+        }
+    }
+    fn event(&mut self, payload: Vec<u8>) {
+        self.queue("event", Outgoing::Event(payload));
+    }
+    fn stats(&mut self, payload: Vec<u8>) {
+        self.queue("stats", Outgoing::Stats(payload));
+    }
+}
+
+/// A running daemon. Stop it with [`Server::shutdown`].
+pub struct Server {
+    session: Session,
+    keys: Keys,
+    subscribers: Vec<Subscriber<()>>,
+    queryable: Queryable<()>,
+    token: LivelinessToken,
+    stop: Arc<AtomicBool>,
+    tick: std::thread::JoinHandle<(ZenohOutputs, RunSummary)>,
+    publisher_task: tokio::task::JoinHandle<()>,
+    query_task: tokio::task::JoinHandle<()>,
+}
+
+impl Server {
+    /// Validate `config`, load the scene, open the Zenoh session, declare everything and start
+    /// the tick thread. Must be called inside a multi-thread tokio runtime.
+    pub async fn start(
+        config: &ServerConfig,
+        options: ServerOptions,
+    ) -> Result<Server, ServiceError> {
+        config.validate()?;
+        let keys = config.keys()?;
+        let source = options
+            .source
+            .clone()
+            .unwrap_or_else(|| SceneSource::from_config(config));
+        let sim = Simulation::new(config, source)?;
+        let zconfig = config.zenoh_config()?;
+        let session = zenoh::open(zconfig)
+            .await
+            .map_err(zerr("cannot open session"))?;
+
+        let poses = session
+            .declare_publisher(keys.poses())
+            .congestion_control(CongestionControl::Drop)
+            .express(true)
+            .await
+            .map_err(zerr("poses publisher"))?;
+        let events = session
+            .declare_publisher(keys.events())
+            .congestion_control(CongestionControl::Block)
+            .await
+            .map_err(zerr("events publisher"))?;
+        let stats = session
+            .declare_publisher(keys.stats())
+            .await
+            .map_err(zerr("stats publisher"))?;
+
+        // Events and stats are put from a task, so a congested link never blocks the loop.
+        let (out_tx, mut out_rx) = tokio::sync::mpsc::channel::<Outgoing>(1024);
+        let publisher_task = tokio::spawn(async move {
+            while let Some(msg) = out_rx.recv().await {
+                let (publisher, payload) = match msg {
+                    Outgoing::Event(p) => (&events, p),
+                    Outgoing::Stats(p) => (&stats, p),
+                };
+                if let Err(e) = publisher.put(payload).await {
+                    tracing::warn!("cannot publish on {}: {e}", publisher.key_expr());
+                }
+            }
+            let _ = events.undeclare().await;
+            let _ = stats.undeclare().await;
+        });
+
+        // The channels between Zenoh callbacks and the tick thread.
+        let capacity = config.command_queue;
+        let (tx, rx) = sync_channel::<Incoming>(capacity as usize);
+        let dropped: Arc<[AtomicU64; 5]> = Arc::new(Default::default());
+        let shared = Arc::new(SharedView::default());
+        shared.store(Arc::new(sim.view()));
+        let stop = Arc::new(AtomicBool::new(false));
+        // The queryable: the callback only hands the query to a task, which replies from the
+        // latest shared view.
+        let (qtx, mut qrx) = tokio::sync::mpsc::channel::<Query>(64);
+        let scene_key = keys.scene();
+        let query_task = {
+            let shared = shared.clone();
+            let scene_key = scene_key.clone();
+            tokio::spawn(async move {
+                while let Some(query) = qrx.recv().await {
+                    let Some(view) = shared.load() else { continue };
+                    match encode(&view.to_state()) {
+                        Ok(payload) => {
+                            if let Err(e) = query.reply(&scene_key, payload).await {
+                                tracing::warn!("cannot reply to a scene query: {e}");
+                            }
+                        }
+                        Err(e) => tracing::error!("cannot encode the scene: {e}"),
+                    }
+                }
+            })
+        };
+        let queryable = session
+            .declare_queryable(&scene_key)
+            .callback(move |query: Query| {
+                if qtx.try_send(query).is_err() {
+                    tracing::warn!("scene query dropped: too many pending");
+                }
+            })
+            .await
+            .map_err(zerr("scene queryable"))?;
+
+        // The command subscribers.
+        let intake = Intake::new(tx, config.limits.clone(), dropped.clone());
+        let mut subscribers = Vec::new();
+        for key in CommandKey::ALL {
+            let intake = intake.clone();
+            let sub = session
+                .declare_subscriber(keys.command(key))
+                .callback(move |sample| intake.handle(key, &sample.payload().to_bytes()))
+                .await
+                .map_err(zerr("command subscriber"))?;
+            subscribers.push(sub);
+        }
+        drop(intake);
+
+        let token = session
+            .liveliness()
+            .declare_token(keys.server())
+            .await
+            .map_err(zerr("liveliness token"))?;
+        // Last, the tick thread: nothing after this can fail.
+        let outputs = ZenohOutputs {
+            poses,
+            tx: out_tx,
+            on_publish: options.on_publish.clone(),
+        };
+        let tick_cfg = TickConfig {
+            dt: Duration::from_secs_f64(config.dt()),
+            max_catch_up: config.max_catch_up,
+            command_capacity: capacity,
+            record: options.record,
+        };
+        let tick = {
+            let (dropped, shared, stop) = (dropped.clone(), shared.clone(), stop.clone());
+            std::thread::Builder::new()
+                .name("tiltbox-tick".into())
+                .spawn(move || tick::run(sim, rx, dropped, outputs, shared, stop, tick_cfg))
+                .map_err(|e| ServiceError::Thread(e.to_string()))?
+        };
+
+        tracing::info!(prefix = keys.prefix(), zid = %session.zid(), "serving");
+        Ok(Server {
+            session,
+            keys,
+            subscribers,
+            queryable,
+            token,
+            stop,
+            tick,
+            publisher_task,
+            query_task,
+        })
+    }
+
+    /// The keys this daemon serves.
+    pub fn keys(&self) -> &Keys {
+        &self.keys
+    }
+
+    /// The Zenoh session (e.g. to open a client on it in benchmarks).
+    pub fn session(&self) -> &Session {
+        &self.session
+    }
+
+    /// Stop: undeclare the subscribers and the queryable, stop the tick thread after its
+    /// current tick, flush events, undeclare the publishers and the token, close the session.
+    pub async fn shutdown(self) -> Result<RunSummary, ServiceError> {
+        let Server {
+            session,
+            subscribers,
+            queryable,
+            token,
+            stop,
+            tick,
+            publisher_task,
+            query_task,
+            ..
+        } = self;
+        for s in subscribers {
+            let _ = s.undeclare().await;
+        }
+        let _ = queryable.undeclare().await;
+        query_task.abort();
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        let joined = tokio::task::spawn_blocking(move || tick.join())
+            .await
+            .map_err(|e| ServiceError::Thread(e.to_string()))?;
+        let (outputs, summary) =
+            joined.map_err(|_| ServiceError::Thread("the tick thread panicked".into()))?;
+        let ZenohOutputs { poses, tx, .. } = outputs;
+        drop(tx);
+        let _ = poses.undeclare().await;
+        if tokio::time::timeout(Duration::from_millis(500), publisher_task)
+            .await
+            .is_err()
+        {
+            tracing::warn!("events still queued at shutdown were dropped");
+        }
+        let _ = token.undeclare().await;
+        match tokio::time::timeout(Duration::from_millis(1000), session.close()).await {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => tracing::warn!("closing the session: {e}"),
+            Err(_) => tracing::warn!("closing the session took more than 1 s"),
+        }
+        tracing::info!(frames = summary.frames, "stopped");
+        Ok(summary)
+    }
+}

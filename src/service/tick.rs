@@ -1,0 +1,286 @@
+//! The tick thread: owns the [`Simulation`], steps it at a fixed dt against absolute deadlines,
+//! applies queued commands at each tick boundary and hands every output to an [`Outputs`].
+
+use super::intake::Incoming;
+use super::sim::{SceneView, Simulation};
+use crate::protocol::{encode, encode_into, CommandKey, Event, Stats};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::Receiver;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// Where the tick thread's encoded messages go. Implementations must not block.
+pub trait Outputs: Send + 'static {
+    /// A snapshot (`…/poses`) for `frame`.
+    fn poses(&mut self, frame: u64, payload: Vec<u8>);
+    /// An event (`…/events`).
+    fn event(&mut self, payload: Vec<u8>);
+    /// Stats (`…/stats`).
+    fn stats(&mut self, payload: Vec<u8>);
+    /// Every command taken from the channel, with the frame it is applied before (the frame
+    /// of its event), whether it is then applied or rejected: the journal a replay needs.
+    /// The default ignores it.
+    fn command(&mut self, frame: u64, incoming: &Incoming) {
+        let _ = (frame, incoming);
+    }
+}
+
+/// The latest [`SceneView`], replaced after every tick. Readers clone the `Arc` (the lock is
+/// held for a pointer copy, never while the World is touched).
+#[derive(Default)]
+pub struct SharedView(Mutex<Option<Arc<SceneView>>>);
+
+impl SharedView {
+    /// The latest view, if a tick has run.
+    pub fn load(&self) -> Option<Arc<SceneView>> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+    /// Publish a new view.
+    pub fn store(&self, view: Arc<SceneView>) {
+        *self.0.lock().unwrap_or_else(|e| e.into_inner()) = Some(view);
+    }
+}
+
+/// How the loop runs.
+#[derive(Clone, Debug)]
+pub struct TickConfig {
+    /// Fixed step.
+    pub dt: Duration,
+    /// Late steps run back to back before time is dropped.
+    pub max_catch_up: u32,
+    /// Command channel capacity (for messages).
+    pub command_capacity: u32,
+    /// Keep every tick's lateness and step time in the [`RunSummary`] (benchmarks).
+    pub record: bool,
+}
+
+/// What the loop did, returned when it stops.
+#[derive(Clone, Debug, Default)]
+pub struct RunSummary {
+    /// Frames stepped.
+    pub frames: u64,
+    /// Steps dropped because the loop fell behind.
+    pub steps_dropped: u64,
+    /// Per tick: how long after its deadline it started (us); only with `record`.
+    pub lateness_us: Vec<u32>,
+    /// Per tick: `World::step` time (us); only with `record`.
+    pub step_us: Vec<u32>,
+}
+
+struct Window {
+    started: Instant,
+    step_us: Vec<u32>,
+    worst_lateness_us: u32,
+}
+
+fn micros(d: Duration) -> u32 {
+    d.as_micros().min(u32::MAX as u128) as u32
+}
+
+/// Run until `stop` is set. Returns the outputs (so the caller can undeclare them) and a summary.
+pub fn run<O: Outputs>(
+    mut sim: Simulation,
+    rx: Receiver<Incoming>,
+    dropped: Arc<[AtomicU64; 5]>,
+    mut out: O,
+    shared: Arc<SharedView>,
+    stop: Arc<AtomicBool>,
+    cfg: TickConfig,
+) -> (O, RunSummary) {
+    let dt = cfg.dt;
+    let start = Instant::now();
+    let deadline = |k: u64| start + dt.mul_f64(k as f64);
+    let mut k: u64 = 1; // index of the next tick on the grid start + k dt
+    let mut summary = RunSummary::default();
+    let mut window = Window {
+        started: start,
+        step_us: Vec::with_capacity(128),
+        worst_lateness_us: 0,
+    };
+    let mut buf = Vec::with_capacity(1024);
+    shared.store(Arc::new(sim.view()));
+    tracing::info!(dt_ms = dt.as_secs_f64() * 1e3, "tick loop started");
+    while !stop.load(Ordering::Relaxed) {
+        let due = deadline(k);
+        let now = Instant::now();
+        if now < due {
+            // Sleep in slices so a stop request is seen quickly.
+            std::thread::sleep((due - now).min(Duration::from_millis(50)));
+            continue;
+        }
+        let late = now - due;
+        let behind = (late.as_secs_f64() / dt.as_secs_f64()) as u64;
+        if behind > cfg.max_catch_up as u64 {
+            let skip = behind - cfg.max_catch_up as u64;
+            k += skip;
+            summary.steps_dropped += skip;
+            tracing::warn!(
+                late_ms = late.as_secs_f64() * 1e3,
+                dropped_steps = skip,
+                "tick loop fell behind: dropping time"
+            );
+            continue;
+        }
+        k += 1;
+
+        // 1. Commands, in arrival order, stamped with the frame about to be stepped.
+        for key in CommandKey::ALL {
+            let n = dropped[key.index()].swap(0, Ordering::Relaxed);
+            if n > 0 {
+                let ev = sim.reject_dropped(key, n, cfg.command_capacity);
+                publish_event(&mut out, &ev);
+            }
+        }
+        while let Ok(incoming) = rx.try_recv() {
+            out.command(sim.next_frame(), &incoming);
+            if let Some(ev) = sim.apply(incoming) {
+                publish_event(&mut out, &ev);
+            }
+        }
+
+        // 2. Step.
+        let step_time = match sim.step() {
+            Ok(t) => t,
+            Err(e) => {
+                tracing::error!(frame = sim.next_frame(), "step failed: {e}");
+                continue;
+            }
+        };
+
+        // 3. Snapshot out, view shared.
+        let frame = sim.frame();
+        let snapshot = sim.snapshot();
+        match encode_into(snapshot, &mut buf) {
+            Ok(()) => out.poses(frame, buf.clone()),
+            Err(e) => tracing::error!(frame, "cannot encode snapshot: {e}"),
+        }
+        shared.store(Arc::new(sim.view()));
+
+        // 4. Bookkeeping and stats once a second.
+        let (late_us, step_us) = (micros(late), micros(step_time));
+        window.step_us.push(step_us);
+        window.worst_lateness_us = window.worst_lateness_us.max(late_us);
+        if cfg.record {
+            summary.lateness_us.push(late_us);
+            summary.step_us.push(step_us);
+        }
+        summary.frames = frame;
+        let now = Instant::now();
+        if now - window.started >= Duration::from_secs(1) {
+            let n = window.step_us.len();
+            let (_, &mut median, _) = window.step_us.select_nth_unstable(n / 2);
+            let stats = Stats {
+                frame,
+                bodies: sim.world().body_count() as u32,
+                awake: sim.awake_count() as u32,
+                contacts: sim.world().contact_count() as u32,
+                step_us_median: median,
+                step_us_max: window.step_us.iter().copied().max().unwrap_or(0),
+                lateness_us_max: window.worst_lateness_us,
+                commands_applied: sim.applied,
+                commands_rejected: sim.rejected,
+                steps_dropped: summary.steps_dropped,
+            };
+            match encode(&stats) {
+                Ok(p) => out.stats(p),
+                Err(e) => tracing::error!("cannot encode stats: {e}"),
+            }
+            window.started = now;
+            window.step_us.clear();
+            window.worst_lateness_us = 0;
+        }
+    }
+    tracing::info!(frames = summary.frames, "tick loop stopped");
+    (out, summary)
+}
+
+fn publish_event<O: Outputs>(out: &mut O, ev: &Event) {
+    match encode(ev) {
+        Ok(p) => out.event(p),
+        Err(e) => tracing::error!("cannot encode event: {e}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::{decode, Snapshot};
+    use crate::service::config::ServerConfig;
+    use crate::service::sim::SceneSource;
+    use std::sync::mpsc::sync_channel;
+
+    /// Collects snapshots; stalls the loop once, on `stall_at`.
+    struct Fake {
+        frames: Arc<Mutex<Vec<u64>>>,
+        stall_at: u64,
+    }
+
+    impl Outputs for Fake {
+        fn poses(&mut self, frame: u64, payload: Vec<u8>) {
+            let s: Snapshot = decode(&payload).unwrap();
+            assert_eq!(s.frame, frame);
+            self.frames.lock().unwrap().push(frame);
+            if frame == self.stall_at {
+                std::thread::sleep(Duration::from_millis(150));
+            }
+        }
+        fn event(&mut self, _: Vec<u8>) {}
+        fn stats(&mut self, _: Vec<u8>) {}
+    }
+
+    #[test]
+    fn the_loop_keeps_time_catches_up_a_little_and_drops_the_rest() {
+        let config = ServerConfig {
+            tick_hz: 100.0,
+            max_catch_up: 3,
+            ..Default::default()
+        };
+        let sim = Simulation::new(&config, SceneSource::Embedded).unwrap();
+        let (_tx, rx) = sync_channel(4);
+        let frames = Arc::new(Mutex::new(Vec::new()));
+        let stop = Arc::new(AtomicBool::new(false));
+        let out = Fake {
+            frames: frames.clone(),
+            stall_at: 10,
+        };
+        let handle = {
+            let stop = stop.clone();
+            std::thread::spawn(move || {
+                run(
+                    sim,
+                    rx,
+                    Arc::default(),
+                    out,
+                    Arc::default(),
+                    stop,
+                    TickConfig {
+                        dt: Duration::from_millis(10),
+                        max_catch_up: 3,
+                        command_capacity: 4,
+                        record: true,
+                    },
+                )
+            })
+        };
+        let t0 = Instant::now();
+        while frames.lock().unwrap().len() < 40 {
+            assert!(t0.elapsed() < Duration::from_secs(5), "loop too slow");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let elapsed = t0.elapsed();
+        stop.store(true, Ordering::Relaxed);
+        let (_, summary) = handle.join().unwrap();
+        let frames = frames.lock().unwrap().clone();
+        // consecutive frames, no gaps: dropped time is not a dropped frame number
+        assert!(frames.windows(2).all(|w| w[1] == w[0] + 1), "{frames:?}");
+        // the 150 ms stall is 15 ticks: 3 are caught up, about 11 are dropped
+        assert!(
+            (9..=13).contains(&summary.steps_dropped),
+            "dropped {}",
+            summary.steps_dropped
+        );
+        // 40 frames at 100 Hz plus the dropped 110 ms: about 0.5 s, not 0.4 s
+        assert!(elapsed > Duration::from_millis(400), "{elapsed:?}");
+        assert_eq!(summary.lateness_us.len() as u64, summary.frames);
+    }
+}

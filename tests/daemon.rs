@@ -1,0 +1,629 @@
+//! The daemon end to end: a real Zenoh session per daemon and per client, TCP loopback, one
+//! port per test, multicast scouting off. Waits are on conditions with deadlines.
+#![cfg(feature = "net")]
+
+use std::time::{Duration, Instant};
+use tiltbox::protocol::*;
+use tiltbox::service::{Server, ServerConfig, ServerOptions, POSE_EPSILON};
+use tokio::sync::mpsc::{unbounded_channel, UnboundedReceiver};
+use zenoh::pubsub::Subscriber;
+use zenoh::Session;
+
+const WAIT: Duration = Duration::from_secs(5);
+
+fn config(port: u16) -> ServerConfig {
+    let mut c = ServerConfig::default();
+    c.zenoh.listen = vec![format!("tcp/127.0.0.1:{port}")];
+    c
+}
+
+async fn serve(config: &ServerConfig) -> Server {
+    Server::start(config, ServerOptions::default())
+        .await
+        .expect("daemon starts")
+}
+
+struct Client {
+    session: Session,
+    keys: Keys,
+    snapshots: UnboundedReceiver<Snapshot>,
+    events: UnboundedReceiver<Event>,
+    stats: UnboundedReceiver<Stats>,
+    _subs: Vec<Subscriber<()>>,
+}
+
+impl Client {
+    /// Connect, subscribe to poses, events and stats, and wait for the first snapshot.
+    async fn connect(port: u16, keys: &Keys) -> Client {
+        Client::connect_as("peer", port, keys).await
+    }
+
+    /// Connect in Zenoh mode `mode` (`peer` or `client`).
+    async fn connect_as(mode: &str, port: u16, keys: &Keys) -> Client {
+        let mut c = zenoh::Config::default();
+        c.insert_json5("mode", &format!("\"{mode}\"")).unwrap();
+        c.insert_json5("connect/endpoints", &format!("[\"tcp/127.0.0.1:{port}\"]"))
+            .unwrap();
+        c.insert_json5("listen/endpoints", "[]").unwrap();
+        c.insert_json5("scouting/multicast/enabled", "false")
+            .unwrap();
+        let session = zenoh::open(c).await.unwrap();
+        let (stx, snapshots) = unbounded_channel();
+        let (etx, events) = unbounded_channel();
+        let (ttx, stats) = unbounded_channel();
+        let mut subs = Vec::new();
+        subs.push(
+            session
+                .declare_subscriber(keys.poses())
+                .callback(move |s| {
+                    let _ = stx.send(decode::<Snapshot>(&s.payload().to_bytes()).unwrap());
+                })
+                .await
+                .unwrap(),
+        );
+        subs.push(
+            session
+                .declare_subscriber(keys.events())
+                .callback(move |s| {
+                    let _ = etx.send(decode::<Event>(&s.payload().to_bytes()).unwrap());
+                })
+                .await
+                .unwrap(),
+        );
+        subs.push(
+            session
+                .declare_subscriber(keys.stats())
+                .callback(move |s| {
+                    let _ = ttx.send(decode::<Stats>(&s.payload().to_bytes()).unwrap());
+                })
+                .await
+                .unwrap(),
+        );
+        let mut client = Client {
+            session,
+            keys: keys.clone(),
+            snapshots,
+            events,
+            stats,
+            _subs: subs,
+        };
+        client.snapshot_where(|_| true).await;
+        client
+    }
+
+    async fn put_raw(&self, key: String, payload: Vec<u8>) {
+        self.session.put(key, payload).await.unwrap();
+    }
+
+    async fn put<M: Message>(&self, key: String, msg: &M) {
+        self.put_raw(key, encode(msg).unwrap()).await;
+    }
+
+    async fn snapshot_where(&mut self, mut pred: impl FnMut(&Snapshot) -> bool) -> Snapshot {
+        let end = Instant::now() + WAIT;
+        loop {
+            let left = end.saturating_duration_since(Instant::now());
+            match tokio::time::timeout(left, self.snapshots.recv()).await {
+                Ok(Some(s)) if pred(&s) => return s,
+                Ok(Some(_)) => {}
+                _ => panic!("no matching snapshot within {WAIT:?}"),
+            }
+        }
+    }
+
+    async fn event_where(&mut self, mut pred: impl FnMut(&Event) -> bool) -> Event {
+        let end = Instant::now() + WAIT;
+        loop {
+            let left = end.saturating_duration_since(Instant::now());
+            match tokio::time::timeout(left, self.events.recv()).await {
+                Ok(Some(e)) if pred(&e) => return e,
+                Ok(Some(_)) => {}
+                _ => panic!("no matching event within {WAIT:?}"),
+            }
+        }
+    }
+
+    async fn rejected(&mut self, key: &str, reason_has: &str) -> Event {
+        let key = key.to_owned();
+        self.event_where(|e| match &e.kind {
+            EventKind::Rejected { key: k, reason } => *k == key && reason.contains(reason_has),
+            _ => false,
+        })
+        .await
+    }
+
+    async fn scene(&self) -> SceneState {
+        let replies = self.session.get(self.keys.scene()).await.unwrap();
+        let reply = tokio::time::timeout(WAIT, replies.recv_async())
+            .await
+            .expect("scene reply in time")
+            .expect("a scene reply");
+        let sample = reply.into_result().expect("scene reply is ok");
+        decode::<SceneState>(&sample.payload().to_bytes()).unwrap()
+    }
+
+    /// Wait until `frames` more frames have been stepped.
+    async fn frames_pass(&mut self, frames: u64) -> Snapshot {
+        // skip what is buffered: count from the newest snapshot
+        let mut first = self.snapshot_where(|_| true).await.frame;
+        while let Ok(s) = self.snapshots.try_recv() {
+            first = s.frame;
+        }
+        self.snapshot_where(|s| s.frame >= first + frames).await
+    }
+}
+
+fn mean_dynamic(state: &SceneState) -> (f32, f32) {
+    let d: Vec<_> = state.bodies.iter().filter(|b| !b.is_static).collect();
+    let n = d.len() as f32;
+    (
+        d.iter().map(|b| b.position.x).sum::<f32>() / n,
+        d.iter().map(|b| b.position.y).sum::<f32>() / n,
+    )
+}
+
+fn brick(name: &str, x: f32, y: f32) -> SpawnBody {
+    SpawnBody {
+        name: Some(name.into()),
+        shape: ShapeSpec::Rect {
+            width: 0.6,
+            height: 0.3,
+        },
+        position: Vector::new(x, y),
+        angle: 0.0,
+        velocity: Vector::default(),
+        angular_velocity: 0.0,
+        density: 1.0,
+        friction: 0.6,
+        restitution: 0.0,
+        colour: Colour { r: 1, g: 2, b: 3 },
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn snapshots_arrive_at_60_hz_with_increasing_frames_and_keyframes() {
+    let cfg = config(17461);
+    let server = serve(&cfg).await;
+    let keys = server.keys().clone();
+    let mut c = Client::connect(17461, &keys).await;
+
+    // the liveliness token is visible
+    let tokens = c.session.liveliness().get(keys.server()).await.unwrap();
+    let token = tokio::time::timeout(WAIT, tokens.recv_async())
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(token.result().unwrap().key_expr().as_str(), keys.server());
+
+    let scene = c.scene().await;
+    let dynamic = scene.bodies.iter().filter(|b| !b.is_static).count();
+    let first = c.snapshot_where(|_| true).await;
+    let t0 = Instant::now();
+    let mut last = first.frame;
+    let mut count = 0;
+    let mut keyframes = 0;
+    while t0.elapsed() < Duration::from_millis(1000) {
+        let s = c.snapshot_where(|_| true).await;
+        assert!(s.frame > last, "frames increase: {} after {last}", s.frame);
+        assert!(s.time > 0.0 && (s.time - s.frame as f64 / 60.0).abs() < 1e-9);
+        if s.frame % 60 == 0 {
+            assert!(s.keyframe);
+            assert_eq!(
+                s.poses.len(),
+                dynamic,
+                "a keyframe carries every dynamic body"
+            );
+            keyframes += 1;
+        } else {
+            assert!(!s.keyframe);
+        }
+        // static bodies never appear
+        for p in &s.poses {
+            let b = scene.bodies.iter().find(|b| b.id == p.id).unwrap();
+            assert!(!b.is_static);
+        }
+        last = s.frame;
+        count += 1;
+    }
+    let rate = count as f64 / t0.elapsed().as_secs_f64();
+    assert!((45.0..=75.0).contains(&rate), "{rate:.1} snapshots/s");
+    assert!(keyframes >= 1);
+
+    let stats = tokio::time::timeout(WAIT, c.stats.recv())
+        .await
+        .unwrap()
+        .unwrap();
+    assert!(stats.frame > 0 && stats.bodies as usize == scene.bodies.len());
+    assert!(stats.awake as usize <= dynamic);
+
+    // clean shutdown within 2 s, token gone
+    let t0 = Instant::now();
+    server.shutdown().await.unwrap();
+    assert!(t0.elapsed() < Duration::from_secs(2), "{:?}", t0.elapsed());
+    let end = Instant::now() + WAIT;
+    loop {
+        let tokens = c.session.liveliness().get(keys.server()).await.unwrap();
+        if tokio::time::timeout(WAIT, tokens.recv_async())
+            .await
+            .unwrap()
+            .is_err()
+        {
+            break;
+        }
+        assert!(Instant::now() < end, "token still alive");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sideways_gravity_moves_bricks_sideways() {
+    let cfg = config(17462);
+    let server = serve(&cfg).await;
+    let mut c = Client::connect(17462, server.keys()).await;
+    let before = c.scene().await;
+    c.put(c.keys.gravity(), &SetGravity { x: 15.0, y: 0.0 })
+        .await;
+    let s = c
+        .snapshot_where(|s| s.gravity == Vector::new(15.0, 0.0))
+        .await;
+    c.snapshot_where(|x| x.frame >= s.frame + 60).await;
+    let after = c.scene().await;
+    let (x0, _) = mean_dynamic(&before);
+    let (x1, _) = mean_dynamic(&after);
+    assert!(x1 > x0 + 0.5, "mean x {x0} -> {x1}");
+    let moved = before
+        .bodies
+        .iter()
+        .filter(|b| !b.is_static)
+        .filter(|b| {
+            let a = after.bodies.iter().find(|a| a.id == b.id).unwrap();
+            a.position.x > b.position.x + 0.5
+        })
+        .count();
+    assert!(moved >= 1);
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn tilting_upside_down_makes_bricks_fall_towards_the_top() {
+    let cfg = config(17463);
+    let server = serve(&cfg).await;
+    let mut c = Client::connect(17463, server.keys()).await;
+    let before = c.scene().await;
+    let g = before.gravity.y.abs();
+    c.put(
+        c.keys.tilt(),
+        &Tilt::Orientation(Orientation::PortraitUpsideDown),
+    )
+    .await;
+    let s = c.snapshot_where(|s| s.gravity == Vector::new(0.0, g)).await;
+    c.snapshot_where(|x| x.frame >= s.frame + 60).await;
+    let after = c.scene().await;
+    let (_, y0) = mean_dynamic(&before);
+    let (_, y1) = mean_dynamic(&after);
+    assert!(y1 > y0 + 1.0, "mean y {y0} -> {y1}");
+    // a phone lying flat: no gravity in the plane
+    c.put(
+        c.keys.tilt(),
+        &Tilt::Accelerometer {
+            x: 0.0,
+            y: 0.0,
+            z: 9.81,
+        },
+    )
+    .await;
+    c.snapshot_where(|s| s.gravity == Vector::new(0.0, 0.0))
+        .await;
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn spawn_shows_up_in_events_scene_and_snapshots_then_remove_and_reset() {
+    let cfg = config(17464);
+    let server = serve(&cfg).await;
+    let mut c = Client::connect(17464, server.keys()).await;
+    let initial = c.scene().await;
+    c.put(
+        c.keys.spawn(),
+        &Spawn {
+            bodies: vec![brick("probe-a", -1.0, 4.5), brick("probe-b", 1.0, 4.5)],
+        },
+    )
+    .await;
+    let ev = c
+        .event_where(|e| matches!(e.kind, EventKind::Added { .. }))
+        .await;
+    let EventKind::Added { bodies } = ev.kind else {
+        unreachable!()
+    };
+    assert_eq!(bodies.len(), 2);
+    assert_eq!(bodies[0].name, "probe-a");
+    assert_eq!(bodies[1].colour, Colour { r: 1, g: 2, b: 3 });
+    assert!(!bodies[0].is_static && (bodies[0].mass - 0.18).abs() < 1e-5);
+    let ids: Vec<BodyRef> = bodies.iter().map(|b| b.id).collect();
+    // the frame stamp is the first snapshot that holds them
+    let s = c.snapshot_where(|s| s.frame >= ev.frame).await;
+    assert_eq!(s.frame, ev.frame, "no snapshot lost in between");
+    for id in &ids {
+        assert!(s.poses.iter().any(|p| p.id == *id), "{id} in snapshot");
+    }
+    let scene = c.scene().await;
+    assert_eq!(scene.bodies.len(), initial.bodies.len() + 2);
+    let a = scene.bodies.iter().find(|b| b.id == ids[0]).unwrap();
+    assert_eq!(a.name, "probe-a");
+    assert_eq!(
+        a.shape,
+        ShapeSpec::Rect {
+            width: 0.6,
+            height: 0.3
+        }
+    );
+
+    c.put(c.keys.remove(), &Remove { ids: vec![ids[0]] }).await;
+    let ev = c
+        .event_where(|e| matches!(e.kind, EventKind::Removed { .. }))
+        .await;
+    assert_eq!(ev.kind, EventKind::Removed { ids: vec![ids[0]] });
+    c.snapshot_where(|s| s.frame >= ev.frame).await;
+    let scene = c.scene().await;
+    assert!(scene.frame >= ev.frame);
+    assert!(scene.bodies.iter().all(|b| b.id != ids[0]));
+    assert!(scene.bodies.iter().any(|b| b.id == ids[1]));
+
+    c.put(c.keys.reset(), &Reset).await;
+    let ev = c
+        .event_where(|e| matches!(e.kind, EventKind::Reset { .. }))
+        .await;
+    let EventKind::Reset { bodies, .. } = &ev.kind else {
+        unreachable!()
+    };
+    assert_eq!(bodies.len(), initial.bodies.len());
+    let s = c.snapshot_where(|s| s.frame >= ev.frame).await;
+    assert!(s.keyframe, "the snapshot after a reset is a keyframe");
+    let scene = c.scene().await;
+    assert!(scene.bodies.iter().all(|b| !b.name.starts_with("probe")));
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn bad_input_is_rejected_on_events_while_frames_keep_increasing() {
+    let mut cfg = config(17465);
+    cfg.limits.max_bodies_per_spawn = 4;
+    cfg.limits.max_spawns_per_second = 2;
+    cfg.limits.max_bodies = 20; // Falling Bricks has 10
+    let server = serve(&cfg).await;
+    let mut c = Client::connect(17465, server.keys()).await;
+    let k = c.keys.clone();
+    let start = c.snapshot_where(|_| true).await.frame;
+
+    // malformed: not postcard at all
+    c.put_raw(k.spawn(), vec![1, 0xff, 0xff, 0xff]).await;
+    c.rejected(&k.spawn(), "truncated Spawn").await;
+    // empty payload, wrong version, trailing bytes
+    c.put_raw(k.gravity(), vec![]).await;
+    c.rejected(&k.gravity(), "empty payload").await;
+    c.put_raw(k.reset(), vec![7]).await;
+    c.rejected(&k.reset(), "unsupported protocol version 7")
+        .await;
+    c.put_raw(k.reset(), vec![1, 0]).await;
+    c.rejected(&k.reset(), "unexpected byte").await;
+    // unknown variants
+    c.put_raw(k.tilt(), vec![1, 9]).await;
+    c.rejected(&k.tilt(), "unknown variant").await;
+    c.put_raw(k.tilt(), vec![1, 0, 42]).await;
+    c.rejected(&k.tilt(), "unknown variant").await;
+    // NaN and infinities, named with their value
+    c.put(
+        k.gravity(),
+        &SetGravity {
+            x: f32::NAN,
+            y: -9.81,
+        },
+    )
+    .await;
+    c.rejected(&k.gravity(), "gravity.x must be a finite number, got NaN")
+        .await;
+    let mut b = brick("bad", 0.0, 3.0);
+    b.angular_velocity = f32::INFINITY;
+    c.put(
+        k.spawn(),
+        &Spawn {
+            bodies: vec![brick("ok", 0.0, 2.0), b],
+        },
+    )
+    .await;
+    c.rejected(
+        &k.spawn(),
+        "bodies[1]: angular_velocity must be a finite number, got inf",
+    )
+    .await;
+    let mut b = brick("bad", 0.0, 3.0);
+    b.restitution = 2.0;
+    c.put(k.spawn(), &Spawn { bodies: vec![b] }).await;
+    c.rejected(&k.spawn(), "restitution = 2").await;
+    // over the limits
+    c.put(
+        k.spawn(),
+        &Spawn {
+            bodies: vec![brick("x", 0.0, 3.0); 5],
+        },
+    )
+    .await;
+    c.rejected(&k.spawn(), "max_bodies_per_spawn = 4").await;
+    c.put(
+        k.remove(),
+        &Remove {
+            ids: vec![BodyRef {
+                index: 999,
+                generation: 0,
+            }],
+        },
+    )
+    .await;
+    c.rejected(&k.remove(), "no body with id 999v0").await;
+    // nothing was half-applied
+    let scene = c.scene().await;
+    assert_eq!(scene.bodies.len(), 10);
+    assert!(scene.bodies.iter().all(|b| b.name != "ok"));
+
+    // rate: two spawns in a second are applied, the third is refused
+    for _ in 0..2 {
+        c.put(
+            k.spawn(),
+            &Spawn {
+                bodies: vec![brick("fill", 0.0, 3.0); 4],
+            },
+        )
+        .await;
+        c.event_where(|e| matches!(e.kind, EventKind::Added { .. }))
+            .await;
+    }
+    c.put(
+        k.spawn(),
+        &Spawn {
+            bodies: vec![brick("over", 0.0, 3.0)],
+        },
+    )
+    .await;
+    c.rejected(&k.spawn(), "max_spawns_per_second = 2").await;
+    assert_eq!(c.scene().await.bodies.len(), 18);
+    // wait out the rate window, then the body limit speaks: 18 + 3 > 20
+    c.frames_pass(61).await;
+    c.put(
+        k.spawn(),
+        &Spawn {
+            bodies: vec![brick("over", 0.0, 3.0); 3],
+        },
+    )
+    .await;
+    c.rejected(&k.spawn(), "more than limits.max_bodies = 20")
+        .await;
+    assert_eq!(c.scene().await.bodies.len(), 18);
+
+    // the world kept stepping throughout
+    let end = c.frames_pass(2).await.frame;
+    assert!(end > start + 2);
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_full_command_queue_rejects_instead_of_blocking() {
+    let mut cfg = config(17466);
+    cfg.command_queue = 1;
+    let server = serve(&cfg).await;
+    let mut c = Client::connect(17466, server.keys()).await;
+    let k = c.keys.clone();
+    for i in 0..200 {
+        c.put(
+            k.gravity(),
+            &SetGravity {
+                x: i as f32 * 0.01,
+                y: -9.81,
+            },
+        )
+        .await;
+    }
+    c.rejected(&k.gravity(), "command queue full (capacity 1)")
+        .await;
+    c.frames_pass(2).await;
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_late_joiner_reconstructs_the_scene_from_query_plus_snapshots() {
+    let mut cfg = config(17467);
+    cfg.keyframe_every = 1000; // only deltas during the test
+    let server = serve(&cfg).await;
+    let mut a = Client::connect(17467, server.keys()).await;
+    let spawned: Vec<_> = (0..5)
+        .map(|i| brick(&format!("late-{i}"), -2.0 + i as f32, 5.0))
+        .collect();
+    a.put(a.keys.spawn(), &Spawn { bodies: spawned }).await;
+    a.event_where(|e| matches!(e.kind, EventKind::Added { .. }))
+        .await;
+
+    // B joins later (as a Zenoh client, like a phone app would): subscribe first, then
+    // query, then apply the snapshots after the state.
+    let mut b = Client::connect_as("client", 17467, server.keys()).await;
+    let state = b.scene().await;
+    assert_eq!(state.bodies.len(), 15);
+    assert_eq!(state.bodies.iter().filter(|x| x.is_static).count(), 4);
+    let mut poses: std::collections::BTreeMap<BodyRef, (f32, f32, f32)> = state
+        .bodies
+        .iter()
+        .map(|x| (x.id, (x.position.x, x.position.y, x.angle)))
+        .collect();
+    // snapshots up to the state's frame are already in it
+    let mut frame = state.frame;
+    while frame < state.frame + 45 {
+        let s = b.snapshot_where(|s| s.frame > state.frame).await;
+        assert!(
+            s.frame == frame + 1 || s.frame <= frame,
+            "no gap: {} after {frame}",
+            s.frame
+        );
+        if s.frame <= frame {
+            continue;
+        }
+        for p in &s.poses {
+            poses.insert(p.id, (p.x, p.y, p.angle));
+        }
+        frame = s.frame;
+    }
+    // compare with the truth at a later frame
+    let truth = loop {
+        let t = b.scene().await;
+        if t.frame >= frame {
+            break t;
+        }
+    };
+    while frame < truth.frame {
+        let s = b.snapshot_where(|s| s.frame == frame + 1).await;
+        for p in &s.poses {
+            poses.insert(p.id, (p.x, p.y, p.angle));
+        }
+        frame = s.frame;
+    }
+    assert_eq!(poses.len(), truth.bodies.len());
+    for t in &truth.bodies {
+        let (x, y, angle) = poses[&t.id];
+        let err = (x - t.position.x)
+            .abs()
+            .max((y - t.position.y).abs())
+            .max((angle - t.angle).abs());
+        assert!(err <= POSE_EPSILON * 1.01, "{} off by {err}", t.name);
+    }
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_scene_file_is_served_and_reloaded_on_reset() {
+    let dir = std::env::temp_dir().join(format!("tiltbox-daemon-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("one.toml");
+    let one = |name: &str| {
+        format!(
+            "name = \"{name}\"\n[[body]]\nname = \"b\"\nshape = {{ type = \"rect\", width = 1, height = 1 }}\nposition = [0, 0]\ndensity = 1\n"
+        )
+    };
+    std::fs::write(&path, one("first")).unwrap();
+    let mut cfg = config(17468);
+    cfg.scene = Some(path.clone());
+    let server = serve(&cfg).await;
+    let mut c = Client::connect(17468, server.keys()).await;
+    assert_eq!(c.scene().await.scene, "first");
+    std::fs::write(&path, one("second")).unwrap();
+    c.put(c.keys.reset(), &Reset).await;
+    let ev = c
+        .event_where(|e| matches!(e.kind, EventKind::Reset { .. }))
+        .await;
+    assert!(matches!(ev.kind, EventKind::Reset { ref scene, .. } if scene == "second"));
+    // a broken file: the reset is rejected and the world keeps running
+    std::fs::write(&path, "name = 3").unwrap();
+    c.put(c.keys.reset(), &Reset).await;
+    c.rejected(&c.keys.reset(), "cannot reload the scene").await;
+    c.frames_pass(2).await;
+    assert_eq!(c.scene().await.scene, "second");
+    server.shutdown().await.unwrap();
+    let _ = std::fs::remove_dir_all(dir);
+}

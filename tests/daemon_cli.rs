@@ -1,0 +1,94 @@
+//! The `tiltbox serve` binary: bad config exits 2 naming key and value; SIGTERM stops it
+//! cleanly within 2 s.
+#![cfg(all(feature = "net", feature = "cli"))]
+
+#![cfg(feature = "net")]
+
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_tiltbox");
+
+fn run(args: &[&str]) -> (i32, String) {
+    let out = Command::new(BIN).args(args).output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn bad_config_names_key_and_value_and_exits_2() {
+    let (code, err) = run(&["serve", "--max-bodies", "0"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("limits.max_bodies = 0"), "{err}");
+
+    let (code, err) = run(&["serve", "--listen", "nowhere"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("zenoh.listen") && err.contains("nowhere"),
+        "{err}"
+    );
+
+    let dir = std::env::temp_dir().join(format!("tiltbox-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("server.toml");
+    std::fs::write(&file, "tick_hz = 0.0\n").unwrap();
+    let (code, err) = run(&["serve", "--config", file.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("tick_hz = 0"), "{err}");
+    std::fs::write(&file, "[limits]\nmax_bodys = 5\n").unwrap();
+    let (code, err) = run(&["serve", "--config", file.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("max_bodys"), "{err}");
+    let (code, err) = run(&[
+        "serve",
+        "--scene",
+        dir.join("missing.toml").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("missing.toml"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_stops_the_daemon_within_2_s() {
+    let mut child = Command::new(BIN)
+        .args(["serve", "--listen", "tcp/127.0.0.1:17469", "--log", "info"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let t0 = Instant::now();
+    loop {
+        let line = lines.next().expect("daemon log").unwrap();
+        if line.contains("tick loop started") {
+            break;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "daemon did not start"
+        );
+    }
+    let status = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let t0 = Instant::now();
+    // drain the log so the daemon never blocks on a full pipe
+    std::thread::spawn(move || for _ in lines {});
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            assert!(status.success(), "{status}");
+            break;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(2),
+            "still running after 2 s"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}

@@ -156,10 +156,16 @@ pub(crate) fn apply_along(
     lambda: Real,
 ) {
     let p = lambda * d;
-    a.v -= a.inv_mass * p;
-    a.w -= a.inv_inertia * lambda * rd_a;
-    b.v += b.inv_mass * p;
-    b.w += b.inv_inertia * lambda * rd_b;
+    // Static bodies are skipped rather than written with zero: a store to the ground for
+    // every ground contact would chain those contacts' solves through memory.
+    if a.inv_mass > 0.0 {
+        a.v -= a.inv_mass * p;
+        a.w -= a.inv_inertia * lambda * rd_a;
+    }
+    if b.inv_mass > 0.0 {
+        b.v += b.inv_mass * p;
+        b.w += b.inv_inertia * lambda * rd_b;
+    }
 }
 
 /// Mutable references to two distinct bodies of the solver array.

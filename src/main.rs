@@ -13,6 +13,8 @@ struct Cli {
     command: Option<Command>,
 }
 
+// Parsed once at start-up: the size difference between variants does not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 enum Command {
     /// Run the daemon: step a scene at a fixed rate and serve it over Zenoh (the default).

@@ -8,6 +8,7 @@ use super::error::{finite, positive, PhysicsError};
 use super::math::{cross, Real, Rot, Vec2};
 use super::settings::{Settings, SolverKind};
 use super::solver::soft_step::Softness;
+use super::solver::wide::WideSolver;
 use super::solver::{self, clamp_speed, Limits, SolverBody};
 
 /// One entry of the body array: a body, or a free slot remembering its generation.
@@ -40,6 +41,7 @@ pub struct World {
     /// wake islands, never solved.
     sleeping_contacts: Vec<Contact>,
     solver_bodies: Vec<SolverBody>,
+    wide: WideSolver,
     // Sleep bookkeeping, reused every step.
     wake_queue: Vec<u32>,
     island_parent: Vec<u32>,
@@ -78,6 +80,7 @@ impl World {
             previous: Vec::new(),
             sleeping_contacts: Vec::new(),
             solver_bodies: Vec::new(),
+            wide: WideSolver::default(),
             wake_queue: Vec::new(),
             island_parent: Vec::new(),
             island_rest: Vec::new(),
@@ -407,6 +410,7 @@ impl World {
                 solver::soft_step::solve(
                     &mut self.solver_bodies,
                     &mut self.contacts,
+                    &mut self.wide,
                     &self.settings,
                     dt,
                     limits,
@@ -442,6 +446,8 @@ impl World {
                 },
                 _ => SolverBody::FIXED,
             }));
+        // One more fixed body, last, for the empty lanes of the wide solver's bundles.
+        self.solver_bodies.push(SolverBody::FIXED);
     }
 
     /// Write velocities and the step's motion back to the bodies; clear forces.

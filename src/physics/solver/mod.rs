@@ -5,6 +5,7 @@
 
 pub(crate) mod sequential;
 pub(crate) mod soft_step;
+pub(crate) mod wide;
 
 use super::math::{Real, Rot, Vec2};
 

@@ -9,6 +9,7 @@
 //! close the gap in one substep, which stops fast bodies at the surface.
 
 use super::sequential::effective_mass;
+use super::wide::WideSolver;
 use super::{
     apply_along, integrate_positions, integrate_velocities, pair_mut, relative_velocity,
     solve_block_lcp, BlockMass, Limits, SolverBody,
@@ -63,6 +64,7 @@ impl Softness {
 pub(crate) fn solve(
     bodies: &mut [SolverBody],
     contacts: &mut [Contact],
+    wide: &mut WideSolver,
     settings: &Settings,
     dt: Real,
     limits: Limits,
@@ -83,27 +85,42 @@ pub(crate) fn solve(
         slop: settings.linear_slop.max(Real::EPSILON),
         h,
     };
+    let push_out = settings.max_push_out_speed;
 
     prepare(bodies, contacts, settings.warm_starting, &stiffness);
+    // Most contacts are solved four at a time (see `wide`); the few the colouring could not
+    // place are solved here one by one, after the bundles.
+    wide.build(bodies, contacts);
 
     for _ in 0..substeps {
         integrate_velocities(bodies, h, limits);
         if settings.warm_starting {
-            warm_start(bodies, contacts);
+            wide.warm_start(bodies);
+            for &i in &wide.overflow {
+                warm_start(bodies, &mut contacts[i as usize]);
+            }
         } else {
-            for c in contacts.iter_mut() {
-                for p in &mut c.points[..c.count] {
+            wide.clear_impulses();
+            for &i in &wide.overflow {
+                for p in &mut contacts[i as usize].points {
                     p.normal_impulse = 0.0;
                     p.tangent_impulse = 0.0;
                 }
             }
         }
-        solve_contacts(bodies, contacts, inv_h, true, settings.max_push_out_speed);
+        wide.solve(bodies, inv_h, true, push_out);
+        for &i in &wide.overflow {
+            solve_contact(bodies, &mut contacts[i as usize], inv_h, true, push_out);
+        }
         integrate_positions(bodies, h, limits);
         for _ in 0..settings.relax_iterations {
-            solve_contacts(bodies, contacts, inv_h, false, settings.max_push_out_speed);
+            wide.solve(bodies, inv_h, false, push_out);
+            for &i in &wide.overflow {
+                solve_contact(bodies, &mut contacts[i as usize], inv_h, false, push_out);
+            }
         }
     }
+    wide.store(contacts);
     restitution(bodies, contacts, settings.restitution_threshold);
 }
 
@@ -186,28 +203,26 @@ fn prepare(
     }
 }
 
-/// Apply the accumulated impulses at the start of a substep.
-fn warm_start(bodies: &mut [SolverBody], contacts: &mut [Contact]) {
-    for c in contacts.iter_mut() {
-        let (n, t) = (c.normal, c.tangent());
-        let (a, b) = pair_mut(bodies, c.a, c.b);
-        for p in &mut c.points[..c.count] {
-            p.total_normal_impulse += p.normal_impulse;
-            apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, p.normal_impulse);
-            apply_along(a, b, t, p.arms.rt_a, p.arms.rt_b, p.tangent_impulse);
-        }
+/// Apply one contact's accumulated impulses at the start of a substep.
+fn warm_start(bodies: &mut [SolverBody], c: &mut Contact) {
+    let (n, t) = (c.normal, c.tangent());
+    let (a, b) = pair_mut(bodies, c.a, c.b);
+    for p in &mut c.points[..c.count] {
+        p.total_normal_impulse += p.normal_impulse;
+        apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, p.normal_impulse);
+        apply_along(a, b, t, p.arms.rt_a, p.arms.rt_b, p.tangent_impulse);
     }
 }
 
-/// One pass over all contacts: with the soft bias (`use_bias`), or the relax pass without.
-fn solve_contacts(
+/// Solve one contact: with the soft bias (`use_bias`), or the relax pass without.
+fn solve_contact(
     bodies: &mut [SolverBody],
-    contacts: &mut [Contact],
+    c: &mut Contact,
     inv_h: Real,
     use_bias: bool,
     max_push_out: Real,
 ) {
-    for c in contacts.iter_mut() {
+    {
         let n = c.normal;
         let t = c.tangent();
         let sf = c.softness;
@@ -261,7 +276,7 @@ fn solve_contacts(
         }
 
         if c.friction == 0.0 {
-            continue;
+            return;
         }
         for p in &mut c.points[..c.count] {
             let vt = relative_velocity(a, b, t, p.arms.rt_a, p.arms.rt_b);

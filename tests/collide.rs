@@ -159,3 +159,34 @@ fn feature_ids_survive_the_reference_face_switching_sides() {
     };
     assert_eq!(ids(&m1), ids(&m2));
 }
+
+#[test]
+fn the_rectangle_fast_path_agrees_with_the_general_polygon_routine() {
+    use tiltbox::physics::collide::{collide_polygons, collide_rects, Polygon};
+    // A deterministic sweep of sizes, offsets and angles, touching, overlapping and apart.
+    let mut seed: u32 = 12345;
+    let mut next = || {
+        seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (seed >> 8) as Real / (1u32 << 24) as Real
+    };
+    let mut compared = 0;
+    for _ in 0..2000 {
+        let ha = vec2(0.1 + next(), 0.1 + next());
+        let hb = vec2(0.1 + next(), 0.1 + next());
+        let xa = at(4.0 * next() - 2.0, 4.0 * next() - 2.0, 6.3 * next());
+        let xb = at(xa.p.x + 3.0 * next() - 1.5, xa.p.y + 3.0 * next() - 1.5, 6.3 * next());
+        let margin = 0.2 * next();
+        let fast = collide_rects(ha, xa, hb, xb, margin);
+        let general = collide_polygons(&Polygon::rect(ha), xa, &Polygon::rect(hb), xb, margin);
+        assert_eq!(fast.count, general.count, "{ha:?} {xa:?} {hb:?} {xb:?}");
+        if fast.count > 0 {
+            compared += 1;
+            assert!((fast.normal - general.normal).length() < 1e-4, "{fast:?} vs {general:?}");
+            for (p, q) in fast.points().iter().zip(general.points()) {
+                assert!((p.point - q.point).length() < 1e-4 && (p.separation - q.separation).abs() < 1e-4, "{fast:?} vs {general:?}");
+                assert_eq!(p.id, q.id);
+            }
+        }
+    }
+    assert!(compared > 300, "only {compared} touching pairs compared");
+}

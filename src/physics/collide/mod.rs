@@ -7,7 +7,7 @@
 
 mod polygon;
 
-pub use polygon::{collide_polygons, Polygon};
+pub use polygon::{collide_polygons, collide_rects, Polygon};
 
 use super::math::{Real, Transform, Vec2};
 use super::shape::Shape;
@@ -64,7 +64,7 @@ impl Manifold {
 pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: Real) -> Manifold {
     match (a, b) {
         (Shape::Rect { half_extents: ha }, Shape::Rect { half_extents: hb }) => {
-            collide_polygons(&Polygon::rect(*ha), xf_a, &Polygon::rect(*hb), xf_b, margin)
+            collide_rects(*ha, xf_a, *hb, xf_b, margin)
         }
     }
 }

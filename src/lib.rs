@@ -10,3 +10,5 @@ pub mod scene;
 pub mod protocol;
 #[cfg(feature = "net")]
 pub mod service;
+#[cfg(all(feature = "net", feature = "cli"))]
+pub mod client;

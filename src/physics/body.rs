@@ -131,20 +131,46 @@ impl BodyDef {
         finite("velocity.x", self.linear_velocity.x)?;
         finite("velocity.y", self.linear_velocity.y)?;
         finite("angular_velocity", self.angular_velocity)?;
-        match self.mass {
-            MassSpec::Static => {}
+        let mass = match self.mass {
+            MassSpec::Static => None,
             MassSpec::Density(d) => {
                 positive("density", d)?;
-                // density x area must stay a usable, finite mass
-                positive("mass (density x area)", d * self.shape.area())?;
+                Some(("mass (density x area)", d * self.shape.area()))
             }
-            MassSpec::Mass(m) => {
-                positive("mass", m)?;
-            }
+            MassSpec::Mass(m) => Some(("mass", positive("mass", m)?)),
+        };
+        if let Some((field, m)) = mass {
+            // Mass and inertia must stay usable: finite, with finite inverses.
+            usable(field, m)?;
+            usable("inertia (from mass and shape)", self.shape.inertia(m))?;
         }
         non_negative("friction", self.friction)?;
+        if self.friction > MAX_FRICTION {
+            return Err(PhysicsError::OutOfRange {
+                field: "friction",
+                value: self.friction,
+                expected: "must be within [0, 1000]",
+            });
+        }
         unit_interval("restitution", self.restitution)?;
         Ok(())
+    }
+}
+
+/// The largest friction coefficient accepted. Real materials stay below about 2; anything near
+/// the float range would overflow the friction cone mu x Pn.
+pub const MAX_FRICTION: Real = 1000.0;
+
+/// A mass or moment of inertia the solver can divide by: finite, positive, finite inverse.
+fn usable(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
+    if value.is_finite() && value > 0.0 && (1.0 / value).is_finite() {
+        Ok(value)
+    } else {
+        Err(PhysicsError::OutOfRange {
+            field,
+            value,
+            expected: "must be finite and positive with a finite inverse",
+        })
     }
 }
 

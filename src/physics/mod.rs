@@ -20,4 +20,5 @@ pub use error::PhysicsError;
 pub use math::{vec2, Real, Rot, Transform, Vec2};
 pub use settings::{Mixing, Settings, SolverKind};
 pub use shape::{Aabb, Shape};
+pub use world::snapshot::{StateError, WorldState};
 pub use world::World;

@@ -11,6 +11,10 @@ use super::solver::soft_step::Softness;
 use super::solver::wide::WideSolver;
 use super::solver::{self, clamp_speed, Limits, SolverBody};
 
+/// Export and import of the full state (checkpoints); a child module so it reads private fields.
+#[path = "snapshot.rs"]
+pub mod snapshot;
+
 /// One entry of the body array: a body, or a free slot remembering its generation.
 #[derive(Clone, Debug)]
 struct Slot {
@@ -131,6 +135,11 @@ impl World {
     /// Add a body; the definition is validated first and nothing changes on error.
     pub fn add_body(&mut self, def: &BodyDef) -> Result<BodyId, PhysicsError> {
         def.validate()?;
+        self.check_speed(
+            def.linear_velocity,
+            def.angular_velocity,
+            def.shape.bounding_radius(),
+        )?;
         let index = match self.free.pop() {
             Some(i) => i,
             None => {
@@ -176,6 +185,29 @@ impl World {
         self.broad_phase.remove(id.index);
         self.contacts.retain(|c| c.a != id.index && c.b != id.index);
         Ok(body)
+    }
+
+    /// Refuse speeds beyond the World's speed cap: linear speed, and the rim speed |w| r of a
+    /// body of bounding radius r. (The solver clamps speeds anyway; a velocity given at the
+    /// API beyond the cap is a mistake worth naming.)
+    fn check_speed(&self, v: Vec2, w: Real, radius: Real) -> Result<(), PhysicsError> {
+        let max = self.settings.max_linear_speed;
+        let expected = "must not exceed Settings::max_linear_speed (default 400 m/s)";
+        if v.length() > max {
+            return Err(PhysicsError::OutOfRange {
+                field: "velocity (speed)",
+                value: v.length(),
+                expected,
+            });
+        }
+        if w.abs() * radius > max {
+            return Err(PhysicsError::OutOfRange {
+                field: "angular_velocity (rim speed)",
+                value: w.abs() * radius,
+                expected,
+            });
+        }
+        Ok(())
     }
 
     /// Remove every body and contact; settings, gravity and time are kept.
@@ -313,6 +345,12 @@ impl World {
         finite("velocity.x", linear.x)?;
         finite("velocity.y", linear.y)?;
         finite("angular_velocity", angular)?;
+        let radius = self
+            .body(id)
+            .ok_or(PhysicsError::UnknownBody(id))?
+            .shape
+            .bounding_radius();
+        self.check_speed(linear, angular, radius)?;
         let b = self.body_mut(id)?;
         if !b.is_static() {
             b.linear_velocity = linear;

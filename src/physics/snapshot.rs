@@ -1,0 +1,563 @@
+//! The World's full state as plain data: what a checkpoint stores and what a restarted daemon
+//! loads, so that stepping the restored World gives bit-identical results to stepping the one
+//! it was taken from.
+//!
+//! Everything that carries over from one step to the next is here: every slot (generation and
+//! body, forces and sleep state included), the free list, time and step count, settings,
+//! gravity, and the persistent contacts (awake and sleeping) with their warm-start impulses.
+//! The broad phase is rebuilt from the bodies: its output is sorted, so its internal order
+//! does not change what a step computes. Per-step scratch buffers are not stored.
+//!
+//! This file is a child module of `world` (declared there with `#[path]`), so it reads the
+//! World's private fields without widening their visibility.
+
+use super::super::body::{Body, BodyId};
+use super::super::contact::{Arms, Contact, ContactPoint};
+use super::super::math::{Real, Rot, Vec2};
+use super::super::settings::Settings;
+use super::super::shape::Shape;
+use super::super::solver::soft_step::Softness;
+use super::super::solver::BlockMass;
+use super::{Slot, World};
+use serde::{Deserialize, Serialize};
+
+/// Why a [`WorldState`] cannot become a World.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("invalid world state: {0}")]
+pub struct StateError(pub String);
+
+/// One body exactly as the World holds it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BodyState {
+    /// Shape: a rectangle's half extents (m). (`Shape`'s own serde form is internally
+    /// tagged, which non-self-describing formats such as postcard cannot read back.)
+    pub half_extents: [Real; 2],
+    /// Centre of mass (m).
+    pub position: [Real; 2],
+    /// Accumulated angle (rad).
+    pub angle: Real,
+    /// The rotation as stored (cos, sin): kept, not recomputed, so it stays bit-identical.
+    pub rot: [Real; 2],
+    /// Linear velocity (m/s).
+    pub linear_velocity: [Real; 2],
+    /// Angular velocity (rad/s).
+    pub angular_velocity: Real,
+    /// Force accumulated for the next step (N).
+    pub force: [Real; 2],
+    /// Torque accumulated for the next step (N m).
+    pub torque: Real,
+    /// Mass, inverse mass, inertia, inverse inertia.
+    pub mass: [Real; 4],
+    /// Friction.
+    pub friction: Real,
+    /// Restitution.
+    pub restitution: Real,
+    /// Awake.
+    pub awake: bool,
+    /// Time spent below the sleep threshold (s).
+    pub sleep_time: Real,
+    /// Island it sleeps with.
+    pub sleep_island: u32,
+}
+
+/// A slot: its generation and its body, if live.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SlotState {
+    /// Generation.
+    pub generation: u32,
+    /// The body.
+    pub body: Option<BodyState>,
+}
+
+/// One contact point with its solver state.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointState {
+    /// Feature id.
+    pub id: u16,
+    /// point.x, point.y, separation, anchor_a.x, anchor_a.y, anchor_b.x, anchor_b.y.
+    pub geometry: [Real; 7],
+    /// normal, tangent, total normal and max normal impulse.
+    pub impulses: [Real; 4],
+    /// Lever arms: rn_a, rn_b, rt_a, rt_b, ra_n, rb_n.
+    pub arms: [Real; 6],
+    /// normal_mass, tangent_mass, adjusted_separation, relative_velocity, approach_velocity, bias.
+    pub solver: [Real; 6],
+}
+
+/// A persistent contact.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactState {
+    /// Pair key.
+    pub key: u64,
+    /// Slot of body A.
+    pub a: u32,
+    /// Slot of body B.
+    pub b: u32,
+    /// Normal.
+    pub normal: [Real; 2],
+    /// Mixed friction.
+    pub friction: Real,
+    /// Mixed restitution.
+    pub restitution: Real,
+    /// A or B static.
+    pub touches_static: bool,
+    /// The live points (1 or 2).
+    pub points: Vec<PointState>,
+    /// Soft step spring: bias_rate, mass_scale, impulse_scale.
+    pub softness: [Real; 3],
+    /// Block solver matrices k and inv, row major.
+    pub block: Option<[Real; 8]>,
+}
+
+/// Everything a World carries from one step to the next.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WorldState {
+    /// Settings.
+    pub settings: Settings,
+    /// Gravity (m/s^2).
+    pub gravity: [Real; 2],
+    /// Every slot in index order.
+    pub slots: Vec<SlotState>,
+    /// Free slots, in the order they will be reused (last first).
+    pub free: Vec<u32>,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// Awake contacts, sorted by key.
+    pub contacts: Vec<ContactState>,
+    /// Sleeping contacts, in the World's order.
+    pub sleeping_contacts: Vec<ContactState>,
+}
+
+fn v2(v: Vec2) -> [Real; 2] {
+    [v.x, v.y]
+}
+fn vec(a: [Real; 2]) -> Vec2 {
+    Vec2::new(a[0], a[1])
+}
+
+fn contact_state(c: &Contact) -> ContactState {
+    let points = c.points[..c.count.min(2)]
+        .iter()
+        .map(|p| PointState {
+            id: p.id,
+            geometry: [
+                p.point.x,
+                p.point.y,
+                p.separation,
+                p.anchor_a.x,
+                p.anchor_a.y,
+                p.anchor_b.x,
+                p.anchor_b.y,
+            ],
+            impulses: [
+                p.normal_impulse,
+                p.tangent_impulse,
+                p.total_normal_impulse,
+                p.max_normal_impulse,
+            ],
+            arms: [
+                p.arms.rn_a,
+                p.arms.rn_b,
+                p.arms.rt_a,
+                p.arms.rt_b,
+                p.arms.ra_n,
+                p.arms.rb_n,
+            ],
+            solver: [
+                p.normal_mass,
+                p.tangent_mass,
+                p.adjusted_separation,
+                p.relative_velocity,
+                p.approach_velocity,
+                p.bias,
+            ],
+        })
+        .collect();
+    ContactState {
+        key: c.key,
+        a: c.a,
+        b: c.b,
+        normal: v2(c.normal),
+        friction: c.friction,
+        restitution: c.restitution,
+        touches_static: c.touches_static,
+        points,
+        softness: [
+            c.softness.bias_rate,
+            c.softness.mass_scale,
+            c.softness.impulse_scale,
+        ],
+        block: c.block.map(|b| {
+            [
+                b.k[0][0],
+                b.k[0][1],
+                b.k[1][0],
+                b.k[1][1],
+                b.inv[0][0],
+                b.inv[0][1],
+                b.inv[1][0],
+                b.inv[1][1],
+            ]
+        }),
+    }
+}
+
+fn finite_all(what: &str, values: &[Real]) -> Result<(), StateError> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(StateError(format!("{what}: a value is not finite")))
+    }
+}
+
+// `..ContactPoint::default()` is deliberate: a field added to ContactPoint later starts from
+// its default here instead of breaking the build.
+#[allow(clippy::needless_update)]
+fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
+    let live = |i: u32| slots.get(i as usize).is_some_and(|s| s.body.is_some());
+    if !(s.a < s.b && live(s.a) && live(s.b)) {
+        return Err(StateError(format!(
+            "contact {:#x} joins slots {} and {}, not two live bodies in order",
+            s.key, s.a, s.b
+        )));
+    }
+    if s.key != (u64::from(s.a) << 32 | u64::from(s.b)) {
+        return Err(StateError(format!(
+            "contact key {:#x} does not match its bodies",
+            s.key
+        )));
+    }
+    if s.points.is_empty() || s.points.len() > 2 {
+        return Err(StateError(format!(
+            "contact {:#x} has {} points",
+            s.key,
+            s.points.len()
+        )));
+    }
+    finite_all(
+        "contact",
+        &[s.normal[0], s.normal[1], s.friction, s.restitution],
+    )?;
+    finite_all("contact softness", &s.softness)?;
+    let mut points = [ContactPoint::default(); 2];
+    for (out, p) in points.iter_mut().zip(&s.points) {
+        finite_all("contact point", &p.geometry)?;
+        finite_all("contact point", &p.impulses)?;
+        finite_all("contact point", &p.arms)?;
+        finite_all("contact point", &p.solver)?;
+        let g = &p.geometry;
+        *out = ContactPoint {
+            id: p.id,
+            point: Vec2::new(g[0], g[1]),
+            separation: g[2],
+            anchor_a: Vec2::new(g[3], g[4]),
+            anchor_b: Vec2::new(g[5], g[6]),
+            normal_impulse: p.impulses[0],
+            tangent_impulse: p.impulses[1],
+            total_normal_impulse: p.impulses[2],
+            max_normal_impulse: p.impulses[3],
+            arms: Arms {
+                rn_a: p.arms[0],
+                rn_b: p.arms[1],
+                rt_a: p.arms[2],
+                rt_b: p.arms[3],
+                ra_n: p.arms[4],
+                rb_n: p.arms[5],
+            },
+            normal_mass: p.solver[0],
+            tangent_mass: p.solver[1],
+            adjusted_separation: p.solver[2],
+            relative_velocity: p.solver[3],
+            approach_velocity: p.solver[4],
+            bias: p.solver[5],
+            ..ContactPoint::default()
+        };
+    }
+    let block = match s.block {
+        Some(b) => {
+            finite_all("contact block", &b)?;
+            Some(BlockMass {
+                k: [[b[0], b[1]], [b[2], b[3]]],
+                inv: [[b[4], b[5]], [b[6], b[7]]],
+            })
+        }
+        None => None,
+    };
+    Ok(Contact {
+        key: s.key,
+        a: s.a,
+        b: s.b,
+        normal: vec(s.normal),
+        friction: s.friction,
+        restitution: s.restitution,
+        touches_static: s.touches_static,
+        points,
+        count: s.points.len(),
+        softness: Softness {
+            bias_rate: s.softness[0],
+            mass_scale: s.softness[1],
+            impulse_scale: s.softness[2],
+        },
+        block,
+    })
+}
+
+impl World {
+    /// The full state: what [`World::import_state`] needs to continue bit-identically.
+    pub fn export_state(&self) -> WorldState {
+        WorldState {
+            settings: self.settings.clone(),
+            gravity: v2(self.gravity),
+            slots: self
+                .slots
+                .iter()
+                .map(|s| SlotState {
+                    generation: s.generation,
+                    body: s.body.as_ref().map(|b| BodyState {
+                        half_extents: match b.shape {
+                            Shape::Rect { half_extents } => v2(half_extents),
+                        },
+                        position: v2(b.position),
+                        angle: b.angle,
+                        rot: [b.rot.c, b.rot.s],
+                        linear_velocity: v2(b.linear_velocity),
+                        angular_velocity: b.angular_velocity,
+                        force: v2(b.force),
+                        torque: b.torque,
+                        mass: [b.mass, b.inv_mass, b.inertia, b.inv_inertia],
+                        friction: b.friction,
+                        restitution: b.restitution,
+                        awake: b.awake,
+                        sleep_time: b.sleep_time,
+                        sleep_island: b.sleep_island,
+                    }),
+                })
+                .collect(),
+            free: self.free.clone(),
+            time: self.time,
+            steps: self.steps,
+            contacts: self.contacts.iter().map(contact_state).collect(),
+            sleeping_contacts: self.sleeping_contacts.iter().map(contact_state).collect(),
+        }
+    }
+
+    /// A World from a state taken by [`World::export_state`] (possibly read from a file):
+    /// everything is validated (finite numbers, consistent slots, free list and contacts)
+    /// and refused with the reason otherwise.
+    pub fn import_state(state: &WorldState) -> Result<World, StateError> {
+        let err = |e: super::super::error::PhysicsError| StateError(e.to_string());
+        let mut world = World::new(state.settings.clone(), vec(state.gravity)).map_err(err)?;
+        if state.slots.len() > u32::MAX as usize {
+            return Err(StateError("too many slots".into()));
+        }
+        let mut free_seen = vec![false; state.slots.len()];
+        for &i in &state.free {
+            match state.slots.get(i as usize) {
+                Some(s) if s.body.is_none() && !free_seen[i as usize] => {
+                    free_seen[i as usize] = true
+                }
+                _ => {
+                    return Err(StateError(format!(
+                        "free list names slot {i}, which is not a free slot"
+                    )))
+                }
+            }
+        }
+        for (index, s) in state.slots.iter().enumerate() {
+            let index = index as u32;
+            let body = match &s.body {
+                None => {
+                    if !free_seen[index as usize] {
+                        return Err(StateError(format!(
+                            "slot {index} is empty but not in the free list"
+                        )));
+                    }
+                    None
+                }
+                Some(b) => {
+                    let shape = Shape::Rect {
+                        half_extents: vec(b.half_extents),
+                    };
+                    shape.validate().map_err(err)?;
+                    let mut all = vec![
+                        b.angle,
+                        b.angular_velocity,
+                        b.torque,
+                        b.friction,
+                        b.restitution,
+                        b.sleep_time,
+                    ];
+                    all.extend_from_slice(&b.position);
+                    all.extend_from_slice(&b.rot);
+                    all.extend_from_slice(&b.linear_velocity);
+                    all.extend_from_slice(&b.force);
+                    finite_all(&format!("body {index}"), &all)?;
+                    // Static bodies have infinite mass and inertia (and zero inverses).
+                    if b.mass.iter().any(|&m| m.is_nan() || m < 0.0)
+                        || b.sleep_island as usize >= state.slots.len()
+                    {
+                        return Err(StateError(format!(
+                            "body {index}: mass or island out of range"
+                        )));
+                    }
+                    Some(Body {
+                        id: BodyId {
+                            index,
+                            generation: s.generation,
+                        },
+                        shape,
+                        position: vec(b.position),
+                        angle: b.angle,
+                        rot: Rot {
+                            c: b.rot[0],
+                            s: b.rot[1],
+                        },
+                        linear_velocity: vec(b.linear_velocity),
+                        angular_velocity: b.angular_velocity,
+                        force: vec(b.force),
+                        torque: b.torque,
+                        mass: b.mass[0],
+                        inv_mass: b.mass[1],
+                        inertia: b.mass[2],
+                        inv_inertia: b.mass[3],
+                        friction: b.friction,
+                        restitution: b.restitution,
+                        awake: b.awake,
+                        sleep_time: b.sleep_time,
+                        sleep_island: b.sleep_island,
+                    })
+                }
+            };
+            if let Some(b) = &body {
+                world.broad_phase.insert(index, b.is_static() || !b.awake);
+                world.body_count += 1;
+            }
+            world.slots.push(Slot {
+                generation: s.generation,
+                body,
+            });
+        }
+        world.free = state.free.clone();
+        if !state.time.is_finite() || state.time < 0.0 {
+            return Err(StateError(format!("time = {}", state.time)));
+        }
+        world.time = state.time;
+        world.steps = state.steps;
+        for c in &state.contacts {
+            let c = contact_of(c, &world.slots)?;
+            world.contacts.push(c);
+        }
+        if !world.contacts.windows(2).all(|w| w[0].key < w[1].key) {
+            return Err(StateError("contacts are not sorted by key".into()));
+        }
+        for c in &state.sleeping_contacts {
+            let c = contact_of(c, &world.slots)?;
+            world.sleeping_contacts.push(c);
+        }
+        Ok(world)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::{BodyDef, Shape, Vec2, World};
+
+    fn bits(w: &World) -> Vec<u64> {
+        let mut out = Vec::new();
+        for b in w.bodies() {
+            out.push(u64::from(b.id().index) << 32 | u64::from(b.id().generation));
+            for v in [
+                b.position().x,
+                b.position().y,
+                b.angle(),
+                b.linear_velocity().x,
+                b.linear_velocity().y,
+                b.angular_velocity(),
+            ] {
+                out.push(v.to_bits() as u64);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn an_imported_world_steps_bit_identically() {
+        let mut w = World::default();
+        w.add_body(&BodyDef::fixed(
+            Shape::rect(20.0, 1.0),
+            Vec2::new(0.0, -0.5),
+        ))
+        .unwrap();
+        let mut ids = Vec::new();
+        for i in 0..12 {
+            let x = (i % 4) as f32 * 1.1 - 1.5;
+            let y = 0.5 + (i / 4) as f32 * 1.05;
+            ids.push(
+                w.add_body(&BodyDef::dynamic(
+                    Shape::rect(1.0, 1.0),
+                    Vec2::new(x as _, y as _),
+                ))
+                .unwrap(),
+            );
+        }
+        w.remove_body(ids[5]).unwrap();
+        for _ in 0..90 {
+            w.step(1.0 / 60.0).unwrap();
+        }
+        assert!(w.contact_count() > 0);
+        let state = w.export_state();
+        let mut copy = World::import_state(&state).unwrap();
+        assert_eq!(copy.export_state(), state);
+        for frame in 0..240 {
+            if frame == 100 {
+                w.set_gravity(Vec2::new(3.0, -9.81)).unwrap();
+                copy.set_gravity(Vec2::new(3.0, -9.81)).unwrap();
+            }
+            w.step(1.0 / 60.0).unwrap();
+            copy.step(1.0 / 60.0).unwrap();
+            assert_eq!(bits(&w), bits(&copy), "frame {frame}");
+        }
+        // a reused slot keeps its generation
+        let id = w
+            .add_body(&BodyDef::dynamic(
+                Shape::rect(1.0, 1.0),
+                Vec2::new(0.0, 9.0),
+            ))
+            .unwrap();
+        let id2 = copy
+            .add_body(&BodyDef::dynamic(
+                Shape::rect(1.0, 1.0),
+                Vec2::new(0.0, 9.0),
+            ))
+            .unwrap();
+        assert_eq!(id, id2);
+        assert_eq!(id.generation, 1);
+    }
+
+    #[test]
+    fn inconsistent_states_are_refused() {
+        let mut w = World::default();
+        let a = w
+            .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), Vec2::ZERO))
+            .unwrap();
+        w.add_body(&BodyDef::dynamic(
+            Shape::rect(1.0, 1.0),
+            Vec2::new(3.0, 0.0),
+        ))
+        .unwrap();
+        w.remove_body(a).unwrap();
+        let good = w.export_state();
+        let mut s = good.clone();
+        s.free.clear();
+        assert!(World::import_state(&s).is_err());
+        let mut s = good.clone();
+        s.slots[1].body.as_mut().unwrap().position[0] = f32::NAN as _;
+        assert!(World::import_state(&s).is_err());
+        let mut s = good.clone();
+        s.free.push(1);
+        assert!(World::import_state(&s).is_err());
+        assert!(World::import_state(&good).is_ok());
+    }
+}

@@ -20,6 +20,9 @@ enum Command {
     /// Run the daemon: step a scene at a fixed rate and serve it over Zenoh (the default).
     #[cfg(feature = "net")]
     Serve(cmd::serve::ServeArgs),
+    /// Replay a command journal (`serve --record LOG`) and check every frame is bit-identical.
+    #[cfg(feature = "net")]
+    Replay(cmd::replay::ReplayArgs),
     /// Step a scene headless and print poses.
     Simulate(cmd::simulate::SimulateArgs),
     /// Regenerate docs/accuracy.md and its charts: error against run time, stiff and extreme cases.
@@ -40,6 +43,8 @@ fn main() -> ExitCode {
         }
         #[cfg(feature = "net")]
         Some(Command::Serve(args)) => cmd::serve::run(args),
+        #[cfg(feature = "net")]
+        Some(Command::Replay(args)) => cmd::replay::run(args),
         Some(Command::Simulate(args)) => cmd::simulate::run(args),
         #[cfg(feature = "report")]
         Some(Command::Report(args)) => cmd::report::run(args),

@@ -3,5 +3,7 @@
 #[cfg(feature = "report")]
 pub mod report;
 #[cfg(feature = "net")]
+pub mod replay;
+#[cfg(feature = "net")]
 pub mod serve;
 pub mod simulate;

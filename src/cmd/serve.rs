@@ -6,7 +6,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
-use tiltbox::service::{bench, Server, ServerConfig, ServerOptions, ServiceError};
+use tiltbox::service::{
+    bench, shutdown_worlds, start_worlds, ServerConfig, ServerOptions, ServiceError,
+};
 
 /// Arguments of `tiltbox serve`. Every config value has a flag; a flag overrides the file.
 #[derive(clap::Args, Default, Debug)]
@@ -20,6 +22,10 @@ pub struct ServeArgs {
     /// Key prefix [config: prefix; default tiltbox/<world>].
     #[arg(long)]
     pub prefix: Option<String>,
+    /// Another world to serve from this daemon (own tick thread, prefix tiltbox/NAME),
+    /// repeatable; replaces the configured list [config: worlds].
+    #[arg(long = "also-world", value_name = "NAME")]
+    pub worlds: Vec<String>,
     /// Steps per second [config: tick_hz; default 60].
     #[arg(long, value_name = "HZ")]
     pub tick_hz: Option<f64>,
@@ -53,6 +59,27 @@ pub struct ServeArgs {
     /// Spawn positions and sizes within +-this, metres [config: limits.max_coordinate; default 1000]
     #[arg(long, value_name = "M")]
     pub max_coordinate: Option<f32>,
+    /// Shortest spawned side, m [config: limits.min_size; default 0.01]
+    #[arg(long, value_name = "M")]
+    pub min_size: Option<f32>,
+    /// [config: limits.min_density; default 0.01 kg/m^2]
+    #[arg(long, value_name = "KG_M2")]
+    pub min_density: Option<f32>,
+    /// [config: limits.max_density; default 1000 kg/m^2]
+    #[arg(long, value_name = "KG_M2")]
+    pub max_density: Option<f32>,
+    /// Fastest spawn, m/s [config: limits.max_speed; default 100]
+    #[arg(long, value_name = "M_S")]
+    pub max_speed: Option<f32>,
+    /// Fastest spawn spin, rad/s [config: limits.max_angular_speed; default 100]
+    #[arg(long, value_name = "RAD_S")]
+    pub max_angular_speed: Option<f32>,
+    /// [config: limits.max_friction; default 10]
+    #[arg(long, value_name = "MU")]
+    pub max_friction: Option<f32>,
+    /// Longest body name, bytes [config: limits.max_name_bytes; default 64]
+    #[arg(long, value_name = "BYTES")]
+    pub max_name_bytes: Option<u32>,
     /// Zenoh mode: peer, client or router [config: zenoh.mode; default peer].
     #[arg(long)]
     pub mode: Option<String>,
@@ -69,6 +96,21 @@ pub struct ServeArgs {
     /// A full Zenoh json5 config, used as it is [config: zenoh.config_file].
     #[arg(long, value_name = "FILE")]
     pub zenoh_config: Option<PathBuf>,
+    /// Write a command journal (commands stamped with their frame, a state hash per frame)
+    /// for `tiltbox replay` [config: record].
+    #[arg(long, value_name = "LOG")]
+    pub record: Option<PathBuf>,
+    /// Checkpoint file, written atomically every --checkpoint-every seconds and on shutdown;
+    /// the previous one is kept as FILE.prev [config: checkpoint].
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints [config: checkpoint_every; default 10].
+    #[arg(long, value_name = "SECONDS")]
+    pub checkpoint_every: Option<f64>,
+    /// Start from the checkpoint (or FILE.prev if it is damaged) instead of the scene
+    /// [config: resume; default false].
+    #[arg(long)]
+    pub resume: bool,
     /// Log filter (tracing EnvFilter syntax; RUST_LOG wins) [default info,zenoh=warn].
     #[arg(long, value_name = "FILTER")]
     pub log: Option<String>,
@@ -94,6 +136,9 @@ impl ServeArgs {
         if self.prefix.is_some() {
             c.prefix = self.prefix.clone();
         }
+        if !self.worlds.is_empty() {
+            c.worlds = self.worlds.clone();
+        }
         set(&mut c.tick_hz, &self.tick_hz);
         if self.scene.is_some() {
             c.scene = self.scene.clone();
@@ -101,6 +146,16 @@ impl ServeArgs {
         set(&mut c.keyframe_every, &self.keyframe_every);
         set(&mut c.max_catch_up, &self.max_catch_up);
         set(&mut c.command_queue, &self.command_queue);
+        if self.record.is_some() {
+            c.record = self.record.clone();
+        }
+        if self.checkpoint.is_some() {
+            c.checkpoint = self.checkpoint.clone();
+        }
+        set(&mut c.checkpoint_every, &self.checkpoint_every);
+        if self.resume {
+            c.resume = true;
+        }
         let l = &mut c.limits;
         set(&mut l.max_bodies, &self.max_bodies);
         set(&mut l.max_spawns_per_second, &self.max_spawns_per_second);
@@ -108,6 +163,13 @@ impl ServeArgs {
         set(&mut l.max_payload_bytes, &self.max_payload_bytes);
         set(&mut l.max_gravity, &self.max_gravity);
         set(&mut l.max_coordinate, &self.max_coordinate);
+        set(&mut l.min_size, &self.min_size);
+        set(&mut l.min_density, &self.min_density);
+        set(&mut l.max_density, &self.max_density);
+        set(&mut l.max_speed, &self.max_speed);
+        set(&mut l.max_angular_speed, &self.max_angular_speed);
+        set(&mut l.max_friction, &self.max_friction);
+        set(&mut l.max_name_bytes, &self.max_name_bytes);
         let z = &mut c.zenoh;
         set(&mut z.mode, &self.mode);
         if !self.listen.is_empty() {
@@ -125,7 +187,7 @@ impl ServeArgs {
     }
 }
 
-fn init_logging(filter: Option<&str>) {
+pub(crate) fn init_logging(filter: Option<&str>) {
     use tracing_subscriber::EnvFilter;
     let filter = EnvFilter::try_from_default_env()
         .or_else(|_| EnvFilter::try_new(filter.unwrap_or("info,zenoh=warn")))
@@ -160,13 +222,13 @@ pub fn run(args: ServeArgs) -> anyhow::Result<ExitCode> {
                 Err(e) => fail(e),
             };
         }
-        let server = match Server::start(&config, ServerOptions::default()).await {
+        let servers = match start_worlds(&config, ServerOptions::default()).await {
             Ok(s) => s,
             Err(e) => return fail(e),
         };
         wait_for_signal().await;
         tracing::info!("stopping");
-        match tokio::time::timeout(Duration::from_millis(1900), server.shutdown()).await {
+        match tokio::time::timeout(Duration::from_millis(1900), shutdown_worlds(servers)).await {
             Ok(Ok(_)) => {}
             Ok(Err(e)) => tracing::warn!("shutdown: {e}"),
             Err(_) => tracing::warn!("shutdown took more than 2 s; exiting anyway"),

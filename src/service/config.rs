@@ -16,6 +16,9 @@ pub struct ServerConfig {
     pub world: String,
     /// Key prefix; absent means `tiltbox/<world>`.
     pub prefix: Option<String>,
+    /// More worlds served by the same daemon and Zenoh session, each on its own tick thread
+    /// under `tiltbox/<name>` (same scene, tick rate and limits). Default none.
+    pub worlds: Vec<String>,
     /// Steps per second (dt = 1 / tick_hz). Default 60.
     pub tick_hz: f64,
     /// Scene file; absent means the embedded Falling Bricks. `…/reset` re-reads it.
@@ -27,6 +30,17 @@ pub struct ServerConfig {
     /// Capacity of the command channel between Zenoh callbacks and the tick thread; a
     /// command arriving when it is full is rejected. Default 256.
     pub command_queue: u32,
+    /// Command journal: every command taken from the channel, stamped with its frame, plus a
+    /// hash of the World after every step, for `tiltbox replay`. Absent: no journal.
+    pub record: Option<PathBuf>,
+    /// Checkpoint file: the full state, written atomically every `checkpoint_every` seconds
+    /// and on shutdown; the previous one is kept as `<file>.prev`. Absent: no checkpoints.
+    pub checkpoint: Option<PathBuf>,
+    /// Seconds (of simulated time) between checkpoints. Default 10.
+    pub checkpoint_every: f64,
+    /// Start from the checkpoint (falling back to `<file>.prev` if it is damaged) instead of
+    /// the scene. Needs `checkpoint`. Default false.
+    pub resume: bool,
     /// Limits on what clients may ask for.
     pub limits: Limits,
     /// The Zenoh side.
@@ -49,6 +63,21 @@ pub struct Limits {
     pub max_gravity: f32,
     /// Spawned bodies must lie within +-max_coordinate on both axes and be smaller (m). Default 1000.
     pub max_coordinate: f32,
+    /// Spawned bodies' sides must be at least this long (m). Default 0.01.
+    pub min_size: f32,
+    /// Spawned bodies' density must lie within [min_density, max_density] (kg/m^2): extreme
+    /// mass ratios make any iterative solver blow up. Defaults 0.01 and 1000.
+    pub min_density: f32,
+    /// See `min_density`.
+    pub max_density: f32,
+    /// Largest spawn speed (m/s). Default 100.
+    pub max_speed: f32,
+    /// Largest spawn spin (rad/s). Default 100.
+    pub max_angular_speed: f32,
+    /// Largest friction coefficient. Default 10.
+    pub max_friction: f32,
+    /// Longest body name (bytes of UTF-8). Default 64.
+    pub max_name_bytes: u32,
 }
 
 /// How the daemon joins Zenoh.
@@ -73,11 +102,16 @@ impl Default for ServerConfig {
         ServerConfig {
             world: DEFAULT_WORLD.to_owned(),
             prefix: None,
+            worlds: Vec::new(),
             tick_hz: 60.0,
             scene: None,
             keyframe_every: 60,
             max_catch_up: 4,
             command_queue: 256,
+            record: None,
+            checkpoint: None,
+            checkpoint_every: 10.0,
+            resume: false,
             limits: Limits::default(),
             zenoh: ZenohSettings::default(),
         }
@@ -93,6 +127,13 @@ impl Default for Limits {
             max_payload_bytes: 65536,
             max_gravity: 100.0,
             max_coordinate: 1000.0,
+            min_size: 0.01,
+            min_density: 0.01,
+            max_density: 1000.0,
+            max_speed: 100.0,
+            max_angular_speed: 100.0,
+            max_friction: 10.0,
+            max_name_bytes: 64,
         }
     }
 }
@@ -205,6 +246,20 @@ impl ServerConfig {
             ));
         }
         self.keys()?;
+        for (i, w) in self.worlds.iter().enumerate() {
+            let bad = w.is_empty()
+                || w.contains(['/', '*', '$', '?', '#'])
+                || *w == self.world
+                || self.worlds[..i].contains(w)
+                || Keys::for_world(w).is_err();
+            if bad {
+                return Err(invalid(
+                    "worlds",
+                    format!("{w:?}"),
+                    "each must be a non-empty name without / * $ ? #, different from world and from each other",
+                ));
+            }
+        }
         if !(self.tick_hz.is_finite() && (1.0..=1000.0).contains(&self.tick_hz)) {
             return Err(invalid("tick_hz", self.tick_hz, "must be within 1..=1000"));
         }
@@ -218,6 +273,22 @@ impl ServerConfig {
         count("keyframe_every", self.keyframe_every, 1, 1_000_000)?;
         count("max_catch_up", self.max_catch_up, 0, 1000)?;
         count("command_queue", self.command_queue, 1, 1_000_000)?;
+        if !(self.checkpoint_every.is_finite()
+            && (0.01..=86_400.0).contains(&self.checkpoint_every))
+        {
+            return Err(invalid(
+                "checkpoint_every",
+                self.checkpoint_every,
+                "must be within 0.01..=86400 seconds",
+            ));
+        }
+        if self.resume && self.checkpoint.is_none() {
+            return Err(invalid(
+                "resume",
+                true,
+                "needs a checkpoint file (config key checkpoint, flag --checkpoint)",
+            ));
+        }
         let l = &self.limits;
         count("limits.max_bodies", l.max_bodies, 1, 1_000_000)?;
         count(
@@ -247,6 +318,20 @@ impl ServerConfig {
         };
         positive("limits.max_gravity", l.max_gravity)?;
         positive("limits.max_coordinate", l.max_coordinate)?;
+        positive("limits.min_size", l.min_size)?;
+        positive("limits.min_density", l.min_density)?;
+        positive("limits.max_density", l.max_density)?;
+        positive("limits.max_speed", l.max_speed)?;
+        positive("limits.max_angular_speed", l.max_angular_speed)?;
+        positive("limits.max_friction", l.max_friction)?;
+        count("limits.max_name_bytes", l.max_name_bytes, 0, 1 << 20)?;
+        if l.min_size > l.max_coordinate || l.min_density > l.max_density {
+            return Err(invalid(
+                "limits.min_size / limits.min_density",
+                format!("{} / {}", l.min_size, l.min_density),
+                "must not exceed limits.max_coordinate / limits.max_density",
+            ));
+        }
         let z = &self.zenoh;
         if !["peer", "client", "router"].contains(&z.mode.as_str()) {
             return Err(invalid(

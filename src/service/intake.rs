@@ -14,9 +14,10 @@ use std::sync::mpsc::{SyncSender, TrySendError};
 use std::sync::Arc;
 
 /// A body to add, validated.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SpawnDef {
     /// The engine's definition (passed `BodyDef::validate`).
+    #[serde(with = "compact_def")]
     pub def: BodyDef,
     /// Name (may be empty).
     pub name: String,
@@ -24,8 +25,58 @@ pub struct SpawnDef {
     pub colour: Colour,
 }
 
-/// A validated command for the tick thread.
-#[derive(Clone, Debug, PartialEq)]
+/// `BodyDef` for non-self-describing formats (the journal's postcard): `Shape`'s serde form
+/// is internally tagged, which postcard cannot read back, so the shape goes as its half extents.
+mod compact_def {
+    use crate::physics::{BodyDef, MassSpec, Real, Shape, Vec2};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    #[derive(Serialize, Deserialize)]
+    struct Compact {
+        half_extents: [Real; 2],
+        position: [Real; 2],
+        angle: Real,
+        linear_velocity: [Real; 2],
+        angular_velocity: Real,
+        mass: MassSpec,
+        friction: Real,
+        restitution: Real,
+    }
+
+    pub fn serialize<S: Serializer>(d: &BodyDef, s: S) -> Result<S::Ok, S::Error> {
+        let Shape::Rect { half_extents: h } = d.shape;
+        Compact {
+            half_extents: [h.x, h.y],
+            position: [d.position.x, d.position.y],
+            angle: d.angle,
+            linear_velocity: [d.linear_velocity.x, d.linear_velocity.y],
+            angular_velocity: d.angular_velocity,
+            mass: d.mass,
+            friction: d.friction,
+            restitution: d.restitution,
+        }
+        .serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<BodyDef, D::Error> {
+        let c = Compact::deserialize(d)?;
+        Ok(BodyDef {
+            shape: Shape::Rect {
+                half_extents: Vec2::new(c.half_extents[0], c.half_extents[1]),
+            },
+            position: Vec2::new(c.position[0], c.position[1]),
+            angle: c.angle,
+            linear_velocity: Vec2::new(c.linear_velocity[0], c.linear_velocity[1]),
+            angular_velocity: c.angular_velocity,
+            mass: c.mass,
+            friction: c.friction,
+            restitution: c.restitution,
+        })
+    }
+}
+
+/// A validated command for the tick thread (serializable: the journal stores it).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Command {
     /// Set gravity (m/s^2).
     SetGravity(Vector),
@@ -131,6 +182,9 @@ pub fn parse(key: CommandKey, payload: &[u8], limits: &Limits) -> Result<Command
     }
 }
 
+/// Largest spawn angle (rad): larger finite angles are legal but only lose precision.
+const MAX_ANGLE: f32 = 1.0e4;
+
 fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, String> {
     let ShapeSpec::Rect { width, height } = b.shape;
     let def = BodyDef {
@@ -157,9 +211,56 @@ fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, String> {
             ));
         }
     }
+    for (field, v) in [("shape.width", width), ("shape.height", height)] {
+        if v < limits.min_size {
+            return Err(format!(
+                "{field} = {v} is too small: must be >= {} (limits.min_size)",
+                limits.min_size
+            ));
+        }
+    }
+    if !(limits.min_density..=limits.max_density).contains(&b.density) {
+        return Err(format!(
+            "density = {} is out of range: must be within {}..={} (limits.min_density, limits.max_density)",
+            b.density, limits.min_density, limits.max_density
+        ));
+    }
+    let speed = b.velocity.x.hypot(b.velocity.y);
+    if speed > limits.max_speed {
+        return Err(format!(
+            "|velocity| = {speed} is out of range: must be <= {} m/s (limits.max_speed)",
+            limits.max_speed
+        ));
+    }
+    if b.angular_velocity.abs() > limits.max_angular_speed {
+        return Err(format!(
+            "angular_velocity = {} is out of range: must be within +-{} rad/s (limits.max_angular_speed)",
+            b.angular_velocity, limits.max_angular_speed
+        ));
+    }
+    if b.friction > limits.max_friction {
+        return Err(format!(
+            "friction = {} is out of range: must be <= {} (limits.max_friction)",
+            b.friction, limits.max_friction
+        ));
+    }
+    if b.angle.abs() > MAX_ANGLE {
+        return Err(format!(
+            "angle = {} is out of range: must be within +-{MAX_ANGLE} rad",
+            b.angle
+        ));
+    }
+    let name = b.name.unwrap_or_default();
+    if name.len() > limits.max_name_bytes as usize {
+        return Err(format!(
+            "name is {} bytes long, more than limits.max_name_bytes = {}",
+            name.len(),
+            limits.max_name_bytes
+        ));
+    }
     Ok(SpawnDef {
         def,
-        name: b.name.unwrap_or_default(),
+        name,
         colour: b.colour,
     })
 }

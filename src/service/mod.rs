@@ -6,16 +6,22 @@
 //! - [`tick`]: the fixed-rate loop.
 //! - [`net`]: the Zenoh session, declarations and shutdown ([`Server`]).
 //! - [`mod@bench`]: the `bench-net` measurement.
+//! - [`checkpoint`]: the full state in an atomically replaced, versioned file; resume.
+//! - [`journal`]: the command journal and deterministic replay.
 
 pub mod bench;
+pub mod checkpoint;
 pub mod config;
 pub mod intake;
+pub mod journal;
 pub mod net;
 pub mod sim;
 pub mod tick;
 
 pub use config::{ConfigError, Limits, ServerConfig, ZenohSettings};
 pub use intake::{Command, Incoming, SpawnDef};
-pub use net::{PublishHook, Server, ServerOptions, ServiceError};
-pub use sim::{SceneSource, SceneView, Simulation, StartError, POSE_EPSILON};
+pub use net::{
+    shutdown_worlds, start_worlds, world_configs, PublishHook, Server, ServerOptions, ServiceError,
+};
+pub use sim::{SceneSource, SceneView, SimState, Simulation, StartError, POSE_EPSILON};
 pub use tick::RunSummary;

@@ -2,10 +2,12 @@
 //! decode, validate and `try_send`), the publishers, the `…/scene` queryable and the liveliness
 //! token. The tick thread is started here and stopped by [`Server::shutdown`].
 
+use super::checkpoint::{self, Checkpointer};
 use super::config::{ConfigError, ServerConfig};
 use super::intake::{Incoming, Intake};
-use super::sim::{SceneSource, Simulation, StartError};
-use super::tick::{self, Outputs, RunSummary, SharedView, TickConfig};
+use super::journal::JournalWriter;
+use super::sim::{SceneSource, StartError};
+use super::tick::{self, Outputs, Recording, RunSummary, SharedView, TickConfig};
 use crate::protocol::{encode, CommandKey, Keys};
 use std::sync::atomic::{AtomicBool, AtomicU64};
 use std::sync::mpsc::sync_channel;
@@ -29,6 +31,9 @@ pub enum ServiceError {
     /// Zenoh refused (e.g. the listen port is taken).
     #[error("zenoh: {0}")]
     Zenoh(String),
+    /// The command journal could not be created.
+    #[error("journal: {0}")]
+    Record(String),
     /// The tick thread could not be started or panicked.
     #[error("tick thread: {0}")]
     Thread(String),
@@ -92,12 +97,13 @@ impl Outputs for ZenohOutputs {
 /// A running daemon. Stop it with [`Server::shutdown`].
 pub struct Server {
     session: Session,
+    owns_session: bool,
     keys: Keys,
     subscribers: Vec<Subscriber<()>>,
     queryable: Queryable<()>,
     token: LivelinessToken,
     stop: Arc<AtomicBool>,
-    tick: std::thread::JoinHandle<(ZenohOutputs, RunSummary)>,
+    tick: std::thread::JoinHandle<(Recording<ZenohOutputs>, RunSummary)>,
     publisher_task: tokio::task::JoinHandle<()>,
     query_task: tokio::task::JoinHandle<()>,
 }
@@ -109,17 +115,56 @@ impl Server {
         config: &ServerConfig,
         options: ServerOptions,
     ) -> Result<Server, ServiceError> {
+        Server::start_inner(None, config, options).await
+    }
+
+    /// Like [`Server::start`], but on an open session shared with other worlds (see
+    /// [`start_worlds`]); the session's own settings apply and `config.zenoh` is ignored.
+    /// [`Server::shutdown`] then leaves the session open.
+    pub async fn start_on(
+        session: &Session,
+        config: &ServerConfig,
+        options: ServerOptions,
+    ) -> Result<Server, ServiceError> {
+        Server::start_inner(Some(session.clone()), config, options).await
+    }
+
+    async fn start_inner(
+        shared_session: Option<Session>,
+        config: &ServerConfig,
+        options: ServerOptions,
+    ) -> Result<Server, ServiceError> {
         config.validate()?;
         let keys = config.keys()?;
         let source = options
             .source
             .clone()
             .unwrap_or_else(|| SceneSource::from_config(config));
-        let sim = Simulation::new(config, source)?;
-        let zconfig = config.zenoh_config()?;
-        let session = zenoh::open(zconfig)
-            .await
-            .map_err(zerr("cannot open session"))?;
+        let (sim, resumed) = checkpoint::start(config, source.clone())?;
+        let journal = match &config.record {
+            Some(path) => Some(
+                JournalWriter::create(path, config, &source, &sim, resumed)
+                    .map_err(|e| ServiceError::Record(e.to_string()))?,
+            ),
+            None => None,
+        };
+        let checkpoints = match &config.checkpoint {
+            Some(path) => {
+                let every = (config.checkpoint_every * config.tick_hz).round().max(1.0) as u64;
+                Some(
+                    Checkpointer::new(path.clone(), every, sim.frame())
+                        .map_err(|e| ServiceError::Thread(e.to_string()))?,
+                )
+            }
+            None => None,
+        };
+        let owns_session = shared_session.is_none();
+        let session = match shared_session {
+            Some(s) => s,
+            None => zenoh::open(config.zenoh_config()?)
+                .await
+                .map_err(zerr("cannot open session"))?,
+        };
 
         let poses = session
             .declare_publisher(keys.poses())
@@ -211,10 +256,14 @@ impl Server {
             .await
             .map_err(zerr("liveliness token"))?;
         // Last, the tick thread: nothing after this can fail.
-        let outputs = ZenohOutputs {
-            poses,
-            tx: out_tx,
-            on_publish: options.on_publish.clone(),
+        let outputs = Recording {
+            inner: ZenohOutputs {
+                poses,
+                tx: out_tx,
+                on_publish: options.on_publish.clone(),
+            },
+            journal,
+            checkpoints,
         };
         let tick_cfg = TickConfig {
             dt: Duration::from_secs_f64(config.dt()),
@@ -233,6 +282,7 @@ impl Server {
         tracing::info!(prefix = keys.prefix(), zid = %session.zid(), "serving");
         Ok(Server {
             session,
+            owns_session,
             keys,
             subscribers,
             queryable,
@@ -259,6 +309,7 @@ impl Server {
     pub async fn shutdown(self) -> Result<RunSummary, ServiceError> {
         let Server {
             session,
+            owns_session,
             subscribers,
             queryable,
             token,
@@ -279,7 +330,7 @@ impl Server {
             .map_err(|e| ServiceError::Thread(e.to_string()))?;
         let (outputs, summary) =
             joined.map_err(|_| ServiceError::Thread("the tick thread panicked".into()))?;
-        let ZenohOutputs { poses, tx, .. } = outputs;
+        let ZenohOutputs { poses, tx, .. } = outputs.inner;
         drop(tx);
         let _ = poses.undeclare().await;
         if tokio::time::timeout(Duration::from_millis(500), publisher_task)
@@ -289,12 +340,86 @@ impl Server {
             tracing::warn!("events still queued at shutdown were dropped");
         }
         let _ = token.undeclare().await;
-        match tokio::time::timeout(Duration::from_millis(1000), session.close()).await {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => tracing::warn!("closing the session: {e}"),
-            Err(_) => tracing::warn!("closing the session took more than 1 s"),
+        if owns_session {
+            match tokio::time::timeout(Duration::from_millis(1000), session.close()).await {
+                Ok(Ok(())) => {}
+                Ok(Err(e)) => tracing::warn!("closing the session: {e}"),
+                Err(_) => tracing::warn!("closing the session took more than 1 s"),
+            }
         }
         tracing::info!(frames = summary.frames, "stopped");
         Ok(summary)
     }
+}
+
+/// The config of each world a daemon serves: `config.world` first, then every name in
+/// `config.worlds`, each with its own key prefix `tiltbox/<name>` (the first keeps
+/// `config.prefix` if set) and, when recording or checkpointing, its own files
+/// (`<file>.<name>` for the extra worlds). Scene, tick rate and limits are shared.
+pub fn world_configs(config: &ServerConfig) -> Vec<ServerConfig> {
+    let mut out = Vec::with_capacity(1 + config.worlds.len());
+    let mut first = config.clone();
+    first.worlds.clear();
+    out.push(first);
+    for name in &config.worlds {
+        let suffixed = |p: &Option<std::path::PathBuf>| {
+            p.as_ref().map(|p| {
+                let mut s = p.as_os_str().to_owned();
+                s.push(format!(".{name}"));
+                std::path::PathBuf::from(s)
+            })
+        };
+        let mut c = config.clone();
+        c.worlds.clear();
+        c.world = name.clone();
+        c.prefix = None;
+        c.record = suffixed(&config.record);
+        c.checkpoint = suffixed(&config.checkpoint);
+        out.push(c);
+    }
+    out
+}
+
+/// Serve every world of `config` (see [`world_configs`]) from one Zenoh session, each on its
+/// own tick thread. Stop them with [`shutdown_worlds`]. With no extra worlds this is
+/// [`Server::start`].
+pub async fn start_worlds(
+    config: &ServerConfig,
+    options: ServerOptions,
+) -> Result<Vec<Server>, ServiceError> {
+    config.validate()?;
+    if config.worlds.is_empty() {
+        return Ok(vec![Server::start(config, options).await?]);
+    }
+    let session = zenoh::open(config.zenoh_config()?)
+        .await
+        .map_err(zerr("cannot open session"))?;
+    let mut servers: Vec<Server> = Vec::new();
+    for c in world_configs(config) {
+        match Server::start_on(&session, &c, options.clone()).await {
+            Ok(s) => servers.push(s),
+            Err(e) => {
+                let _ = shutdown_worlds(servers).await;
+                let _ = session.close().await;
+                return Err(e);
+            }
+        }
+    }
+    // The first world closes the shared session when it stops (it is stopped last).
+    servers[0].owns_session = true;
+    Ok(servers)
+}
+
+/// Stop the worlds started by [`start_worlds`] (the session's owner last).
+pub async fn shutdown_worlds(servers: Vec<Server>) -> Result<Vec<RunSummary>, ServiceError> {
+    let mut summaries = Vec::with_capacity(servers.len());
+    let mut result = Ok(());
+    for s in servers.into_iter().rev() {
+        match s.shutdown().await {
+            Ok(summary) => summaries.push(summary),
+            Err(e) => result = Err(e),
+        }
+    }
+    summaries.reverse();
+    result.map(|()| summaries)
 }

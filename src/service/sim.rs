@@ -52,7 +52,7 @@ impl SceneSource {
 }
 
 /// What a body looks like and is made of: fixed for its lifetime.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BodyMeta {
     /// Name (may be empty).
     pub name: String,
@@ -96,6 +96,19 @@ pub fn shape_spec(shape: &Shape) -> ShapeSpec {
             height: 2.0 * half_extents.y as f32,
         },
     }
+}
+
+fn body_is_finite(b: &Body) -> bool {
+    [
+        b.position().x,
+        b.position().y,
+        b.angle(),
+        b.linear_velocity().x,
+        b.linear_velocity().y,
+        b.angular_velocity(),
+    ]
+    .iter()
+    .all(|v| v.is_finite())
 }
 
 fn vector(v: Vec2) -> Vector {
@@ -186,6 +199,35 @@ pub enum StartError {
         /// The limit.
         max: u32,
     },
+    /// A checkpoint (or a journal's starting state) cannot be used.
+    #[error("checkpoint: {0}")]
+    Checkpoint(String),
+}
+
+/// Everything a [`Simulation`] carries from one tick to the next: what a checkpoint stores.
+/// Snapshot delta bookkeeping is not kept (a restored simulation starts with a keyframe).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SimState {
+    /// World name it ran as.
+    pub world_name: String,
+    /// Scene name.
+    pub scene_name: String,
+    /// |gravity| of the scene, which tilts scale.
+    pub scene_gravity: f32,
+    /// dt (s) it ran with.
+    pub dt: f64,
+    /// Last frame stepped.
+    pub frame: u64,
+    /// Per slot: the generation and what the body looks like.
+    pub meta: Vec<Option<(u32, BodyMeta)>>,
+    /// Frames of the spawns applied in the last second (the rate limit's window).
+    pub spawn_frames: Vec<u64>,
+    /// Commands applied.
+    pub applied: u64,
+    /// Commands rejected.
+    pub rejected: u64,
+    /// The World.
+    pub world: crate::physics::WorldState,
 }
 
 /// The World plus everything the daemon keeps about it.
@@ -216,10 +258,16 @@ pub struct Simulation {
 impl Simulation {
     /// Load the scene and build the World. Frame 0, nothing stepped yet.
     pub fn new(config: &ServerConfig, source: SceneSource) -> Result<Simulation, StartError> {
+        let mut sim = Simulation::new_empty(config, source);
+        sim.load_scene()?;
+        Ok(sim)
+    }
+
+    fn new_empty(config: &ServerConfig, source: SceneSource) -> Simulation {
         let keys = config
             .keys()
             .expect("config validated before the simulation starts");
-        let mut sim = Simulation {
+        Simulation {
             world: World::default(),
             scene_name: String::new(),
             scene_gravity: 9.81,
@@ -245,9 +293,84 @@ impl Simulation {
             },
             applied: 0,
             rejected: 0,
-        };
-        sim.load_scene()?;
+        }
+    }
+
+    /// A simulation continuing from `state` (a checkpoint). `source` is still what `…/reset`
+    /// loads. The world name, dt and limits in force are the config's; a different dt than
+    /// the checkpoint's is refused (the continuation would not be the same simulation).
+    pub fn restore(
+        config: &ServerConfig,
+        source: SceneSource,
+        state: SimState,
+    ) -> Result<Simulation, StartError> {
+        let bad = |m: String| StartError::Checkpoint(m);
+        if state.dt.to_bits() != config.dt().to_bits() {
+            return Err(bad(format!(
+                "it was taken with dt = {} s, the config has tick_hz = {} (dt = {} s)",
+                state.dt,
+                config.tick_hz,
+                config.dt()
+            )));
+        }
+        if !(state.scene_gravity.is_finite() && state.scene_gravity > 0.0) {
+            return Err(bad(format!("scene gravity = {}", state.scene_gravity)));
+        }
+        let world = World::import_state(&state.world).map_err(|e| bad(e.to_string()))?;
+        if world.body_count() > config.limits.max_bodies as usize {
+            return Err(StartError::TooManyBodies {
+                bodies: world.body_count(),
+                max: config.limits.max_bodies,
+            });
+        }
+        if state.world.steps != state.frame {
+            tracing::debug!(
+                steps = state.world.steps,
+                frame = state.frame,
+                "checkpoint: world steps and frame differ (resets keep the step count)"
+            );
+        }
+        let mut sim = Simulation::new_empty(config, source);
+        sim.world = world;
+        sim.scene_name = state.scene_name;
+        sim.scene_gravity = state.scene_gravity;
+        sim.frame = state.frame;
+        sim.meta = state
+            .meta
+            .into_iter()
+            .map(|m| m.map(|(g, meta)| (g, Arc::new(meta))))
+            .collect();
+        sim.spawn_frames = state.spawn_frames.into();
+        sim.applied = state.applied;
+        sim.rejected = state.rejected;
+        if state.world_name != sim.world_name {
+            tracing::warn!(
+                was = %state.world_name,
+                now = %sim.world_name,
+                "checkpoint taken under another world name"
+            );
+        }
         Ok(sim)
+    }
+
+    /// The state to checkpoint (see [`Simulation::restore`]).
+    pub fn export_state(&self) -> SimState {
+        SimState {
+            world_name: self.world_name.clone(),
+            scene_name: self.scene_name.clone(),
+            scene_gravity: self.scene_gravity,
+            dt: self.dt_secs,
+            frame: self.frame,
+            meta: self
+                .meta
+                .iter()
+                .map(|m| m.as_ref().map(|(g, meta)| (*g, (**meta).clone())))
+                .collect(),
+            spawn_frames: self.spawn_frames.iter().copied().collect(),
+            applied: self.applied,
+            rejected: self.rejected,
+            world: self.world.export_state(),
+        }
     }
 
     /// (Re)load the scene from its source and replace the World; nothing changes on error.
@@ -467,6 +590,42 @@ impl Simulation {
             gravity: vector(self.world.gravity()),
             bodies: self.world.bodies().map(|b| self.info(b)).collect(),
         })
+    }
+
+    /// Step like [`Simulation::step`], but survive an engine failure: if `World::step`
+    /// panics or leaves a body with a non-finite number, the scene is reloaded (the world is
+    /// lost, the daemon is not) and the `Reset` event to publish is returned. Deterministic,
+    /// so a replay recovers at the same frame.
+    pub fn step_guarded(&mut self) -> Result<(Duration, Option<Event>), PhysicsError> {
+        let t0 = Instant::now();
+        let before = self.frame;
+        let stepped = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.step()));
+        let failure = match stepped {
+            Ok(Ok(took)) => match self.world.bodies().find(|b| !body_is_finite(b)) {
+                None => return Ok((took, None)),
+                Some(b) => format!("body {} holds a non-finite number", b.id()),
+            },
+            Ok(Err(e)) => return Err(e),
+            Err(_) => "the engine panicked".to_owned(),
+        };
+        // The frame that failed still counts, so frame numbers stay consecutive.
+        self.frame = before + 1;
+        tracing::error!(
+            frame = self.frame,
+            "{failure}: reloading the scene to keep serving"
+        );
+        let event = match self.reset() {
+            Ok(kind) => Some(Event {
+                frame: self.next_frame(),
+                kind,
+            }),
+            Err(e) => {
+                tracing::error!("cannot reload the scene either: {e}");
+                self.world.clear();
+                None
+            }
+        };
+        Ok((t0.elapsed(), event))
     }
 
     /// Step the World once (frame += 1); returns how long `World::step` took.

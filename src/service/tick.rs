@@ -1,7 +1,9 @@
 //! The tick thread: owns the [`Simulation`], steps it at a fixed dt against absolute deadlines,
 //! applies queued commands at each tick boundary and hands every output to an [`Outputs`].
 
+use super::checkpoint::Checkpointer;
 use super::intake::Incoming;
+use super::journal::JournalWriter;
 use super::sim::{SceneView, Simulation};
 use crate::protocol::{encode, encode_into, CommandKey, Event, Stats};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -22,6 +24,61 @@ pub trait Outputs: Send + 'static {
     /// The default ignores it.
     fn command(&mut self, frame: u64, incoming: &Incoming) {
         let _ = (frame, incoming);
+    }
+    /// After every step, with the Simulation as it now is (journal hashes, checkpoints).
+    fn stepped(&mut self, sim: &Simulation) {
+        let _ = sim;
+    }
+    /// Once, when the loop stops, with the final Simulation (final checkpoint).
+    fn finished(&mut self, sim: &Simulation) {
+        let _ = sim;
+    }
+}
+
+/// An [`Outputs`] plus the optional command journal and checkpoints, which see every command
+/// and every step on the tick thread.
+pub struct Recording<O> {
+    /// Where messages go.
+    pub inner: O,
+    /// The command journal (`--record`).
+    pub journal: Option<JournalWriter>,
+    /// Periodic checkpoints (`--checkpoint`).
+    pub checkpoints: Option<Checkpointer>,
+}
+
+impl<O: Outputs> Outputs for Recording<O> {
+    fn poses(&mut self, frame: u64, payload: Vec<u8>) {
+        self.inner.poses(frame, payload);
+    }
+    fn event(&mut self, payload: Vec<u8>) {
+        self.inner.event(payload);
+    }
+    fn stats(&mut self, payload: Vec<u8>) {
+        self.inner.stats(payload);
+    }
+    fn command(&mut self, frame: u64, incoming: &Incoming) {
+        self.inner.command(frame, incoming);
+        if let Some(j) = self.journal.as_mut() {
+            j.command(frame, incoming);
+        }
+    }
+    fn stepped(&mut self, sim: &Simulation) {
+        self.inner.stepped(sim);
+        if let Some(j) = self.journal.as_mut() {
+            j.stepped(sim);
+        }
+        if let Some(c) = self.checkpoints.as_mut() {
+            c.stepped(sim);
+        }
+    }
+    fn finished(&mut self, sim: &Simulation) {
+        self.inner.finished(sim);
+        if let Some(j) = self.journal.as_mut() {
+            j.finish(sim);
+        }
+        if let Some(c) = self.checkpoints.as_mut() {
+            c.finish(sim);
+        }
     }
 }
 
@@ -139,8 +196,13 @@ pub fn run<O: Outputs>(
         }
 
         // 2. Step.
-        let step_time = match sim.step() {
-            Ok(t) => t,
+        let step_time = match sim.step_guarded() {
+            Ok((t, recovered)) => {
+                if let Some(ev) = recovered {
+                    publish_event(&mut out, &ev);
+                }
+                t
+            }
             Err(e) => {
                 tracing::error!(frame = sim.next_frame(), "step failed: {e}");
                 continue;
@@ -155,6 +217,7 @@ pub fn run<O: Outputs>(
             Err(e) => tracing::error!(frame, "cannot encode snapshot: {e}"),
         }
         shared.store(Arc::new(sim.view()));
+        out.stepped(&sim);
 
         // 4. Bookkeeping and stats once a second.
         let (late_us, step_us) = (micros(late), micros(step_time));
@@ -190,6 +253,7 @@ pub fn run<O: Outputs>(
             window.worst_lateness_us = 0;
         }
     }
+    out.finished(&sim);
     tracing::info!(frames = summary.frames, "tick loop stopped");
     (out, summary)
 }

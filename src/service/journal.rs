@@ -1,0 +1,472 @@
+//! The command journal and deterministic replay.
+//!
+//! `tiltbox serve --record LOG` writes every command the tick thread takes from its channel,
+//! stamped with the frame it is applied before, and a hash of every body's state after every
+//! step. `tiltbox replay LOG` rebuilds the same Simulation (same config, same scene, or the
+//! same starting checkpoint), applies the same commands at the same frames, and compares the
+//! hash at every frame: on the same build the run is bit-identical (docs/reliability.md says
+//! why and what would break it).
+//!
+//! File layout: magic `TILTJRNL`, format version (u32 LE), then records, each a u32 LE length
+//! followed by that many bytes of postcard: first a [`Header`], then [`Record`]s. A record
+//! cut short by a crash ends the log (reported as `truncated`), it does not poison it.
+
+use super::checkpoint;
+use super::config::ServerConfig;
+use super::intake::{Command, Incoming};
+use super::sim::{SceneSource, Simulation, StartError};
+use crate::physics::World;
+use crate::protocol::CommandKey;
+use crate::scene::Scene;
+use serde::{Deserialize, Serialize};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Bumped whenever the header or the records change shape.
+pub const FORMAT_VERSION: u32 = 1;
+const MAGIC: &[u8; 8] = b"TILTJRNL";
+/// Largest record accepted when reading (a corrupt length must not allocate gigabytes).
+const MAX_RECORD: u32 = 256 << 20;
+
+/// A hash of every body's state (id, position, angle, velocities, awake) and gravity, over the
+/// exact bits of each number, in slot order: equal hashes mean (with overwhelming odds)
+/// bit-identical worlds.
+pub fn state_hash(world: &World) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: u64| {
+        for b in x.to_le_bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    let g = world.gravity();
+    eat(g.x.to_bits() as u64);
+    eat(g.y.to_bits() as u64);
+    for b in world.bodies() {
+        let id = b.id();
+        eat(u64::from(id.index) << 32 | u64::from(id.generation));
+        for v in [
+            b.position().x,
+            b.position().y,
+            b.angle(),
+            b.linear_velocity().x,
+            b.linear_velocity().y,
+            b.angular_velocity(),
+        ] {
+            eat(v.to_bits() as u64);
+        }
+        eat(u64::from(b.is_awake()));
+    }
+    h
+}
+
+/// Where the recorded run's scene came from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum JournalScene {
+    /// The embedded Falling Bricks.
+    Embedded,
+    /// A scene file: its path and its text at start (so the log replays on its own).
+    File {
+        /// Path as configured.
+        path: String,
+        /// The file's text when recording started.
+        text: String,
+    },
+    /// A scene given in memory (tests): replay needs it given again.
+    Given {
+        /// Its name.
+        name: String,
+    },
+}
+
+/// The first record: everything needed to rebuild the starting Simulation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// The daemon's config, as TOML.
+    pub config_toml: String,
+    /// The scene.
+    pub scene: JournalScene,
+    /// When the run was resumed from a checkpoint: that checkpoint's bytes.
+    pub start: Option<Vec<u8>>,
+    /// The frame of the starting state.
+    pub start_frame: u64,
+}
+
+/// One journal entry.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Record {
+    /// A command taken from the channel, applied (or rejected) before frame `frame` is stepped.
+    Command {
+        /// The frame it is applied before.
+        frame: u64,
+        /// [`CommandKey::index`] of the key it arrived on.
+        key: u8,
+        /// The validated command, or why the intake refused it.
+        command: Result<Command, String>,
+    },
+    /// The World after frame `frame` was stepped.
+    Frame {
+        /// The frame.
+        frame: u64,
+        /// [`state_hash`] of the World.
+        hash: u64,
+    },
+    /// The daemon stopped cleanly after `frame`.
+    End {
+        /// The last frame stepped.
+        frame: u64,
+    },
+}
+
+/// Why a journal cannot be written, read or replayed.
+#[derive(Debug, thiserror::Error)]
+pub enum JournalError {
+    /// File trouble.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// Not a journal, another version, or a damaged header.
+    #[error("{}: {reason}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The recorded run cannot be rebuilt.
+    #[error("cannot rebuild the recorded run: {0}")]
+    Start(String),
+}
+
+fn frame_bytes(out: &mut Vec<u8>, value: &impl Serialize) -> Result<(), String> {
+    let bytes = postcard::to_stdvec(value).map_err(|e| e.to_string())?;
+    out.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+    out.extend_from_slice(&bytes);
+    Ok(())
+}
+
+/// Writes the journal from the tick thread. Buffered; flushed once per frame, so a SIGKILL
+/// loses at most the frame in progress. A write error is logged once and stops the journal.
+pub struct JournalWriter {
+    path: PathBuf,
+    file: Option<BufWriter<File>>,
+    buf: Vec<u8>,
+    /// Records written.
+    pub records: u64,
+}
+
+impl JournalWriter {
+    /// Create (truncate) `path` and write the header for a run of `sim`, started from scratch
+    /// (`start = None`) or from a checkpoint's bytes.
+    pub fn create(
+        path: &Path,
+        config: &ServerConfig,
+        source: &SceneSource,
+        sim: &Simulation,
+        resumed: bool,
+    ) -> Result<JournalWriter, JournalError> {
+        let io = |source| JournalError::Io {
+            path: path.to_owned(),
+            source,
+        };
+        let invalid = |reason: String| JournalError::Invalid {
+            path: path.to_owned(),
+            reason,
+        };
+        let scene = match source {
+            SceneSource::Embedded => JournalScene::Embedded,
+            SceneSource::File(p) => JournalScene::File {
+                path: p.display().to_string(),
+                text: std::fs::read_to_string(p).map_err(|source| JournalError::Io {
+                    path: p.clone(),
+                    source,
+                })?,
+            },
+            SceneSource::Given(s) => JournalScene::Given {
+                name: s.name.clone(),
+            },
+        };
+        let start = if resumed {
+            Some(checkpoint::encode(&sim.export_state()).map_err(invalid)?)
+        } else {
+            None
+        };
+        let header = Header {
+            config_toml: toml::to_string(config).map_err(|e| invalid(e.to_string()))?,
+            scene,
+            start,
+            start_frame: sim.frame(),
+        };
+        let mut buf = Vec::new();
+        buf.extend_from_slice(MAGIC);
+        buf.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        frame_bytes(&mut buf, &header).map_err(invalid)?;
+        let mut file = BufWriter::new(File::create(path).map_err(io)?);
+        file.write_all(&buf).map_err(io)?;
+        file.flush().map_err(io)?;
+        buf.clear();
+        Ok(JournalWriter {
+            path: path.to_owned(),
+            file: Some(file),
+            buf,
+            records: 0,
+        })
+    }
+
+    fn write(&mut self, record: &Record, flush: bool) {
+        let Some(file) = self.file.as_mut() else {
+            return;
+        };
+        self.buf.clear();
+        let result = frame_bytes(&mut self.buf, record)
+            .map_err(std::io::Error::other)
+            .and_then(|()| file.write_all(&self.buf))
+            .and_then(|()| if flush { file.flush() } else { Ok(()) });
+        match result {
+            Ok(()) => self.records += 1,
+            Err(e) => {
+                tracing::error!(path = %self.path.display(), "journal stopped: {e}");
+                self.file = None;
+            }
+        }
+    }
+
+    /// A command taken from the channel before `frame`.
+    pub fn command(&mut self, frame: u64, incoming: &Incoming) {
+        self.write(
+            &Record::Command {
+                frame,
+                key: incoming.key.index() as u8,
+                command: incoming.command.clone(),
+            },
+            false,
+        );
+    }
+
+    /// The World after a step.
+    pub fn stepped(&mut self, sim: &Simulation) {
+        self.write(
+            &Record::Frame {
+                frame: sim.frame(),
+                hash: state_hash(sim.world()),
+            },
+            true,
+        );
+    }
+
+    /// A clean stop.
+    pub fn finish(&mut self, sim: &Simulation) {
+        self.write(&Record::End { frame: sim.frame() }, true);
+        if let Some(f) = self.file.as_mut() {
+            let _ = f.get_ref().sync_all();
+        }
+    }
+}
+
+/// A journal read back.
+#[derive(Clone, Debug)]
+pub struct Journal {
+    /// The header.
+    pub header: Header,
+    /// Every complete record.
+    pub records: Vec<Record>,
+    /// The last record was cut short (a crash while writing).
+    pub truncated: bool,
+}
+
+impl Journal {
+    /// Read a journal file. A damaged header is an error; a damaged tail ends the records.
+    pub fn read(path: &Path) -> Result<Journal, JournalError> {
+        let bytes = std::fs::read(path).map_err(|source| JournalError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Journal::parse(&bytes).map_err(|reason| JournalError::Invalid {
+            path: path.to_owned(),
+            reason,
+        })
+    }
+
+    /// Parse a journal's bytes.
+    pub fn parse(bytes: &[u8]) -> Result<Journal, String> {
+        if bytes.len() < 12 || &bytes[..8] != MAGIC {
+            return Err("not a tiltbox journal (bad magic)".into());
+        }
+        let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+        if version != FORMAT_VERSION {
+            return Err(format!(
+                "journal format version {version}, this build reads {FORMAT_VERSION}"
+            ));
+        }
+        let mut rest = &bytes[12..];
+        let next = |rest: &mut &[u8]| -> Option<Result<Vec<u8>, ()>> {
+            if rest.is_empty() {
+                return None;
+            }
+            if rest.len() < 4 {
+                return Some(Err(()));
+            }
+            let len = u32::from_le_bytes([rest[0], rest[1], rest[2], rest[3]]);
+            if len > MAX_RECORD || rest.len() - 4 < len as usize {
+                return Some(Err(()));
+            }
+            let body = rest[4..4 + len as usize].to_vec();
+            *rest = &rest[4 + len as usize..];
+            Some(Ok(body))
+        };
+        let header: Header = match next(&mut rest) {
+            Some(Ok(b)) => postcard::from_bytes(&b).map_err(|e| format!("bad header: {e}"))?,
+            _ => return Err("truncated header".into()),
+        };
+        let mut records = Vec::new();
+        let mut truncated = false;
+        while let Some(r) = next(&mut rest) {
+            match r.ok().and_then(|b| postcard::from_bytes::<Record>(&b).ok()) {
+                Some(rec) => records.push(rec),
+                None => {
+                    truncated = true;
+                    break;
+                }
+            }
+        }
+        Ok(Journal {
+            header,
+            records,
+            truncated,
+        })
+    }
+
+    /// The recorded config.
+    pub fn config(&self) -> Result<ServerConfig, JournalError> {
+        let c = ServerConfig::from_toml_str(&self.header.config_toml, Path::new("<journal>"))
+            .map_err(|e| JournalError::Start(e.to_string()))?;
+        c.validate()
+            .map_err(|e| JournalError::Start(e.to_string()))?;
+        Ok(c)
+    }
+
+    /// The scene source of the recorded run (`given` replaces it, and is required for a
+    /// scene that was given in memory).
+    pub fn scene_source(&self, given: Option<SceneSource>) -> Result<SceneSource, JournalError> {
+        if let Some(s) = given {
+            return Ok(s);
+        }
+        match &self.header.scene {
+            JournalScene::Embedded => Ok(SceneSource::Embedded),
+            JournalScene::File { text, .. } => Scene::from_toml_str(text)
+                .map(|s| SceneSource::Given(Box::new(s)))
+                .map_err(|e| JournalError::Start(format!("recorded scene: {e}"))),
+            JournalScene::Given { name } => Err(JournalError::Start(format!(
+                "the run used an in-memory scene ({name:?}): give it with --scene"
+            ))),
+        }
+    }
+}
+
+/// What a replay found.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReplayReport {
+    /// Frame the run started from.
+    pub start_frame: u64,
+    /// Last frame stepped.
+    pub last_frame: u64,
+    /// Commands applied (or rejected, as recorded).
+    pub commands: u64,
+    /// Frames whose hash was compared.
+    pub frames_checked: u64,
+    /// The first frame whose hash differs: (frame, recorded, replayed).
+    pub first_mismatch: Option<(u64, u64, u64)>,
+    /// Frames that differed.
+    pub mismatches: u64,
+    /// The log ended cleanly (an `End` record).
+    pub clean_end: bool,
+    /// The log's last record was cut short.
+    pub truncated: bool,
+    /// Hash of the final World.
+    pub final_hash: u64,
+}
+
+/// Replay `journal`: rebuild the starting Simulation, apply each command at its frame, step,
+/// and compare every frame's hash. `on_frame(frame, hash)` sees every replayed frame.
+pub fn replay(
+    journal: &Journal,
+    scene: Option<SceneSource>,
+    mut on_frame: impl FnMut(&Simulation),
+) -> Result<ReplayReport, JournalError> {
+    let config = journal.config()?;
+    let source = journal.scene_source(scene)?;
+    let start = |e: StartError| JournalError::Start(e.to_string());
+    let mut sim = match &journal.header.start {
+        Some(bytes) => {
+            let state = checkpoint::decode(bytes).map_err(JournalError::Start)?;
+            Simulation::restore(&config, source, state).map_err(start)?
+        }
+        None => Simulation::new(&config, source).map_err(start)?,
+    };
+    let mut report = ReplayReport {
+        start_frame: sim.frame(),
+        truncated: journal.truncated,
+        ..Default::default()
+    };
+    let step = |sim: &mut Simulation| -> Result<(), JournalError> {
+        sim.step_guarded()
+            .map(|_| ())
+            .map_err(|e| JournalError::Start(format!("step {}: {e}", sim.next_frame())))
+    };
+    for record in &journal.records {
+        match record {
+            Record::Command {
+                frame,
+                key,
+                command,
+            } => {
+                if *frame != sim.next_frame() {
+                    return Err(JournalError::Start(format!(
+                        "a command stamped with frame {frame} arrives when the next frame is {}",
+                        sim.next_frame()
+                    )));
+                }
+                let key = *CommandKey::ALL.get(*key as usize).ok_or_else(|| {
+                    JournalError::Start(format!("unknown command key index {key}"))
+                })?;
+                // The event is what the daemon published; a replay only needs the state.
+                let _ = sim.apply(Incoming {
+                    key,
+                    command: command.clone(),
+                });
+                report.commands += 1;
+            }
+            Record::Frame { frame, hash } => {
+                step(&mut sim)?;
+                if sim.frame() != *frame {
+                    return Err(JournalError::Start(format!(
+                        "replayed frame {} where the log has frame {frame}",
+                        sim.frame()
+                    )));
+                }
+                let h = state_hash(sim.world());
+                report.frames_checked += 1;
+                if h != *hash {
+                    report.mismatches += 1;
+                    report.first_mismatch.get_or_insert((*frame, *hash, h));
+                }
+                on_frame(&sim);
+            }
+            Record::End { frame } => {
+                while sim.frame() < *frame {
+                    step(&mut sim)?;
+                    on_frame(&sim);
+                }
+                report.clean_end = true;
+            }
+        }
+    }
+    report.last_frame = sim.frame();
+    report.final_hash = state_hash(sim.world());
+    Ok(report)
+}

@@ -1,0 +1,336 @@
+//! Checkpoints: a restored Simulation continues bit-identically; damaged files fall back to
+//! the previous generation; a daemon resumes from its checkpoint; a daemon killed with
+//! SIGKILL loses at most one checkpoint interval.
+#![cfg(feature = "net")]
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use tiltbox::protocol::*;
+use tiltbox::service::checkpoint::{self, load, previous_path, write_atomic};
+use tiltbox::service::intake::parse;
+use tiltbox::service::journal::state_hash;
+use tiltbox::service::{Incoming, SceneSource, Server, ServerConfig, Simulation};
+
+const WAIT: Duration = Duration::from_secs(5);
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tiltbox-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn spawn_body(name: &str, x: f32, y: f32, vx: f32) -> SpawnBody {
+    SpawnBody {
+        name: Some(name.into()),
+        shape: ShapeSpec::Rect {
+            width: 0.8,
+            height: 0.6,
+        },
+        position: Vector::new(x, y),
+        angle: 0.3,
+        velocity: Vector::new(vx, 0.0),
+        angular_velocity: 1.0,
+        density: 1.5,
+        friction: 0.4,
+        restitution: 0.2,
+        colour: Colour { r: 1, g: 2, b: 3 },
+    }
+}
+
+/// The commands applied before frame `f` (the same for both runs).
+fn commands_at(f: u64) -> Vec<(CommandKey, Vec<u8>)> {
+    let mut v = Vec::new();
+    if f % 25 == 0 {
+        let x = ((f / 25) % 7) as f32 - 3.0;
+        let spawn = Spawn {
+            bodies: vec![spawn_body(&format!("s{f}"), x, 8.0, 1.0)],
+        };
+        v.push((CommandKey::Spawn, encode(&spawn).unwrap()));
+    }
+    if f % 60 == 30 {
+        let t = Tilt::Accelerometer {
+            x: ((f % 120) as f32 - 60.0) / 10.0,
+            y: -9.0,
+            z: 1.0,
+        };
+        v.push((CommandKey::Tilt, encode(&t).unwrap()));
+    }
+    if f == 420 {
+        let r = Remove {
+            ids: vec![BodyRef {
+                index: 3,
+                generation: 0,
+            }],
+        };
+        v.push((CommandKey::Remove, encode(&r).unwrap()));
+    }
+    v
+}
+
+fn tick(sim: &mut Simulation, config: &ServerConfig) {
+    for (key, payload) in commands_at(sim.next_frame()) {
+        let command = parse(key, &payload, &config.limits);
+        let _ = sim.apply(Incoming { key, command });
+    }
+    sim.step().unwrap();
+}
+
+#[test]
+fn a_restored_simulation_continues_bit_identically() {
+    let config = ServerConfig::default();
+    let mut live = Simulation::new(&config, SceneSource::Embedded).unwrap();
+    for _ in 0..300 {
+        tick(&mut live, &config);
+    }
+    assert!(
+        live.world().contact_count() > 0,
+        "warm-start state to carry"
+    );
+    let bytes = checkpoint::encode(&live.export_state()).unwrap();
+    let state = checkpoint::decode(&bytes).unwrap();
+    assert_eq!(state, live.export_state());
+    let mut restored = Simulation::restore(&config, SceneSource::Embedded, state).unwrap();
+    assert_eq!(restored.frame(), live.frame());
+    assert_eq!(restored.applied, live.applied);
+    for _ in 0..400 {
+        tick(&mut live, &config);
+        tick(&mut restored, &config);
+        assert_eq!(
+            state_hash(live.world()),
+            state_hash(restored.world()),
+            "frame {}",
+            live.frame()
+        );
+    }
+    // names and colours (not in the World) came along too
+    let (a, b) = (live.view().to_state(), restored.view().to_state());
+    assert_eq!(a.bodies, b.bodies);
+    assert!(a.bodies.iter().any(|b| b.name == "s25"));
+
+    // a different dt is refused rather than silently continued at another rate
+    let other = ServerConfig {
+        tick_hz: 120.0,
+        ..Default::default()
+    };
+    let e = Simulation::restore(&other, SceneSource::Embedded, live.export_state())
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("dt"), "{e}");
+}
+
+fn frame_of(path: &Path) -> u64 {
+    checkpoint::decode(&std::fs::read(path).unwrap())
+        .unwrap()
+        .frame
+}
+
+#[test]
+fn damaged_checkpoints_fall_back_to_the_previous_generation() {
+    let dir = temp_dir("ckpt-files");
+    let path = dir.join("world.ckpt");
+    let config = ServerConfig::default();
+    let mut sim = Simulation::new(&config, SceneSource::Embedded).unwrap();
+    assert!(
+        load(&path).unwrap().is_none(),
+        "first start: nothing to load"
+    );
+
+    for _ in 0..10 {
+        sim.step().unwrap();
+    }
+    write_atomic(&path, &checkpoint::encode(&sim.export_state()).unwrap()).unwrap();
+    for _ in 0..10 {
+        sim.step().unwrap();
+    }
+    let good = checkpoint::encode(&sim.export_state()).unwrap();
+    write_atomic(&path, &good).unwrap();
+    assert_eq!(frame_of(&path), 20);
+    assert_eq!(frame_of(&previous_path(&path)), 10, "two generations kept");
+    assert!(!dir.join("world.ckpt.tmp").exists());
+
+    let loaded = load(&path).unwrap().unwrap();
+    assert_eq!((loaded.state.frame, loaded.problems.len()), (20, 0));
+
+    // One flipped byte: the checksum catches it and the previous one is used.
+    let mut bad = good.clone();
+    let n = bad.len();
+    bad[n / 2] ^= 0x40;
+    std::fs::write(&path, &bad).unwrap();
+    let loaded = load(&path).unwrap().unwrap();
+    assert_eq!(loaded.state.frame, 10);
+    assert_eq!(loaded.from, previous_path(&path));
+    assert!(loaded.problems[0].to_string().contains("checksum"));
+
+    // Truncated (a torn write without the temp-file dance).
+    std::fs::write(&path, &good[..good.len() - 7]).unwrap();
+    let loaded = load(&path).unwrap().unwrap();
+    assert_eq!(loaded.state.frame, 10);
+    assert!(loaded.problems[0].to_string().contains("truncated"));
+
+    // Another format version, then nothing usable at all: an error naming both files.
+    let mut v2 = good.clone();
+    v2[8] = 2;
+    std::fs::write(&path, &v2).unwrap();
+    std::fs::write(previous_path(&path), b"TILT").unwrap();
+    let problems = load(&path).unwrap_err();
+    assert_eq!(problems.len(), 2);
+    assert!(problems[0].to_string().contains("format version 2"));
+    assert!(problems[1].to_string().contains("truncated"));
+    // and a daemon asked to resume refuses to start over silently
+    let cfg = ServerConfig {
+        checkpoint: Some(path.clone()),
+        resume: true,
+        ..Default::default()
+    };
+    let e = checkpoint::start(&cfg, SceneSource::Embedded)
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("no usable checkpoint"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn client_config(port: u16) -> zenoh::Config {
+    let mut c = zenoh::Config::default();
+    c.insert_json5("mode", "\"peer\"").unwrap();
+    c.insert_json5("connect/endpoints", &format!("[\"tcp/127.0.0.1:{port}\"]"))
+        .unwrap();
+    c.insert_json5("listen/endpoints", "[]").unwrap();
+    c.insert_json5("scouting/multicast/enabled", "false")
+        .unwrap();
+    c
+}
+
+async fn scene(session: &zenoh::Session, keys: &Keys) -> SceneState {
+    let end = Instant::now() + WAIT;
+    loop {
+        assert!(Instant::now() < end, "no scene reply");
+        let replies = session.get(keys.scene()).await.unwrap();
+        if let Ok(Ok(reply)) = tokio::time::timeout(WAIT, replies.recv_async()).await {
+            if let Ok(sample) = reply.into_result() {
+                return decode::<SceneState>(&sample.payload().to_bytes()).unwrap();
+            }
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_daemon_resumes_from_its_checkpoint() {
+    let dir = temp_dir("ckpt-daemon");
+    let path = dir.join("bricks.ckpt");
+    let mut config = ServerConfig::default();
+    config.zenoh.listen = vec!["tcp/127.0.0.1:17520".into()];
+    config.checkpoint = Some(path.clone());
+    config.checkpoint_every = 0.2;
+    let server = Server::start(&config, Default::default()).await.unwrap();
+    let keys = server.keys().clone();
+    let session = zenoh::open(client_config(17520)).await.unwrap();
+    let (etx, mut events) = tokio::sync::mpsc::unbounded_channel();
+    let _sub = session
+        .declare_subscriber(keys.events())
+        .callback(move |s| {
+            if let Ok(e) = decode::<Event>(&s.payload().to_bytes()) {
+                let _ = etx.send(e);
+            }
+        })
+        .await
+        .unwrap();
+    let spawn = Spawn {
+        bodies: vec![spawn_body("keeper", 0.0, 6.0, 0.0)],
+    };
+    let end = Instant::now() + WAIT;
+    let id = loop {
+        assert!(Instant::now() < end, "spawn not acknowledged");
+        session
+            .put(keys.spawn(), encode(&spawn).unwrap())
+            .await
+            .unwrap();
+        if let Ok(Some(Event {
+            kind: EventKind::Added { bodies },
+            ..
+        })) = tokio::time::timeout(Duration::from_millis(200), events.recv()).await
+        {
+            break bodies[0].id;
+        }
+    };
+    let summary = server.shutdown().await.unwrap();
+    session.close().await.unwrap();
+    let saved = load(&path).unwrap().unwrap().state;
+    assert_eq!(
+        saved.frame, summary.frames,
+        "the final checkpoint is taken on shutdown"
+    );
+
+    // Restart with resume (another port): the spawned body is back, same id, same name,
+    // and the frame count continues.
+    config.zenoh.listen = vec!["tcp/127.0.0.1:17521".into()];
+    config.resume = true;
+    let server = Server::start(&config, Default::default()).await.unwrap();
+    let session = zenoh::open(client_config(17521)).await.unwrap();
+    let s = scene(&session, &keys).await;
+    assert!(s.frame >= saved.frame, "{} < {}", s.frame, saved.frame);
+    let keeper = s
+        .bodies
+        .iter()
+        .find(|b| b.name == "keeper")
+        .expect("keeper");
+    assert_eq!(keeper.id, id);
+    session.close().await.unwrap();
+    server.shutdown().await.unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The real binary, killed with SIGKILL: the checkpoint on disk is whole and at most one
+/// interval (plus a tick or two) behind the last snapshot a subscriber saw.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sigkill_loses_at_most_one_checkpoint_interval() {
+    let dir = temp_dir("ckpt-kill");
+    let path = dir.join("k.ckpt");
+    let port = 17522;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_tiltbox"))
+        .args(["serve", "--listen", &format!("tcp/127.0.0.1:{port}")])
+        .arg("--checkpoint")
+        .arg(&path)
+        .args(["--checkpoint-every", "0.25", "--log", "warn"])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let keys = Keys::for_world("bricks").unwrap();
+    // The daemon may not listen yet: a peer keeps retrying its connect endpoints.
+    let session = tokio::time::timeout(Duration::from_secs(10), zenoh::open(client_config(port)))
+        .await
+        .expect("connected in time")
+        .unwrap();
+    let (ftx, mut frames) = tokio::sync::mpsc::unbounded_channel();
+    let _sub = session
+        .declare_subscriber(keys.poses())
+        .callback(move |s| {
+            if let Ok(snap) = decode::<Snapshot>(&s.payload().to_bytes()) {
+                let _ = ftx.send(snap.frame);
+            }
+        })
+        .await
+        .unwrap();
+    let end = Instant::now() + Duration::from_secs(10);
+    let mut last = 0;
+    while last < 80 {
+        assert!(Instant::now() < end, "no snapshots from the daemon");
+        if let Ok(Some(f)) = tokio::time::timeout(Duration::from_millis(500), frames.recv()).await {
+            last = f;
+        }
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    while let Ok(f) = frames.try_recv() {
+        last = last.max(f);
+    }
+    let loaded = load(&path).unwrap().expect("a checkpoint on disk");
+    let lost = last.saturating_sub(loaded.state.frame);
+    assert!(
+        lost <= 15 + 4,
+        "lost {lost} frames (checkpoint at {}, last seen {last})",
+        loaded.state.frame
+    );
+    session.close().await.unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,341 @@
+//! Hostile input: random bytes, mutated valid payloads and edge-value fields fed to every
+//! decoder and through the daemon's whole command path (intake parse -> Simulation::apply ->
+//! step) of an in-process Simulation. Nothing may panic, the World may never hold a NaN or an
+//! infinity, and nothing may grow without bound. Deterministic (fixed seeds), a few seconds.
+#![cfg(feature = "net")]
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::sync_channel;
+use std::sync::Arc;
+use tiltbox::protocol::*;
+use tiltbox::service::intake::{parse, Intake};
+use tiltbox::service::{Incoming, Limits, SceneSource, ServerConfig, Simulation};
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+    fn pick<T: Copy>(&mut self, v: &[T]) -> T {
+        v[self.below(v.len())]
+    }
+}
+
+/// Floats that break careless code.
+const EDGE: [f32; 16] = [
+    0.0,
+    -0.0,
+    1.0,
+    -1.0,
+    0.5,
+    1e-38,
+    1e-45,
+    -1e-45,
+    3.4e38,
+    -3.4e38,
+    1e30,
+    999.9,
+    f32::NAN,
+    f32::INFINITY,
+    f32::NEG_INFINITY,
+    1e-7,
+];
+
+fn edgy(rng: &mut Rng) -> f32 {
+    if rng.next() % 3 == 0 {
+        rng.pick(&EDGE)
+    } else {
+        (rng.next() % 2000) as f32 / 100.0 - 10.0
+    }
+}
+
+/// Mostly within `lo..hi`, sometimes an edge value: most spawns pass, so the World fills up.
+fn field(rng: &mut Rng, lo: f32, hi: f32) -> f32 {
+    if rng.next() % 40 == 0 {
+        rng.pick(&EDGE)
+    } else {
+        lo + (hi - lo) * (rng.next() % 10_000) as f32 / 10_000.0
+    }
+}
+
+fn body(rng: &mut Rng) -> SpawnBody {
+    let name_len = rng.pick(&[0usize, 3, 40, 0, 3, 40, 65, 5000]);
+    SpawnBody {
+        name: if rng.next() % 2 == 0 {
+            None
+        } else {
+            Some("n".repeat(name_len))
+        },
+        shape: ShapeSpec::Rect {
+            width: field(rng, 0.01, 3.0),
+            height: field(rng, 0.01, 3.0),
+        },
+        position: Vector::new(field(rng, -8.0, 8.0), field(rng, -1.0, 30.0)),
+        angle: field(rng, -7.0, 7.0),
+        velocity: Vector::new(field(rng, -70.0, 70.0), field(rng, -70.0, 70.0)),
+        angular_velocity: field(rng, -100.0, 100.0),
+        density: field(rng, 0.01, 1000.0),
+        friction: field(rng, 0.0, 3.0),
+        restitution: field(rng, 0.0, 1.0),
+        colour: Colour::default(),
+    }
+}
+
+/// A well-formed message for `key`, with edge values in its fields.
+fn valid(rng: &mut Rng, key: CommandKey) -> Vec<u8> {
+    match key {
+        CommandKey::Gravity => encode(&SetGravity {
+            x: edgy(rng),
+            y: edgy(rng),
+        }),
+        CommandKey::Tilt => match rng.next() % 3 {
+            0 => encode(&Tilt::Orientation(Orientation::Portrait)),
+            _ => encode(&Tilt::Accelerometer {
+                x: edgy(rng),
+                y: edgy(rng),
+                z: edgy(rng),
+            }),
+        },
+        CommandKey::Spawn => {
+            let n = rng.pick(&[0usize, 1, 1, 2, 5, 70]);
+            encode(&Spawn {
+                bodies: (0..n).map(|_| body(rng)).collect(),
+            })
+        }
+        CommandKey::Remove => {
+            let n = rng.pick(&[0usize, 1, 2, 3]);
+            encode(&Remove {
+                ids: (0..n)
+                    .map(|_| BodyRef {
+                        index: rng.pick(&[0u32, 1, 5, 40, 41, u32::MAX]),
+                        generation: rng.pick(&[0u32, 1, u32::MAX]),
+                    })
+                    .collect(),
+            })
+        }
+        CommandKey::Reset => encode(&Reset),
+    }
+    .unwrap()
+}
+
+/// Random bytes, or a valid payload mutated.
+fn hostile(rng: &mut Rng, key: CommandKey) -> Vec<u8> {
+    if rng.next() % 5 == 0 {
+        let n = rng.pick(&[0usize, 1, 2, 5, 17, 64, 300]);
+        return (0..n).map(|_| rng.next() as u8).collect();
+    }
+    let mut p = valid(rng, key);
+    for _ in 0..1 + rng.below(3) {
+        let n = p.len();
+        match rng.next() % 8 {
+            0 if n > 0 => {
+                let i = rng.below(n);
+                p[i] ^= 1 << rng.below(8);
+            }
+            1 if n > 0 => {
+                let i = rng.below(n);
+                p[i] = rng.pick(&[0u8, 0x7f, 0x80, 0xff]);
+            }
+            2 => p.truncate(rng.below(n + 1)),
+            3 => p.extend((0..rng.below(16)).map(|_| rng.next() as u8)),
+            4 if n > 0 => {
+                let i = rng.below(n);
+                p.insert(i, rng.next() as u8);
+            }
+            5 if n >= 4 => {
+                let i = rng.below(n - 3);
+                p[i..i + 4].copy_from_slice(&rng.pick(&EDGE).to_le_bytes());
+            }
+            6 if n > 1 => {
+                // a huge varint length prefix
+                let i = 1 + rng.below(n - 1);
+                p.splice(i..i, [0xff, 0xff, 0xff, 0xff, 0x0f]);
+            }
+            _ if n > 0 => p[0] = rng.pick(&[0u8, 1, 2, 255]), // protocol version byte
+            _ => {}
+        }
+    }
+    p
+}
+
+fn assert_sane(sim: &Simulation, limits: &Limits, at: usize) {
+    let w = sim.world();
+    assert!(
+        w.body_count() <= limits.max_bodies as usize,
+        "{} bodies",
+        w.body_count()
+    );
+    let g = w.gravity();
+    assert!(g.x.is_finite() && g.y.is_finite(), "gravity {g:?} at {at}");
+    assert!(g.length() <= limits.max_gravity * 1.0001, "gravity {g:?}");
+    for b in w.bodies() {
+        let v = [
+            b.position().x,
+            b.position().y,
+            b.angle(),
+            b.linear_velocity().x,
+            b.linear_velocity().y,
+            b.angular_velocity(),
+        ];
+        assert!(
+            v.iter().all(|x| x.is_finite()),
+            "body {} not finite at command {at}: {v:?}",
+            b.id()
+        );
+    }
+}
+
+#[test]
+fn every_decoder_survives_random_and_mutated_bytes() {
+    let mut rng = Rng(0x1234_5678_9abc_def1);
+    for i in 0..20_000 {
+        let key = CommandKey::ALL[i % 5];
+        let p = hostile(&mut rng, key);
+        // command decoders, and the daemon-side messages clients decode
+        let _ = decode::<SetGravity>(&p);
+        let _ = decode::<Tilt>(&p);
+        let _ = decode::<Spawn>(&p);
+        let _ = decode::<Remove>(&p);
+        let _ = decode::<Reset>(&p);
+        let _ = decode::<Snapshot>(&p);
+        let _ = decode::<Event>(&p);
+        let _ = decode::<SceneState>(&p);
+        let _ = decode::<Stats>(&p);
+    }
+}
+
+#[test]
+fn the_command_path_never_panics_never_holds_nan_and_stays_bounded() {
+    let mut config = ServerConfig::default();
+    config.limits.max_bodies = 250;
+    config.limits.max_spawns_per_second = 1000; // let the storm reach the body limit
+    let limits = config.limits.clone();
+    let mut sim = Simulation::new(&config, SceneSource::Embedded).unwrap();
+    let mut rng = Rng(0xdead_beef_cafe_f00d);
+    let (mut accepted, mut rejected) = (0u64, 0u64);
+    let mut max_event = 0usize;
+    let mut most_bodies = 0usize;
+    for i in 0..12_000 {
+        // weight towards spawns: they are what can grow
+        let key = rng.pick(&[
+            CommandKey::Spawn,
+            CommandKey::Spawn,
+            CommandKey::Spawn,
+            CommandKey::Gravity,
+            CommandKey::Tilt,
+            CommandKey::Remove,
+            CommandKey::Reset,
+        ]);
+        let key = if key == CommandKey::Reset && rng.next() % 200 != 0 {
+            CommandKey::Tilt
+        } else {
+            key
+        };
+        let p = if rng.next() % 2 == 0 {
+            valid(&mut rng, key)
+        } else {
+            hostile(&mut rng, key)
+        };
+        let command = parse(key, &p, &limits);
+        if command.is_ok() {
+            accepted += 1;
+        }
+        if let Some(ev) = sim.apply(Incoming { key, command }) {
+            if matches!(ev.kind, EventKind::Rejected { .. }) {
+                rejected += 1;
+            }
+            max_event = max_event.max(encode(&ev).unwrap().len());
+        }
+        if i % 4 == 0 {
+            sim.step().unwrap();
+            let _ = encode(sim.snapshot()).unwrap();
+            assert_sane(&sim, &limits, i);
+            most_bodies = most_bodies.max(sim.world().body_count());
+        }
+    }
+    assert_sane(&sim, &limits, usize::MAX);
+    let _ = encode(&sim.view().to_state()).unwrap();
+    assert!(accepted > 3000 && rejected > 3000, "{accepted} {rejected}");
+    // the storm reached the body limit, and the limit held
+    assert!(most_bodies >= 240, "at most {most_bodies} bodies");
+    assert_eq!(sim.rejected, rejected);
+    // a rejection echoes the key and a reason, never the payload: events stay small
+    assert!(max_event < 400_000, "largest event {max_event} bytes");
+}
+
+#[test]
+fn the_intake_channel_is_bounded_under_a_flood() {
+    let (tx, rx) = sync_channel::<Incoming>(16);
+    let dropped: Arc<[AtomicU64; 5]> = Arc::new(Default::default());
+    let intake = Intake::new(tx, Limits::default(), dropped.clone());
+    let mut rng = Rng(42);
+    for i in 0..5_000 {
+        let key = CommandKey::ALL[i % 5];
+        intake.handle(key, &hostile(&mut rng, key));
+    }
+    let queued = rx.try_iter().count();
+    let dropped: u64 = dropped.iter().map(|d| d.load(Ordering::Relaxed)).sum();
+    assert_eq!(queued, 16);
+    assert_eq!(dropped, 5_000 - 16);
+    // oversized payloads are refused before decoding
+    let big = vec![0u8; Limits::default().max_payload_bytes as usize + 1];
+    let e = parse(CommandKey::Spawn, &big, &Limits::default()).unwrap_err();
+    assert!(e.contains("max_payload_bytes"));
+}
+
+/// Defence in depth: should the engine ever fail (here provoked by loosening the friction
+/// limit so an absurd coefficient gets in), the guarded step the tick loop uses reloads the
+/// scene instead of panicking the daemon or serving NaN.
+#[test]
+fn an_engine_failure_resets_the_world_instead_of_killing_the_daemon() {
+    let mut config = ServerConfig::default();
+    config.limits.max_friction = 3.0e38;
+    let mut sim = Simulation::new(&config, SceneSource::Embedded).unwrap();
+    let mut b = SpawnBody {
+        name: None,
+        shape: ShapeSpec::Rect {
+            width: 1.1,
+            height: 2.3,
+        },
+        position: Vector::new(0.0, 1.0),
+        angle: -3.99,
+        velocity: Vector::new(-11.9, 10.9),
+        angular_velocity: -9.4,
+        density: 224.0,
+        friction: 2.2e38,
+        restitution: 0.16,
+        colour: Colour::default(),
+    };
+    let mut resets = 0;
+    for i in 0..400 {
+        if i % 20 == 0 {
+            b.position.x = (i % 7) as f32 - 3.0;
+            let p = encode(&Spawn {
+                bodies: vec![b.clone()],
+            })
+            .unwrap();
+            let command = parse(CommandKey::Spawn, &p, &config.limits);
+            let _ = sim.apply(Incoming {
+                key: CommandKey::Spawn,
+                command,
+            });
+        }
+        let (_, event) = sim.step_guarded().unwrap();
+        if let Some(Event {
+            kind: EventKind::Reset { .. },
+            ..
+        }) = event
+        {
+            resets += 1;
+        }
+        assert_sane(&sim, &config.limits, i);
+    }
+    assert_eq!(sim.frame(), 400, "frames stay consecutive");
+    eprintln!("engine failures recovered from: {resets}");
+}

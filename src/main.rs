@@ -23,6 +23,9 @@ enum Command {
     /// Replay a command journal (`serve --record LOG`) and check every frame is bit-identical.
     #[cfg(feature = "net")]
     Replay(cmd::replay::ReplayArgs),
+    /// Start the daemon and the text viewer in one process: bricks fall at once.
+    #[cfg(all(feature = "net", feature = "tui"))]
+    Demo(cmd::demo::DemoArgs),
     /// Step a scene headless and print poses.
     Simulate(cmd::simulate::SimulateArgs),
     /// Regenerate docs/accuracy.md and its charts: error against run time, stiff and extreme cases.
@@ -45,6 +48,8 @@ fn main() -> ExitCode {
         Some(Command::Serve(args)) => cmd::serve::run(args),
         #[cfg(feature = "net")]
         Some(Command::Replay(args)) => cmd::replay::run(args),
+        #[cfg(all(feature = "net", feature = "tui"))]
+        Some(Command::Demo(args)) => cmd::demo::run(args),
         Some(Command::Simulate(args)) => cmd::simulate::run(args),
         #[cfg(feature = "report")]
         Some(Command::Report(args)) => cmd::report::run(args),

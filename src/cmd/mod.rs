@@ -1,5 +1,7 @@
 //! The subcommands of the `tiltbox` binary; each is a thin layer over the library.
 
+#[cfg(all(feature = "net", feature = "tui"))]
+pub mod demo;
 #[cfg(feature = "report")]
 pub mod report;
 #[cfg(feature = "net")]

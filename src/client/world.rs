@@ -1,0 +1,401 @@
+//! The viewer's copy of one world, rebuilt the way `docs/protocol.md` tells a late joiner to:
+//! subscribe to `…/poses` and `…/events`, query `…/scene` (frame F), drop what is at or before
+//! F, then apply later snapshots (a pose replaces the body's pose; a keyframe also says which
+//! dynamic bodies exist) and events (added, removed, reset). A pose that arrives before the
+//! `Added` event of its body is kept until the event comes.
+
+use crate::protocol::{
+    BodyInfo, BodyRef, Event, EventKind, Pose, SceneState, ShapeSpec, Snapshot, Vector,
+};
+use std::collections::{BTreeMap, VecDeque};
+
+/// Poses of bodies not known yet are kept this many frames for their `Added` event.
+const PENDING_FRAMES: u64 = 120;
+/// A snapshot this many frames older than the newest one means the daemon restarted.
+const RESTART_FRAMES: u64 = 120;
+/// Messages kept while waiting for the `…/scene` reply.
+const EARLY_CAPACITY: usize = 1024;
+
+/// One body as the viewer knows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewBody {
+    /// What the daemon said about it (shape, colour, name, static or not).
+    pub info: BodyInfo,
+    /// Current centre of mass x (m).
+    pub x: f32,
+    /// Current centre of mass y (m).
+    pub y: f32,
+    /// Current angle (rad).
+    pub angle: f32,
+    /// Frame from which the body exists.
+    since: u64,
+}
+
+impl ViewBody {
+    fn new(info: BodyInfo, since: u64) -> ViewBody {
+        ViewBody {
+            x: info.position.x,
+            y: info.position.y,
+            angle: info.angle,
+            info,
+            since,
+        }
+    }
+
+    /// The four corners of the body's rectangle in world coordinates, counter-clockwise.
+    pub fn corners(&self) -> [(f32, f32); 4] {
+        let ShapeSpec::Rect { width, height } = self.info.shape;
+        let (hw, hh) = (width * 0.5, height * 0.5);
+        let (s, c) = self.angle.sin_cos();
+        [(-hw, -hh), (hw, -hh), (hw, hh), (-hw, hh)]
+            .map(|(lx, ly)| (self.x + c * lx - s * ly, self.y + s * lx + c * ly))
+    }
+}
+
+/// What became of a snapshot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Applied {
+    /// It moved the view forward.
+    Applied,
+    /// It was at or before the view's frame (already included, or out of order).
+    Stale,
+    /// Its frame is far behind the view's: the daemon restarted, query `…/scene` again.
+    Restarted,
+}
+
+/// The state of one world: the `…/scene` reply brought forward by snapshots and events.
+#[derive(Clone, Debug)]
+pub struct WorldView {
+    /// World name.
+    pub world: String,
+    /// Scene name.
+    pub scene: String,
+    /// Frame of the newest snapshot applied (or of the scene reply).
+    pub frame: u64,
+    /// Simulated time of that frame (s).
+    pub time: f64,
+    /// Gravity in force (m/s^2).
+    pub gravity: Vector,
+    /// Every body, static ones included.
+    pub bodies: BTreeMap<BodyRef, ViewBody>,
+    /// The reason of the latest `Rejected` event, if any.
+    pub last_rejected: Option<String>,
+    /// Events at or before this frame are already included.
+    base: u64,
+    /// Snapshots before this frame describe bodies from before a reset: ignored.
+    min_frame: u64,
+    /// Poses of bodies whose `Added` event has not arrived yet, with their frame.
+    pending: BTreeMap<BodyRef, (u64, Pose)>,
+}
+
+impl WorldView {
+    /// The view as a `…/scene` reply describes it.
+    pub fn from_scene(state: SceneState) -> WorldView {
+        let bodies = state
+            .bodies
+            .into_iter()
+            .map(|b| (b.id, ViewBody::new(b, 0)))
+            .collect();
+        WorldView {
+            world: state.world,
+            scene: state.scene,
+            frame: state.frame,
+            time: state.time,
+            gravity: state.gravity,
+            bodies,
+            last_rejected: None,
+            base: state.frame,
+            min_frame: 0,
+            pending: BTreeMap::new(),
+        }
+    }
+
+    /// Apply a snapshot received after the scene reply.
+    pub fn apply_snapshot(&mut self, s: &Snapshot) -> Applied {
+        if s.frame + RESTART_FRAMES < self.frame {
+            return Applied::Restarted;
+        }
+        if s.frame <= self.frame || s.frame < self.min_frame {
+            return Applied::Stale;
+        }
+        self.frame = s.frame;
+        self.time = s.time;
+        self.gravity = s.gravity;
+        for p in &s.poses {
+            match self.bodies.get_mut(&p.id) {
+                Some(b) => (b.x, b.y, b.angle) = (p.x, p.y, p.angle),
+                None => {
+                    self.pending.insert(p.id, (s.frame, *p));
+                }
+            }
+        }
+        if s.keyframe {
+            let frame = s.frame;
+            let mut present: Vec<BodyRef> = s.poses.iter().map(|p| p.id).collect();
+            present.sort_unstable();
+            self.bodies.retain(|id, b| {
+                b.info.is_static || b.since > frame || present.binary_search(id).is_ok()
+            });
+        }
+        let now = self.frame;
+        self.pending.retain(|_, (f, _)| *f + PENDING_FRAMES >= now);
+        Applied::Applied
+    }
+
+    /// Apply an event received after the scene reply.
+    pub fn apply_event(&mut self, e: &Event) {
+        if e.frame <= self.base {
+            return;
+        }
+        match &e.kind {
+            EventKind::Added { bodies } => {
+                for info in bodies {
+                    self.insert(info.clone(), e.frame);
+                }
+            }
+            EventKind::Removed { ids } => {
+                for id in ids {
+                    self.bodies.remove(id);
+                    self.pending.remove(id);
+                }
+            }
+            EventKind::Reset {
+                scene,
+                gravity,
+                bodies,
+            } => {
+                self.scene = scene.clone();
+                self.gravity = *gravity;
+                self.bodies.clear();
+                self.min_frame = e.frame;
+                self.pending.retain(|_, (f, _)| *f >= e.frame);
+                for info in bodies {
+                    self.insert(info.clone(), e.frame);
+                }
+            }
+            EventKind::Rejected { key, reason } => {
+                self.last_rejected = Some(format!("{key}: {reason}"));
+            }
+        }
+    }
+
+    fn insert(&mut self, info: BodyInfo, since: u64) {
+        let id = info.id;
+        let mut body = ViewBody::new(info, since);
+        if let Some((f, p)) = self.pending.remove(&id) {
+            if f >= since {
+                (body.x, body.y, body.angle) = (p.x, p.y, p.angle);
+            }
+        }
+        self.bodies.insert(id, body);
+    }
+
+    /// The area to show, `(min_x, min_y, max_x, max_y)` in metres: the static bodies (the
+    /// walls) when there are any, else every body. `None` for an empty world.
+    pub fn bounds(&self) -> Option<(f32, f32, f32, f32)> {
+        let any_static = self.bodies.values().any(|b| b.info.is_static);
+        let mut it = self
+            .bodies
+            .values()
+            .filter(|b| !any_static || b.info.is_static)
+            .flat_map(|b| b.corners())
+            .filter(|(x, y)| x.is_finite() && y.is_finite());
+        let (x0, y0) = it.next()?;
+        Some(it.fold((x0, y0, x0, y0), |(a, b, c, d), (x, y)| {
+            (a.min(x), b.min(y), c.max(x), d.max(y))
+        }))
+    }
+
+    /// Dynamic bodies.
+    pub fn dynamic_count(&self) -> usize {
+        self.bodies.values().filter(|b| !b.info.is_static).count()
+    }
+}
+
+/// Something received on the world's keys.
+#[derive(Clone, Debug)]
+pub enum Received {
+    /// A `…/poses` snapshot.
+    Snapshot(Snapshot),
+    /// An `…/events` event.
+    Event(Event),
+}
+
+/// A late join in progress or done: messages received before the scene reply are kept, and
+/// replayed on it.
+#[derive(Debug, Default)]
+pub struct Join {
+    view: Option<WorldView>,
+    early: VecDeque<Received>,
+}
+
+impl Join {
+    /// A join that waits for its scene reply.
+    pub fn new() -> Join {
+        Join::default()
+    }
+
+    /// The view, once the scene reply came.
+    pub fn view(&self) -> Option<&WorldView> {
+        self.view.as_ref()
+    }
+
+    /// Forget everything (the daemon went away or restarted): wait for a new scene reply.
+    pub fn restart(&mut self) {
+        self.view = None;
+        self.early.clear();
+    }
+
+    /// The scene reply: start from it and replay what came before it.
+    pub fn scene(&mut self, state: SceneState) {
+        let mut view = WorldView::from_scene(state);
+        for r in self.early.drain(..) {
+            match r {
+                Received::Snapshot(s) => {
+                    view.apply_snapshot(&s);
+                }
+                Received::Event(e) => view.apply_event(&e),
+            }
+        }
+        self.view = Some(view);
+    }
+
+    /// A message from the daemon. Returns [`Applied::Restarted`] when the view should be
+    /// queried again.
+    pub fn receive(&mut self, r: Received) -> Applied {
+        match &mut self.view {
+            None => {
+                if self.early.len() == EARLY_CAPACITY {
+                    self.early.pop_front();
+                }
+                self.early.push_back(r);
+                Applied::Stale
+            }
+            Some(view) => match r {
+                Received::Snapshot(s) => view.apply_snapshot(&s),
+                Received::Event(e) => {
+                    view.apply_event(&e);
+                    Applied::Applied
+                }
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::Colour;
+
+    fn info(index: u32, is_static: bool, x: f32) -> BodyInfo {
+        BodyInfo {
+            id: BodyRef {
+                index,
+                generation: 0,
+            },
+            name: String::new(),
+            shape: ShapeSpec::Rect {
+                width: 1.0,
+                height: 1.0,
+            },
+            is_static,
+            colour: Colour::default(),
+            position: Vector::new(x, 0.0),
+            angle: 0.0,
+            velocity: Vector::default(),
+            angular_velocity: 0.0,
+            mass: 1.0,
+            friction: 0.5,
+            restitution: 0.0,
+        }
+    }
+
+    fn pose(index: u32, x: f32) -> Pose {
+        Pose {
+            id: BodyRef {
+                index,
+                generation: 0,
+            },
+            x,
+            y: 1.0,
+            angle: 0.0,
+        }
+    }
+
+    fn snap(frame: u64, keyframe: bool, poses: Vec<Pose>) -> Received {
+        Received::Snapshot(Snapshot {
+            frame,
+            time: frame as f64 / 60.0,
+            gravity: Vector::new(0.0, -9.81),
+            keyframe,
+            poses,
+        })
+    }
+
+    fn state(frame: u64) -> SceneState {
+        SceneState {
+            world: "w".into(),
+            scene: "s".into(),
+            frame,
+            time: 0.0,
+            gravity: Vector::new(0.0, -9.81),
+            bodies: vec![info(0, true, 0.0), info(1, false, 1.0), info(2, false, 2.0)],
+        }
+    }
+
+    #[test]
+    fn a_late_join_drops_what_the_scene_has_and_keeps_early_poses_for_added_bodies() {
+        let mut j = Join::new();
+        // before the scene reply: one snapshot already in it, one after it
+        j.receive(snap(10, false, vec![pose(1, 9.0)]));
+        j.receive(snap(11, false, vec![pose(1, 1.5)]));
+        j.scene(state(10));
+        let v = j.view().unwrap();
+        assert_eq!(v.frame, 11);
+        assert_eq!(v.bodies[&pose(1, 0.0).id].x, 1.5);
+        // a spawned body's pose comes before its Added event
+        j.receive(snap(12, false, vec![pose(3, 7.0)]));
+        assert_eq!(j.view().unwrap().bodies.len(), 3);
+        j.receive(Received::Event(Event {
+            frame: 12,
+            kind: EventKind::Added {
+                bodies: vec![info(3, false, 5.0)],
+            },
+        }));
+        assert_eq!(j.view().unwrap().bodies[&pose(3, 0.0).id].x, 7.0);
+        // a keyframe without body 2: it is gone; the static body stays
+        j.receive(snap(13, true, vec![pose(1, 1.5), pose(3, 7.0)]));
+        let v = j.view().unwrap();
+        assert_eq!(v.bodies.len(), 3);
+        assert!(!v.bodies.contains_key(&pose(2, 0.0).id));
+        // stale and restarted
+        assert_eq!(j.receive(snap(13, false, vec![])), Applied::Stale);
+        assert_eq!(j.receive(snap(1, true, vec![])), Applied::Stale);
+        let mut far = Join::new();
+        far.scene(state(1000));
+        assert_eq!(far.receive(snap(2, true, vec![])), Applied::Restarted);
+    }
+
+    #[test]
+    fn a_reset_replaces_everything_and_older_snapshots_are_ignored() {
+        let mut j = Join::new();
+        j.scene(state(10));
+        j.receive(Received::Event(Event {
+            frame: 20,
+            kind: EventKind::Reset {
+                scene: "again".into(),
+                gravity: Vector::new(0.0, -1.0),
+                bodies: vec![info(0, false, -3.0)],
+            },
+        }));
+        // a snapshot from before the reset, arriving late: its ids are the old world's
+        j.receive(snap(15, false, vec![pose(0, 99.0)]));
+        let v = j.view().unwrap();
+        assert_eq!(v.scene, "again");
+        assert_eq!(v.bodies.len(), 1);
+        assert_eq!(v.bodies[&pose(0, 0.0).id].x, -3.0);
+        j.receive(snap(20, true, vec![pose(0, -2.5)]));
+        assert_eq!(j.view().unwrap().bodies[&pose(0, 0.0).id].x, -2.5);
+        assert_eq!(j.view().unwrap().bounds().unwrap(), (-3.0, 0.5, -2.0, 1.5));
+    }
+}

@@ -2,6 +2,7 @@
 //! Eclipse Zenoh.
 //!
 //! - [`physics`]: the engine (no async, no network).
+pub mod accuracy;
 pub mod cases;
 pub mod physics;
 #[cfg(feature = "scene")]
@@ -10,5 +11,7 @@ pub mod scene;
 pub mod protocol;
 #[cfg(feature = "net")]
 pub mod service;
+#[cfg(feature = "report")]
+pub mod report;
 #[cfg(all(feature = "net", feature = "cli"))]
 pub mod client;

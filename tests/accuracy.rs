@@ -1,0 +1,179 @@
+//! CI-sized accuracy checks: every closed-form case at dt = 1/60 with both solvers' defaults
+//! (`Settings::sequential()`: 10 iterations; `Settings::soft_step()`: 4 substeps), plus the two
+//! scenes without a closed form against their reference runs. The full sweep over dt,
+//! iterations and substeps is `tiltbox report`.
+//!
+//! Each tolerance says where it comes from. h is the integration step: dt for the sequential
+//! solver, dt / substeps for the soft step (`accuracy::integration_step`).
+
+use tiltbox::accuracy::{closed_form, integration_step, scenes, Measurement};
+use tiltbox::physics::{Real, Settings};
+
+const DT: Real = 1.0 / 60.0;
+
+fn solvers() -> [Settings; 2] {
+    [Settings::sequential(), Settings::soft_step()]
+}
+
+fn show(s: &Settings, m: &Measurement) -> String {
+    format!(
+        "{} {}: error {} {} ({}), diverged {}, details {:?}",
+        tiltbox::accuracy::config_label(s),
+        m.case,
+        m.error,
+        m.unit,
+        m.error_meaning,
+        m.diverged,
+        m.details
+    )
+}
+
+fn run(case: fn(&Settings, Real) -> Measurement, s: &Settings, dt: Real) -> Measurement {
+    let m = case(s, dt);
+    println!("{}", show(s, &m));
+    assert!(!m.diverged, "{}", show(s, &m));
+    m
+}
+
+#[test]
+fn free_fall_matches_semi_implicit_euler_exactly_and_converges_first_order() {
+    for s in solvers() {
+        let m = run(closed_form::free_fall, &s, DT);
+        // Semi-implicit Euler's exact discrete answer; what is left is f32 rounding: the spacing
+        // of f32 at y = 100 m is 7.6e-6 m, accumulated over at most 240 position updates.
+        let discrete = m.detail("error vs discrete exact form (m)").unwrap();
+        assert!(discrete < 1e-3, "{}", show(&s, &m));
+        // Against the continuous answer the error is g t h / 2 (first order in h).
+        let predicted = 0.5 * 9.81 * 1.0 * integration_step(&s, DT);
+        assert!((m.error - predicted).abs() < 1e-3, "{}", show(&s, &m));
+        // Halving dt halves the error (first order), to within rounding.
+        let half = run(closed_form::free_fall, &s, DT / 2.0);
+        let ratio = half.error / m.error;
+        assert!(
+            (ratio - 0.5).abs() < 0.05,
+            "ratio {ratio}: {}",
+            show(&s, &half)
+        );
+    }
+}
+
+#[test]
+fn slide_to_a_stop_covers_v0_squared_over_2_mu_g() {
+    for s in solvers() {
+        let m = run(closed_form::slide_to_stop, &s, DT);
+        // Semi-implicit Euler overshoots or undershoots a constant deceleration by about
+        // v0 h / 2; allow twice that (v0 = 5 m/s).
+        let h = integration_step(&s, DT);
+        assert!(m.error < 5.0 * h, "{}", show(&s, &m));
+        // The stop is detected on the step grid: within two steps of v0 / (mu g).
+        let t = m.detail("stop time (s)").unwrap();
+        let t_expected = m.detail("expected stop time (s)").unwrap();
+        assert!((t - t_expected).abs() < 2.0 * DT as f64, "{}", show(&s, &m));
+    }
+}
+
+#[test]
+fn slope_below_the_friction_angle_sticks() {
+    for s in solvers() {
+        let m = run(closed_form::slope_stick, &s, DT);
+        // Static friction holds exactly in the continuous model; allow 1 mm over 2 s
+        // (a fifth of the soft step's 5 mm slop), i.e. no visible creep.
+        assert!(m.error < 1e-3, "{}", show(&s, &m));
+    }
+}
+
+#[test]
+fn slope_above_the_friction_angle_slides_at_g_sin_minus_mu_cos() {
+    for s in solvers() {
+        let m = run(closed_form::slope_slide, &s, DT);
+        // Semi-implicit Euler under constant acceleration a is ahead by a t h / 2 at time t;
+        // allow twice that (a = 3.2 m/s^2, t = 1 s).
+        let a = m.detail("expected a (m/s^2)").unwrap();
+        let h = integration_step(&s, DT);
+        assert!(m.error < a * 1.0 * h, "{}", show(&s, &m));
+    }
+}
+
+#[test]
+fn bounce_rebounds_to_e_squared_of_the_drop_height() {
+    for s in solvers() {
+        let m = run(closed_form::bounce, &s, DT);
+        // Rapier's restitution test accepts +-0.05 on the rebound height ratio.
+        assert!(m.error < 0.05, "{}", show(&s, &m));
+    }
+}
+
+#[test]
+fn head_on_conserves_momentum_and_obeys_the_restitution_law() {
+    for s in solvers() {
+        let m = run(closed_form::head_on, &s, DT);
+        // Both are exact for one contact solved with restitution; what is left is f32
+        // rounding of speeds of a few m/s (spacing ~5e-7).
+        assert!(m.error < 1e-3, "{}", show(&s, &m));
+        let p = m.detail("momentum error (kg m/s)").unwrap();
+        assert!(p < 1e-3, "{}", show(&s, &m));
+    }
+}
+
+#[test]
+fn constant_torque_spins_up_at_tau_over_i() {
+    for s in solvers() {
+        let m = run(closed_form::spin, &s, DT);
+        // Semi-implicit Euler integrates a constant angular acceleration exactly in omega;
+        // only f32 rounding (omega ~ 2 rad/s, spacing 2.4e-7, <= 240 additions) remains.
+        assert!(m.error < 1e-4, "{}", show(&s, &m));
+    }
+}
+
+#[test]
+fn resting_stack_of_10_neither_sinks_nor_drifts() {
+    for s in solvers() {
+        let m = run(closed_form::resting_stack, &s, DT);
+        let slop = s.linear_slop as f64;
+        // Box2D's allowance for a resting contact is the slop; for the whole 10-box stack we
+        // allow twice that, beyond which the overlap is visible.
+        let sink = m.detail("top sinking (m)").unwrap();
+        assert!(sink.abs() < 2.0 * slop, "{}", show(&s, &m));
+        // An aligned stack has no sideways force at all: any drift is a solver artefact.
+        let drift = m.detail("largest top drift during run (m)").unwrap();
+        assert!(drift < 1e-3, "{}", show(&s, &m));
+    }
+}
+
+fn scene_check(scene: scenes::Scene, s: &Settings) -> Measurement {
+    let reference = scenes::reference_run(scene, s);
+    let m = scenes::compare(&scenes::run(scene, s, DT), &reference);
+    println!("{}", show(s, &m));
+    assert!(!m.diverged, "{}", show(s, &m));
+    assert!(!reference.diverged, "reference diverged: {reference:?}");
+    // Contacts are found up to the speculative distance (4 x slop) ahead; an overlap deeper
+    // than that means a contact was resolved late.
+    let slop = s.linear_slop as f64;
+    let pen = m.detail("largest penetration (m)").unwrap();
+    assert!(pen < 4.0 * slop, "{}", show(s, &m));
+    // Contacts only remove energy (restitution <= 1): a gain of more than 1 % is the solver
+    // adding energy.
+    let drift = m.detail("energy drift (relative)").unwrap();
+    assert!(drift < 0.01, "{}", show(s, &m));
+    m
+}
+
+#[test]
+fn falling_bricks_stays_bounded_against_its_reference() {
+    for s in solvers() {
+        let m = scene_check(scenes::Scene::FallingBricks, &s);
+        // Chaotic after the first collisions, so no convergence order; the bricks must still
+        // end up in the same region as the reference run (1 m RMS in a 10 m box).
+        assert!(m.error < 1.0, "{}", show(&s, &m));
+    }
+}
+
+#[test]
+fn pyramid_of_20_settles_like_its_reference() {
+    for s in solvers() {
+        let m = scene_check(scenes::Scene::Pyramid20, &s);
+        // The pyramid only settles: positions should agree with the fine reference to within
+        // the overlap two resting contacts may have (2 x slop).
+        assert!(m.error < 2.0 * s.linear_slop as f64, "{}", show(&s, &m));
+    }
+}

@@ -6,7 +6,10 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let name = args.next().unwrap_or_else(|| "large_pyramid".to_string());
     let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(500);
-    let Some(setup) = tiltbox::cases::benchmark_setups().into_iter().find(|s| s.name == name) else {
+    let Some(setup) = tiltbox::cases::benchmark_setups()
+        .into_iter()
+        .find(|s| s.name == name)
+    else {
         eprintln!("unknown scene {name}");
         std::process::exit(2);
     };
@@ -27,7 +30,10 @@ fn main() {
         times.push(t.elapsed().as_secs_f64() * 1e3);
     }
     times.sort_by(f64::total_cmp);
-    let top = world.bodies().map(|b| b.position().y).fold(f32::MIN as f64, |a, y| a.max(y as f64));
+    let top = world
+        .bodies()
+        .map(|b| b.position().y)
+        .fold(f32::MIN as f64, |a, y| a.max(y as f64));
     println!(
         "{name}: {} bodies, median {:.3} ms/step, min {:.3}, contacts {}, awake {}, top y {top:.2}",
         world.body_count(),

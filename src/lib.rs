@@ -4,14 +4,14 @@
 //! - [`physics`]: the engine (no async, no network).
 pub mod accuracy;
 pub mod cases;
+#[cfg(all(feature = "net", feature = "cli"))]
+pub mod client;
 pub mod physics;
+#[cfg(feature = "net")]
+pub mod protocol;
+#[cfg(feature = "report")]
+pub mod report;
 #[cfg(feature = "scene")]
 pub mod scene;
 #[cfg(feature = "net")]
-pub mod protocol;
-#[cfg(feature = "net")]
 pub mod service;
-#[cfg(feature = "report")]
-pub mod report;
-#[cfg(all(feature = "net", feature = "cli"))]
-pub mod client;

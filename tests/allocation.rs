@@ -36,7 +36,10 @@ fn allocations() -> u64 {
 #[test]
 fn a_steady_step_does_not_allocate() {
     for name in ["pyramid_20", "resting_pyramid", "falling_bricks"] {
-        let setup = benchmark_setups().into_iter().find(|s| s.name == name).expect("known scene");
+        let setup = benchmark_setups()
+            .into_iter()
+            .find(|s| s.name == name)
+            .expect("known scene");
         let mut world = setup.build().expect("valid scene");
         // Warm up: buffers grow to the scene's size, islands fall asleep where allowed.
         for _ in 0..(setup.warm_up.max(120)) {

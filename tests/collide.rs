@@ -174,16 +174,27 @@ fn the_rectangle_fast_path_agrees_with_the_general_polygon_routine() {
         let ha = vec2(0.1 + next(), 0.1 + next());
         let hb = vec2(0.1 + next(), 0.1 + next());
         let xa = at(4.0 * next() - 2.0, 4.0 * next() - 2.0, 6.3 * next());
-        let xb = at(xa.p.x + 3.0 * next() - 1.5, xa.p.y + 3.0 * next() - 1.5, 6.3 * next());
+        let xb = at(
+            xa.p.x + 3.0 * next() - 1.5,
+            xa.p.y + 3.0 * next() - 1.5,
+            6.3 * next(),
+        );
         let margin = 0.2 * next();
         let fast = collide_rects(ha, xa, hb, xb, margin);
         let general = collide_polygons(&Polygon::rect(ha), xa, &Polygon::rect(hb), xb, margin);
         assert_eq!(fast.count, general.count, "{ha:?} {xa:?} {hb:?} {xb:?}");
         if fast.count > 0 {
             compared += 1;
-            assert!((fast.normal - general.normal).length() < 1e-4, "{fast:?} vs {general:?}");
+            assert!(
+                (fast.normal - general.normal).length() < 1e-4,
+                "{fast:?} vs {general:?}"
+            );
             for (p, q) in fast.points().iter().zip(general.points()) {
-                assert!((p.point - q.point).length() < 1e-4 && (p.separation - q.separation).abs() < 1e-4, "{fast:?} vs {general:?}");
+                assert!(
+                    (p.point - q.point).length() < 1e-4
+                        && (p.separation - q.separation).abs() < 1e-4,
+                    "{fast:?} vs {general:?}"
+                );
                 assert_eq!(p.id, q.id);
             }
         }

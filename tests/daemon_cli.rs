@@ -1,7 +1,6 @@
 //! The `tiltbox serve` binary: bad config exits 2 naming key and value; SIGTERM stops it
 //! cleanly within 2 s.
 #![cfg(all(feature = "net", feature = "cli"))]
-
 #![cfg(feature = "net")]
 
 use std::io::{BufRead, BufReader};

@@ -2,10 +2,10 @@
 
 #[cfg(all(feature = "net", feature = "tui"))]
 pub mod demo;
-#[cfg(feature = "report")]
-pub mod report;
 #[cfg(feature = "net")]
 pub mod replay;
+#[cfg(feature = "report")]
+pub mod report;
 #[cfg(feature = "net")]
 pub mod serve;
 pub mod simulate;

@@ -397,11 +397,8 @@ fn pack(kind: Kind, chunk: &[u32], contacts: &[Contact], dummy: u32) -> Bundle {
     // Header fields: nx, ny, friction, bias_rate, mass_scale, impulse_scale, k00, k01, k11,
     // i00, i01, i11 (identity block for empty lanes so the LCP stays finite).
     let mut f = [[0.0 as Real; 4]; 12];
-    for lane in 0..4 {
-        f[6][lane] = 1.0;
-        f[8][lane] = 1.0;
-        f[9][lane] = 1.0;
-        f[11][lane] = 1.0;
+    for field in [6, 8, 9, 11] {
+        f[field] = [1.0; 4];
     }
     let mut pts = [[[0.0 as Real; 4]; 13]; 2];
     for (lane, &ci) in chunk.iter().enumerate() {

@@ -326,15 +326,17 @@ impl WideSolver {
                 }
             }
 
-            // Friction, one point after the other (zero friction clamps to zero).
+            // Friction, one point after the other; skipped when no lane has any.
             let (tx, ty) = (ny, -nx);
-            for p in &mut bundle.p {
-                let vt = BodyLanes::relative(&a, &b, tx, ty, p.rt_a, p.rt_b);
-                let max_f = bundle.friction * p.normal_impulse;
-                let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);
-                let applied = total - p.tangent_impulse;
-                p.tangent_impulse = total;
-                BodyLanes::apply(&mut a, &mut b, tx, ty, p.rt_a, p.rt_b, applied);
+            if bundle.friction.cmpgt(Lanes::ZERO).any() {
+                for p in &mut bundle.p {
+                    let vt = BodyLanes::relative(&a, &b, tx, ty, p.rt_a, p.rt_b);
+                    let max_f = bundle.friction * p.normal_impulse;
+                    let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);
+                    let applied = total - p.tangent_impulse;
+                    p.tangent_impulse = total;
+                    BodyLanes::apply(&mut a, &mut b, tx, ty, p.rt_a, p.rt_b, applied);
+                }
             }
 
             a.scatter(bodies, &bundle.a);

@@ -305,6 +305,42 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
 }
 
 impl World {
+    /// The words that define the World's motion, as raw bits: gravity, then per body its id,
+    /// position, angle, velocities and whether it is awake. Two Worlds with equal words step
+    /// identically from here on only if their contacts match too; replay and checkpoint tests
+    /// compare these (or a hash of them) frame by frame.
+    pub fn state_bits(&self) -> impl Iterator<Item = u64> + '_ {
+        let g = self.gravity;
+        [g.x.to_bits() as u64, g.y.to_bits() as u64]
+            .into_iter()
+            .chain(self.bodies().flat_map(|b| {
+                let id = b.id();
+                let (p, v) = (b.position(), b.linear_velocity());
+                [
+                    u64::from(id.index) << 32 | u64::from(id.generation),
+                    p.x.to_bits() as u64,
+                    p.y.to_bits() as u64,
+                    b.angle().to_bits() as u64,
+                    v.x.to_bits() as u64,
+                    v.y.to_bits() as u64,
+                    b.angular_velocity().to_bits() as u64,
+                    u64::from(b.is_awake()),
+                ]
+            }))
+    }
+
+    /// FNV-1a hash of [`World::state_bits`]: one number per frame for replay checks.
+    pub fn state_hash(&self) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for word in self.state_bits() {
+            for byte in word.to_le_bytes() {
+                h ^= u64::from(byte);
+                h = h.wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        }
+        h
+    }
+
     /// The full state: what [`World::import_state`] needs to continue bit-identically.
     pub fn export_state(&self) -> WorldState {
         WorldState {
@@ -465,21 +501,7 @@ mod tests {
     use super::super::super::{BodyDef, Shape, Vec2, World};
 
     fn bits(w: &World) -> Vec<u64> {
-        let mut out = Vec::new();
-        for b in w.bodies() {
-            out.push(u64::from(b.id().index) << 32 | u64::from(b.id().generation));
-            for v in [
-                b.position().x,
-                b.position().y,
-                b.angle(),
-                b.linear_velocity().x,
-                b.linear_velocity().y,
-                b.angular_velocity(),
-            ] {
-                out.push(v.to_bits() as u64);
-            }
-        }
-        out
+        w.state_bits().collect()
     }
 
     #[test]

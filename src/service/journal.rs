@@ -33,32 +33,7 @@ const MAX_RECORD: u32 = 256 << 20;
 /// exact bits of each number, in slot order: equal hashes mean (with overwhelming odds)
 /// bit-identical worlds.
 pub fn state_hash(world: &World) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |x: u64| {
-        for b in x.to_le_bytes() {
-            h ^= u64::from(b);
-            h = h.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    };
-    let g = world.gravity();
-    eat(g.x.to_bits() as u64);
-    eat(g.y.to_bits() as u64);
-    for b in world.bodies() {
-        let id = b.id();
-        eat(u64::from(id.index) << 32 | u64::from(id.generation));
-        for v in [
-            b.position().x,
-            b.position().y,
-            b.angle(),
-            b.linear_velocity().x,
-            b.linear_velocity().y,
-            b.angular_velocity(),
-        ] {
-            eat(v.to_bits() as u64);
-        }
-        eat(u64::from(b.is_awake()));
-    }
-    h
+    world.state_hash()
 }
 
 /// Where the recorded run's scene came from.

@@ -162,7 +162,17 @@ fn feature_ids_survive_the_reference_face_switching_sides() {
 
 #[test]
 fn the_rectangle_fast_path_agrees_with_the_general_polygon_routine() {
-    use tiltbox::physics::collide::{collide_polygons, collide_rects, Polygon};
+    use tiltbox::physics::collide::{collide_polygons, collide_rects};
+    use tiltbox::physics::Polygon;
+    let poly = |h: Vec2| {
+        let corners = [
+            vec2(-h.x, -h.y),
+            vec2(h.x, -h.y),
+            vec2(h.x, h.y),
+            vec2(-h.x, h.y),
+        ];
+        Polygon::new(&corners).unwrap().0
+    };
     // A deterministic sweep of sizes, offsets and angles, touching, overlapping and apart.
     let mut seed: u32 = 12345;
     let mut next = || {
@@ -181,7 +191,7 @@ fn the_rectangle_fast_path_agrees_with_the_general_polygon_routine() {
         );
         let margin = 0.2 * next();
         let fast = collide_rects(ha, xa, hb, xb, margin);
-        let general = collide_polygons(&Polygon::rect(ha), xa, &Polygon::rect(hb), xb, margin);
+        let general = collide_polygons(&poly(ha), 0.0, xa, &poly(hb), 0.0, xb, margin);
         assert_eq!(fast.count, general.count, "{ha:?} {xa:?} {hb:?} {xb:?}");
         if fast.count > 0 {
             compared += 1;

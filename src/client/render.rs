@@ -74,7 +74,10 @@ struct FilledRect {
 
 impl FilledRect {
     fn of(b: &ViewBody) -> FilledRect {
-        let crate::protocol::ShapeSpec::Rect { width, height } = b.info.shape;
+        let (width, height) = match &b.info.shape {
+            crate::protocol::ShapeSpec::Rect { width, height } => (*width, *height),
+            _ => (0.1, 0.1), // TEMPORARY until the viewer learns the other shapes
+        };
         let c = b.info.colour;
         FilledRect {
             corners: b.corners(),

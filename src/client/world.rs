@@ -44,7 +44,13 @@ impl ViewBody {
 
     /// The four corners of the body's rectangle in world coordinates, counter-clockwise.
     pub fn corners(&self) -> [(f32, f32); 4] {
-        let ShapeSpec::Rect { width, height } = self.info.shape;
+        // TEMPORARY: non-rectangles drawn by their bounding box until the viewer learns them.
+        let (width, height) = match &self.info.shape {
+            ShapeSpec::Rect { width, height } => (*width, *height),
+            ShapeSpec::Circle { radius } => (2.0 * radius, 2.0 * radius),
+            ShapeSpec::Capsule { length, radius } => (*length, 2.0 * radius),
+            ShapeSpec::Polygon { .. } => (0.1, 0.1),
+        };
         let (hw, hh) = (width * 0.5, height * 0.5);
         let (s, c) = self.angle.sin_cos();
         [(-hw, -hh), (hw, -hh), (hw, hh), (-hw, hh)]

@@ -28,6 +28,15 @@ pub enum PhysicsError {
     /// A body id that does not (or no longer) name a body in this World.
     #[error("no body with id {0}")]
     UnknownBody(super::body::BodyId),
+    /// A shape that is not a usable convex shape (a polygon's vertex out of order, a
+    /// collinear corner, too many points).
+    #[error("{field} {reason}")]
+    InvalidShape {
+        /// The field, e.g. `shape.vertices[2]`.
+        field: String,
+        /// What is wrong with it, quoting the value.
+        reason: String,
+    },
     /// The World already holds as many bodies as a body id can address.
     #[error("the world is full ({0} bodies)")]
     Full(usize),

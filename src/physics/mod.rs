@@ -7,6 +7,7 @@ pub mod body;
 pub(crate) mod broad_phase;
 pub mod collide;
 pub mod contact;
+pub mod convex;
 pub mod error;
 pub mod math;
 pub mod settings;
@@ -16,6 +17,7 @@ pub mod world;
 
 pub use body::{Body, BodyDef, BodyId, MassSpec};
 pub use contact::{ContactInfo, ContactPointInfo};
+pub use convex::Polygon;
 pub use error::PhysicsError;
 pub use math::{vec2, Real, Rot, Transform, Vec2};
 pub use settings::{Mixing, Settings, SolverKind};

@@ -1,22 +1,43 @@
 //! Collision shapes, their bounding boxes and their mass properties.
 //!
-//! Shapes are described in the body's frame, centred on the centre of mass. New kinds
-//! (circles, convex polygons) are new enum variants plus a narrow-phase routine per pair;
-//! the solver only ever sees contact manifolds, so it does not change.
+//! Shapes are described in the body's frame, centred on the centre of mass. Each kind is an
+//! enum variant plus narrow-phase routines for its pairs (`collide`); the solver only ever
+//! sees contact manifolds, so it does not know which shapes touched.
 
+use super::convex::Polygon;
 use super::error::{positive, PhysicsError};
-use super::math::{Real, Transform, Vec2};
+use super::math::{Real, Transform, Vec2, PI};
 use serde::{Deserialize, Serialize};
 
 /// A collision shape in body coordinates (metres), centred on the centre of mass.
+///
+/// The serde form is externally tagged (`{"circle": {"radius": 0.5}}`), which both
+/// self-describing formats and postcard read back; a polygon travels as its vertex list and is
+/// re-checked on the way in.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
+#[serde(rename_all = "snake_case")]
 pub enum Shape {
-    /// A rectangle of the given half extents (half width, half height), in metres.
+    /// A rectangle of the given half extents (half width, half height), in metres. A polygon
+    /// in all but name; it keeps its own variant for the closed-form box-box test.
     Rect {
         /// Half width and half height, metres.
         half_extents: Vec2,
     },
+    /// A disc of the given radius (m), centred on the centre of mass.
+    Circle {
+        /// Radius, metres.
+        radius: Real,
+    },
+    /// A stadium: the segment from (-half_length, 0) to (half_length, 0) in body coordinates,
+    /// grown by `radius` (m). Its length end to end is 2 (half_length + radius).
+    Capsule {
+        /// Half the length of the core segment, metres.
+        half_length: Real,
+        /// Radius of the rounded ends (and half the thickness), metres.
+        radius: Real,
+    },
+    /// A convex polygon of 3 to 8 vertices, centred on its centroid (see [`Polygon::new`]).
+    Polygon(Polygon),
 }
 
 impl Shape {
@@ -27,13 +48,50 @@ impl Shape {
         }
     }
 
-    /// Refuse shapes that cannot be simulated (non-finite or non-positive sizes).
+    /// A disc of `radius` metres.
+    pub fn circle(radius: Real) -> Shape {
+        Shape::Circle { radius }
+    }
+
+    /// A capsule lying along the body's x axis: `length` metres end to end (rounded ends
+    /// included), `radius` metres thick on each side of the axis. `length >= 2 radius`.
+    pub fn capsule(length: Real, radius: Real) -> Shape {
+        Shape::Capsule {
+            half_length: 0.5 * length - radius,
+            radius,
+        }
+    }
+
+    /// Refuse shapes that cannot be simulated (non-finite or non-positive sizes, a capsule
+    /// shorter than its own ends).
     pub fn validate(&self) -> Result<(), PhysicsError> {
         match *self {
             Shape::Rect { half_extents } => {
                 positive("shape.width", 2.0 * half_extents.x)?;
                 positive("shape.height", 2.0 * half_extents.y)?;
             }
+            Shape::Circle { radius } => {
+                positive("shape.radius", radius)?;
+            }
+            Shape::Capsule {
+                half_length,
+                radius,
+            } => {
+                positive("shape.radius", radius)?;
+                let length = 2.0 * (half_length + radius);
+                positive("shape.length", length)?;
+                if half_length <= 0.0 {
+                    return Err(PhysicsError::InvalidShape {
+                        field: "shape.length".into(),
+                        reason: format!(
+                            "= {length} must be more than twice shape.radius = {radius} \
+                             (use a circle for a capsule with no straight part)"
+                        ),
+                    });
+                }
+            }
+            // A Polygon can only be built through its checks.
+            Shape::Polygon(_) => {}
         }
         Ok(())
     }
@@ -42,18 +100,45 @@ impl Shape {
     pub fn area(&self) -> Real {
         match *self {
             Shape::Rect { half_extents: h } => 4.0 * h.x * h.y,
+            Shape::Circle { radius: r } => PI * r * r,
+            // A 2L x 2r rectangle plus two half discs.
+            Shape::Capsule {
+                half_length: l,
+                radius: r,
+            } => 4.0 * l * r + PI * r * r,
+            Shape::Polygon(ref p) => p.area(),
         }
     }
 
     /// Moment of inertia about the centre of mass for a body of `mass` kg (kg m^2).
     ///
-    /// Rectangle: I = m (w^2 + h^2) / 12 (appendix, step 1).
+    /// Rectangle: I = m (w^2 + h^2) / 12 (appendix, step 1). Disc: I = m r^2 / 2. Capsule:
+    /// the rectangle's share plus the two half discs moved out by the parallel-axis theorem.
+    /// Polygon: m J / A with J the polar second moment of area of its triangle fan.
     pub fn inertia(&self, mass: Real) -> Real {
         match *self {
             Shape::Rect { half_extents: h } => {
                 let (w, hh) = (2.0 * h.x, 2.0 * h.y);
                 mass * (w * w + hh * hh) / 12.0
             }
+            Shape::Circle { radius: r } => 0.5 * mass * r * r,
+            Shape::Capsule {
+                half_length: l,
+                radius: r,
+            } => {
+                let rect_area = 4.0 * l * r;
+                let disc_area = PI * r * r;
+                let density = mass / (rect_area + disc_area);
+                let (m_rect, m_disc) = (density * rect_area, density * disc_area);
+                // Rectangle 2L x 2r about its centre.
+                let i_rect = m_rect * (4.0 * l * l + 4.0 * r * r) / 12.0;
+                // Each half disc: m r^2/2 about the flat edge's centre; its centroid sits
+                // 4r/(3 pi) out. Moved to the capsule centre (L + 4r/(3 pi) away), the pair adds
+                // m_disc (r^2/2 + L^2 + 8 L r / (3 pi)).
+                let i_discs = m_disc * (0.5 * r * r + l * l + 8.0 * l * r / (3.0 * PI));
+                i_rect + i_discs
+            }
+            Shape::Polygon(ref p) => mass * p.second_moment() / p.area(),
         }
     }
 
@@ -61,22 +146,55 @@ impl Shape {
     pub fn bounding_radius(&self) -> Real {
         match *self {
             Shape::Rect { half_extents } => half_extents.length(),
+            Shape::Circle { radius } => radius,
+            Shape::Capsule {
+                half_length,
+                radius,
+            } => half_length + radius,
+            Shape::Polygon(ref p) => p.radius(),
         }
     }
 
     /// The world-space bounding box of the shape placed at `xf`.
     pub fn aabb(&self, xf: Transform) -> Aabb {
-        match *self {
+        let e = match *self {
             Shape::Rect { half_extents: h } => {
                 // |R| h: the extent of a rotated box along each world axis.
                 let ex = xf.q.c.abs() * h.x + xf.q.s.abs() * h.y;
                 let ey = xf.q.s.abs() * h.x + xf.q.c.abs() * h.y;
-                let e = Vec2::new(ex, ey);
-                Aabb {
-                    min: xf.p - e,
-                    max: xf.p + e,
-                }
+                Vec2::new(ex, ey)
             }
+            Shape::Circle { radius } => Vec2::splat(radius),
+            Shape::Capsule {
+                half_length,
+                radius,
+            } => (xf.q.x_axis() * half_length).abs() + Vec2::splat(radius),
+            Shape::Polygon(ref p) => {
+                let (mut lo, mut hi) = (Vec2::splat(Real::INFINITY), Vec2::splat(-Real::INFINITY));
+                for &v in p.vertices() {
+                    let w = xf.q.rotate(v);
+                    lo = lo.min(w);
+                    hi = hi.max(w);
+                }
+                return Aabb {
+                    min: xf.p + lo,
+                    max: xf.p + hi,
+                };
+            }
+        };
+        Aabb {
+            min: xf.p - e,
+            max: xf.p + e,
+        }
+    }
+
+    /// The kind's name as scenes and messages spell it: `rect`, `circle`, `capsule`, `polygon`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Shape::Rect { .. } => "rect",
+            Shape::Circle { .. } => "circle",
+            Shape::Capsule { .. } => "capsule",
+            Shape::Polygon(_) => "polygon",
         }
     }
 }
@@ -136,7 +254,75 @@ mod tests {
     }
 
     #[test]
+    fn circle_and_capsule_mass_properties_match_closed_form() {
+        let c = Shape::circle(0.5);
+        assert!((c.area() - PI * 0.25).abs() < 1e-6);
+        assert!((c.inertia(2.0) - 0.25).abs() < 1e-6);
+        // A capsule with a vanishing straight part is a disc.
+        let thin = Shape::Capsule {
+            half_length: 1e-7,
+            radius: 0.5,
+        };
+        assert!((thin.inertia(2.0) - 0.25).abs() < 1e-5);
+        // Capsule 3 m long, r = 0.5: rectangle 2 x 1 plus a disc of r 0.5.
+        let cap = Shape::capsule(3.0, 0.5);
+        let area = 2.0 + PI * 0.25;
+        assert!((cap.area() - area).abs() < 1e-5);
+        // Integrate I / rho numerically over the stadium on a fine grid as the reference.
+        let (n, mut j, mut a) = (1200, 0.0f64, 0.0f64);
+        let (hx, hy) = (1.5f64, 0.5f64);
+        for ix in 0..n {
+            for iy in 0..n {
+                let x = -hx + (ix as f64 + 0.5) * 2.0 * hx / n as f64;
+                let y = -hy + (iy as f64 + 0.5) * 2.0 * hy / n as f64;
+                let dx = (x.abs() - 1.0).max(0.0);
+                if dx * dx + y * y <= 0.25 {
+                    let da = (2.0 * hx / n as f64) * (2.0 * hy / n as f64);
+                    a += da;
+                    j += (x * x + y * y) * da;
+                }
+            }
+        }
+        let mass = 3.0;
+        let expected = mass as f64 * j / a;
+        let got = cap.inertia(mass) as f64;
+        assert!(
+            (got - expected).abs() < 2e-3 * expected,
+            "{got} vs {expected}"
+        );
+        assert!((a - area as f64).abs() < 1e-3);
+    }
+
+    #[test]
+    fn capsule_and_polygon_aabbs_are_tight() {
+        let cap = Shape::capsule(3.0, 0.5);
+        let xf = Transform {
+            p: vec2(0.0, 0.0),
+            q: Rot::from_angle(PI / 2.0),
+        };
+        let b = cap.aabb(xf);
+        assert!(
+            (b.max.y - 1.5).abs() < 1e-5 && (b.max.x - 0.5).abs() < 1e-5,
+            "{b:?}"
+        );
+        let (p, _) = Polygon::new(&[vec2(0.0, 0.0), vec2(2.0, 0.0), vec2(0.0, 1.0)]).unwrap();
+        let b = Shape::Polygon(p).aabb(Transform {
+            p: vec2(10.0, 0.0),
+            q: Rot::IDENTITY,
+        });
+        // Centroid (2/3, 1/3) sits at x = 10.
+        assert!((b.min.x - (10.0 - 2.0 / 3.0)).abs() < 1e-5 && (b.max.y - 2.0 / 3.0).abs() < 1e-5);
+    }
+
+    #[test]
     fn bad_sizes_are_refused_with_the_field_name() {
+        let e = Shape::circle(-1.0).validate().unwrap_err();
+        assert!(e.to_string().contains("shape.radius"), "{e}");
+        let e = Shape::capsule(0.8, 0.5).validate().unwrap_err();
+        assert!(
+            e.to_string().contains("shape.length") && e.to_string().contains("0.8"),
+            "{e}"
+        );
         let e = Shape::rect(0.0, 1.0).validate().unwrap_err();
         assert!(e.to_string().contains("shape.width"), "{e}");
         let e = Shape::rect(1.0, Real::NAN).validate().unwrap_err();

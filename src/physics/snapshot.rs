@@ -29,9 +29,8 @@ pub struct StateError(pub String);
 /// One body exactly as the World holds it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BodyState {
-    /// Shape: a rectangle's half extents (m). (`Shape`'s own serde form is internally
-    /// tagged, which non-self-describing formats such as postcard cannot read back.)
-    pub half_extents: [Real; 2],
+    /// Shape, in body coordinates (m). A polygon is re-checked when read back.
+    pub shape: Shape,
     /// Centre of mass (m).
     pub position: [Real; 2],
     /// Accumulated angle (rad).
@@ -352,9 +351,7 @@ impl World {
                 .map(|s| SlotState {
                     generation: s.generation,
                     body: s.body.as_ref().map(|b| BodyState {
-                        half_extents: match b.shape {
-                            Shape::Rect { half_extents } => v2(half_extents),
-                        },
+                        shape: b.shape,
                         position: v2(b.position),
                         angle: b.angle,
                         rot: [b.rot.c, b.rot.s],
@@ -413,9 +410,7 @@ impl World {
                     None
                 }
                 Some(b) => {
-                    let shape = Shape::Rect {
-                        half_extents: vec(b.half_extents),
-                    };
+                    let shape = b.shape;
                     shape.validate().map_err(err)?;
                     let mut all = vec![
                         b.angle,

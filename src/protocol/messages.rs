@@ -66,8 +66,9 @@ pub struct Colour {
     pub b: u8,
 }
 
-/// A collision shape, in the body's frame (metres).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// A collision shape, in the body's frame (metres). New kinds are appended, so a variant's
+/// number on the wire never changes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum ShapeSpec {
     /// Variant 0: a `width` x `height` rectangle centred on the centre of mass.
     Rect {
@@ -75,6 +76,27 @@ pub enum ShapeSpec {
         width: f32,
         /// Full height, metres.
         height: f32,
+    },
+    /// Variant 1: a disc of `radius` metres centred on the centre of mass.
+    Circle {
+        /// Radius, metres.
+        radius: f32,
+    },
+    /// Variant 2: a capsule along the body's x axis, `length` metres end to end (rounded ends
+    /// included, so `length > 2 radius`), `radius` metres on each side of the axis.
+    Capsule {
+        /// Length end to end, metres.
+        length: f32,
+        /// Radius of the rounded ends, metres.
+        radius: f32,
+    },
+    /// Variant 3: a convex polygon, 3 to 8 vertices counter-clockwise, in the body's frame
+    /// (m). From the daemon the vertices are centred on the centroid (the body's position is
+    /// its centre of mass); in a spawn they are relative to the spawn position, and the
+    /// daemon moves the body to the centroid.
+    Polygon {
+        /// Vertices, counter-clockwise, metres.
+        vertices: Vec<Vector>,
     },
 }
 

@@ -4,7 +4,7 @@
 #![allow(clippy::unnecessary_cast)] // Real <-> f32 casts matter with the `f64` feature.
 
 use super::config::Limits;
-use crate::physics::{BodyDef, BodyId, MassSpec, Real, Shape, Vec2};
+use crate::physics::{BodyDef, BodyId, MassSpec, PhysicsError, Polygon, Real, Shape, Vec2};
 use crate::protocol::{
     decode, Colour, CommandKey, Remove, Reset, SetGravity, ShapeSpec, Spawn, SpawnBody, Tilt,
     Vector,
@@ -25,15 +25,15 @@ pub struct SpawnDef {
     pub colour: Colour,
 }
 
-/// `BodyDef` for non-self-describing formats (the journal's postcard): `Shape`'s serde form
-/// is internally tagged, which postcard cannot read back, so the shape goes as its half extents.
+/// `BodyDef` for the journal's postcard, with vectors as plain arrays so the f32 and f64
+/// builds write the same layout per precision.
 mod compact_def {
     use crate::physics::{BodyDef, MassSpec, Real, Shape, Vec2};
     use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
     #[derive(Serialize, Deserialize)]
     struct Compact {
-        half_extents: [Real; 2],
+        shape: Shape,
         position: [Real; 2],
         angle: Real,
         linear_velocity: [Real; 2],
@@ -44,9 +44,8 @@ mod compact_def {
     }
 
     pub fn serialize<S: Serializer>(d: &BodyDef, s: S) -> Result<S::Ok, S::Error> {
-        let Shape::Rect { half_extents: h } = d.shape;
         Compact {
-            half_extents: [h.x, h.y],
+            shape: d.shape,
             position: [d.position.x, d.position.y],
             angle: d.angle,
             linear_velocity: [d.linear_velocity.x, d.linear_velocity.y],
@@ -61,9 +60,7 @@ mod compact_def {
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<BodyDef, D::Error> {
         let c = Compact::deserialize(d)?;
         Ok(BodyDef {
-            shape: Shape::Rect {
-                half_extents: Vec2::new(c.half_extents[0], c.half_extents[1]),
-            },
+            shape: c.shape,
             position: Vec2::new(c.position[0], c.position[1]),
             angle: c.angle,
             linear_velocity: Vec2::new(c.linear_velocity[0], c.linear_velocity[1]),
@@ -185,11 +182,64 @@ pub fn parse(key: CommandKey, payload: &[u8], limits: &Limits) -> Result<Command
 /// Largest spawn angle (rad): larger finite angles are legal but only lose precision.
 const MAX_ANGLE: f32 = 1.0e4;
 
+/// The engine shape for a wire shape, and where its centre of mass sits relative to the
+/// body origin the sender gave (non-zero only for a polygon whose vertices are not centred).
+/// Refuses what the engine refuses, naming the field.
+pub fn shape_from_spec(spec: &ShapeSpec) -> Result<(Shape, Vec2), PhysicsError> {
+    let shape = match *spec {
+        ShapeSpec::Rect { width, height } => Shape::rect(width as Real, height as Real),
+        ShapeSpec::Circle { radius } => Shape::circle(radius as Real),
+        ShapeSpec::Capsule { length, radius } => Shape::capsule(length as Real, radius as Real),
+        ShapeSpec::Polygon { ref vertices } => {
+            let points: Vec<Vec2> = vertices
+                .iter()
+                .map(|v| Vec2::new(v.x as Real, v.y as Real))
+                .collect();
+            let (p, centroid) = Polygon::new(&points)?;
+            return Ok((Shape::Polygon(p), centroid));
+        }
+    };
+    shape.validate()?;
+    Ok((shape, Vec2::ZERO))
+}
+
+/// The sizes of a wire shape that the daemon's limits bound: (field, metres) pairs checked
+/// against `limits.max_coordinate` and `limits.min_size`.
+fn shape_sizes(spec: &ShapeSpec) -> Vec<(String, f32)> {
+    match spec {
+        ShapeSpec::Rect { width, height } => vec![
+            ("shape.width".into(), *width),
+            ("shape.height".into(), *height),
+        ],
+        ShapeSpec::Circle { radius } => vec![("shape.radius".into(), 2.0 * radius)],
+        ShapeSpec::Capsule { length, radius } => vec![
+            ("shape.length".into(), *length),
+            ("shape.radius".into(), 2.0 * radius),
+        ],
+        ShapeSpec::Polygon { vertices } => {
+            let (mut lo, mut hi) = (
+                Vector::new(f32::MAX, f32::MAX),
+                Vector::new(f32::MIN, f32::MIN),
+            );
+            for v in vertices {
+                lo = Vector::new(lo.x.min(v.x), lo.y.min(v.y));
+                hi = Vector::new(hi.x.max(v.x), hi.y.max(v.y));
+            }
+            vec![
+                ("shape.vertices (width)".into(), hi.x - lo.x),
+                ("shape.vertices (height)".into(), hi.y - lo.y),
+            ]
+        }
+    }
+}
+
 fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, String> {
-    let ShapeSpec::Rect { width, height } = b.shape;
+    let (shape, centroid) = shape_from_spec(&b.shape).map_err(|e| e.to_string())?;
+    let origin = Vec2::new(b.position.x as Real, b.position.y as Real);
     let def = BodyDef {
-        shape: Shape::rect(width as Real, height as Real),
-        position: Vec2::new(b.position.x as Real, b.position.y as Real),
+        shape,
+        // A polygon's centre of mass: its centroid, turned with the body.
+        position: origin + crate::physics::Rot::from_angle(b.angle as Real).rotate(centroid),
         angle: b.angle as Real,
         linear_velocity: Vec2::new(b.velocity.x as Real, b.velocity.y as Real),
         angular_velocity: b.angular_velocity as Real,
@@ -199,19 +249,18 @@ fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, String> {
     };
     def.validate().map_err(|e| e.to_string())?;
     let max = limits.max_coordinate;
-    for (field, v) in [
-        ("position.x", b.position.x),
-        ("position.y", b.position.y),
-        ("shape.width", width),
-        ("shape.height", height),
-    ] {
+    for (field, v) in [("position.x", b.position.x), ("position.y", b.position.y)]
+        .into_iter()
+        .map(|(f, v)| (f.to_string(), v))
+        .chain(shape_sizes(&b.shape))
+    {
         if v.abs() > max {
             return Err(format!(
                 "{field} = {v} is out of range: must be within +-{max} (limits.max_coordinate)"
             ));
         }
     }
-    for (field, v) in [("shape.width", width), ("shape.height", height)] {
+    for (field, v) in shape_sizes(&b.shape) {
         if v < limits.min_size {
             return Err(format!(
                 "{field} = {v} is too small: must be >= {} (limits.min_size)",

@@ -95,6 +95,23 @@ pub fn shape_spec(shape: &Shape) -> ShapeSpec {
             width: 2.0 * half_extents.x as f32,
             height: 2.0 * half_extents.y as f32,
         },
+        Shape::Circle { radius } => ShapeSpec::Circle {
+            radius: radius as f32,
+        },
+        Shape::Capsule {
+            half_length,
+            radius,
+        } => ShapeSpec::Capsule {
+            length: 2.0 * (half_length + radius) as f32,
+            radius: radius as f32,
+        },
+        Shape::Polygon(ref p) => ShapeSpec::Polygon {
+            vertices: p
+                .vertices()
+                .iter()
+                .map(|v| Vector::new(v.x as f32, v.y as f32))
+                .collect(),
+        },
     }
 }
 
@@ -139,7 +156,7 @@ impl ViewBody {
         BodyInfo {
             id: self.id,
             name: m.name.clone(),
-            shape: m.shape,
+            shape: m.shape.clone(),
             is_static: m.is_static,
             colour: m.colour,
             position: self.position,

@@ -5,12 +5,16 @@
 //! separation per point (negative = overlap) and a feature id so the solver can match a point
 //! with the same point last step (warm starting).
 
+mod circle;
 mod polygon;
 
-pub use polygon::{collide_polygons, collide_rects, Polygon};
+pub use circle::{collide_circles, collide_polygon_circle};
+pub use polygon::{collide_polygons, collide_rects};
 
+use super::convex::Polygon;
 use super::math::{Real, Transform, Vec2};
 use super::shape::Shape;
+use std::borrow::Cow;
 
 /// Identifies which features (edges and vertices) of the two shapes produced a contact point,
 /// so the same physical contact keeps the same id from one step to the next.
@@ -61,10 +65,55 @@ impl Manifold {
 /// Points whose separation exceeds `margin` metres are left out, so `margin > 0` also yields
 /// speculative contacts (surfaces about to touch), which the soft-step solver uses to stop fast
 /// bodies at the surface instead of letting them tunnel.
+///
+/// Every pair of kinds is covered: rectangle pairs by the closed-form box test; anything with a
+/// circle by the one-point circle routines; every other pair (polygons, capsules, rectangles
+/// mixed) by the general clipper on the shapes' cores and radii.
 pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: Real) -> Manifold {
     match (a, b) {
         (Shape::Rect { half_extents: ha }, Shape::Rect { half_extents: hb }) => {
             collide_rects(*ha, xf_a, *hb, xf_b, margin)
         }
+        (Shape::Circle { radius: ra }, Shape::Circle { radius: rb }) => {
+            collide_circles(*ra, xf_a, *rb, xf_b, margin)
+        }
+        (_, Shape::Circle { radius: rb }) => {
+            let (core_a, ra) = core(a);
+            collide_polygon_circle(&core_a, ra, xf_a, *rb, xf_b, margin)
+        }
+        (Shape::Circle { radius: ra }, _) => {
+            let (core_b, rb) = core(b);
+            collide_polygon_circle(&core_b, rb, xf_b, *ra, xf_a, margin).swapped()
+        }
+        _ => {
+            let ((core_a, ra), (core_b, rb)) = (core(a), core(b));
+            collide_polygons(&core_a, ra, xf_a, &core_b, rb, xf_b, margin)
+        }
+    }
+}
+
+/// A shape as a convex core and the radius it is grown by (m): a rectangle or polygon is its
+/// own core with radius 0, a capsule is its segment, a circle is its centre.
+fn core(shape: &Shape) -> (Cow<'_, Polygon>, Real) {
+    match shape {
+        Shape::Rect { half_extents } => (Cow::Owned(Polygon::rect(*half_extents)), 0.0),
+        Shape::Polygon(p) => (Cow::Borrowed(p), 0.0),
+        Shape::Capsule {
+            half_length,
+            radius,
+        } => (Cow::Owned(Polygon::segment(*half_length)), *radius),
+        Shape::Circle { radius } => (Cow::Owned(Polygon::point()), *radius),
+    }
+}
+
+impl Manifold {
+    /// The same contact seen from the other body: normal reversed, and each feature id's two
+    /// halves swapped so it still reads (A's feature, B's feature).
+    pub fn swapped(mut self) -> Manifold {
+        self.normal = -self.normal;
+        for p in &mut self.points[..self.count] {
+            p.id = p.id.rotate_left(8);
+        }
+        self
     }
 }

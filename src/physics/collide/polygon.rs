@@ -1,63 +1,22 @@
-//! Convex polygon against convex polygon (rectangles today) by the separating axis test,
-//! a reference face, and an incident edge clipped to the reference face's side planes.
+//! Convex polygon against convex polygon by the separating axis test, a reference face, and
+//! an incident edge clipped to the reference face's side planes.
 //!
 //! This is the appendix's box-box routine (its f_A, f_B face separations, reference and
-//! incident edges, two clips and projection) written for any convex polygon, so that
-//! general polygons reuse it unchanged.
+//! incident edges, two clips and projection) written for any convex polygon. Each polygon may
+//! carry a radius: a capsule is its core segment (a two-vertex polygon) grown by its radius,
+//! so capsule-capsule and capsule-polygon run through here too. Rounded cores that do not
+//! touch may meet corner to corner, where no face normal is right; that case is detected from
+//! the closest points of the two candidate edges and answered with one point on the line
+//! between them.
 
 use super::{FeatureId, Manifold, ManifoldPoint};
+use crate::physics::convex::Polygon;
 use crate::physics::math::{Real, Rot, Transform, Vec2};
 
-/// Most vertices a polygon may have.
-pub const MAX_VERTICES: usize = 8;
-
-/// A convex polygon in body coordinates, counter-clockwise, with outward unit edge normals.
-/// Edge `i` runs from `vertices[i]` to `vertices[(i + 1) % count]` and has `normals[i]`.
-#[derive(Clone, Copy, Debug)]
-pub struct Polygon {
-    /// Vertices, counter-clockwise (m).
-    pub vertices: [Vec2; MAX_VERTICES],
-    /// Outward unit normal of each edge.
-    pub normals: [Vec2; MAX_VERTICES],
-    /// Number of vertices in use.
-    pub count: usize,
-}
-
-impl Polygon {
-    /// The rectangle with half extents `h`, centred on the origin.
-    /// Edges: 0 bottom, 1 right, 2 top, 3 left.
-    pub fn rect(h: Vec2) -> Polygon {
-        let mut vertices = [Vec2::ZERO; MAX_VERTICES];
-        let mut normals = [Vec2::ZERO; MAX_VERTICES];
-        vertices[..4].copy_from_slice(&[
-            Vec2::new(-h.x, -h.y),
-            Vec2::new(h.x, -h.y),
-            Vec2::new(h.x, h.y),
-            Vec2::new(-h.x, h.y),
-        ]);
-        normals[..4].copy_from_slice(&[
-            Vec2::new(0.0, -1.0),
-            Vec2::new(1.0, 0.0),
-            Vec2::new(0.0, 1.0),
-            Vec2::new(-1.0, 0.0),
-        ]);
-        Polygon {
-            vertices,
-            normals,
-            count: 4,
-        }
-    }
-
-    /// The polygon moved by `xf` (vertices transformed, normals rotated).
-    fn transformed(&self, xf: Transform) -> Polygon {
-        let mut out = *self;
-        for i in 0..self.count {
-            out.vertices[i] = xf.apply(self.vertices[i]);
-            out.normals[i] = xf.q.rotate(self.normals[i]);
-        }
-        out
-    }
-}
+/// Core separation (m) above which two rounded shapes are treated as apart at their cores,
+/// so the corner-to-corner test runs. Below it the cores touch or overlap and the face
+/// normal is the better answer.
+const CORE_GAP: Real = 5.0e-4;
 
 /// The edge of `p1` along which `p2` is farthest out, and that separation (m).
 ///
@@ -97,28 +56,72 @@ fn clip_segment(seg: [Vec2; 2], n: Vec2, offset: Real) -> Option<[Vec2; 2]> {
     }
 }
 
-/// Contact manifold between convex polygons `a` at `xf_a` and `b` at `xf_b`, keeping points
-/// whose separation is at most `margin` metres. The normal points from A to B.
+/// Contact manifold between convex polygons `a` at `xf_a` and `b` at `xf_b`, each grown by a
+/// radius (`ra`, `rb`, metres; 0 for a sharp polygon), keeping points whose separation is at
+/// most `margin` metres. The normal points from A to B.
 pub fn collide_polygons(
     a: &Polygon,
+    ra: Real,
     xf_a: Transform,
     b: &Polygon,
+    rb: Real,
     xf_b: Transform,
     margin: Real,
 ) -> Manifold {
     let rel = relative(xf_a, xf_b);
     let pa = *a;
     let pb = b.transformed(rel);
+    let reach = margin + ra + rb;
 
     let (edge_a, sep_a) = max_separation(&pa, &pb);
-    if sep_a > margin {
+    if sep_a > reach {
         return Manifold::EMPTY;
     }
     let (edge_b, sep_b) = max_separation(&pb, &pa);
-    if sep_b > margin {
+    if sep_b > reach {
         return Manifold::EMPTY;
     }
-    clip_to_reference(&pa, &pb, (edge_a, sep_a), (edge_b, sep_b), xf_a, margin)
+    let radii = Radii { a: ra, b: rb };
+    clip_to_reference(
+        &pa,
+        &pb,
+        (edge_a, sep_a),
+        (edge_b, sep_b),
+        radii,
+        xf_a,
+        margin,
+    )
+}
+
+/// The radii the two cores are grown by (m).
+#[derive(Clone, Copy)]
+struct Radii {
+    a: Real,
+    b: Real,
+}
+
+/// Closest points between segments p1-q1 and p2-q2: (s, t) along each, both clamped to [0, 1]
+/// (the standard clamp-and-recompute solution of the 2x2 normal equations).
+fn segment_closest(p1: Vec2, q1: Vec2, p2: Vec2, q2: Vec2) -> (Real, Real) {
+    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
+    let (a, e, f) = (d1.dot(d1), d2.dot(d2), d2.dot(r));
+    let c = d1.dot(r);
+    let b = d1.dot(d2);
+    let denom = a * e - b * b;
+    let mut s = if denom > 1.0e-12 * a * e {
+        ((b * f - c * e) / denom).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let mut t = (b * s + f) / e;
+    if t < 0.0 {
+        t = 0.0;
+        s = (-c / a).clamp(0.0, 1.0);
+    } else if t > 1.0 {
+        t = 1.0;
+        s = ((b - c) / a).clamp(0.0, 1.0);
+    }
+    (s, t)
 }
 
 /// B's transform relative to A. Working in A's frame subtracts the two positions once, so
@@ -172,7 +175,16 @@ pub fn collide_rects(
     }
     let pa = Polygon::rect(ha);
     let pb = Polygon::rect(hb).transformed(rel);
-    clip_to_reference(&pa, &pb, (edge_a, sep_a), (edge_b, sep_b), xf_a, margin)
+    let sharp = Radii { a: 0.0, b: 0.0 };
+    clip_to_reference(
+        &pa,
+        &pb,
+        (edge_a, sep_a),
+        (edge_b, sep_b),
+        sharp,
+        xf_a,
+        margin,
+    )
 }
 
 /// Pick the reference face from the best face of each polygon (both in A's frame), clip the
@@ -182,6 +194,7 @@ fn clip_to_reference(
     pb: &Polygon,
     (edge_a, sep_a): (usize, Real),
     (edge_b, sep_b): (usize, Real),
+    radii: Radii,
     xf_a: Transform,
     margin: Real,
 ) -> Manifold {
@@ -194,6 +207,11 @@ fn clip_to_reference(
         (pb, pa, edge_b)
     } else {
         (pa, pb, edge_a)
+    };
+    let (r_ref, r_inc) = if flip {
+        (radii.b, radii.a)
+    } else {
+        (radii.a, radii.b)
     };
 
     // Incident edge: the edge of the other polygon whose normal is most anti-parallel to the
@@ -212,10 +230,50 @@ fn clip_to_reference(
     let i1 = inc_edge;
     let i2 = (inc_edge + 1) % incident.count;
     let seg = [incident.vertices[i1], incident.vertices[i2]];
-
-    // Side planes of the reference edge: its tangent t, bounded by its two end vertices.
     let r1 = reference.vertices[ref_edge];
     let r2 = reference.vertices[(ref_edge + 1) % reference.count];
+
+    // Rounded cores that do not touch: if the two edges are closest at a vertex of each, the
+    // shapes meet corner to corner, along the line between those vertices.
+    if r_ref + r_inc > 0.0 && sep_a.max(sep_b) > CORE_GAP {
+        let (s, t) = segment_closest(r1, r2, seg[0], seg[1]);
+        let at_end = |x: Real| x == 0.0 || x == 1.0;
+        if at_end(s) && at_end(t) {
+            let c_ref = r1 + s * (r2 - r1);
+            let c_inc = seg[0] + t * (seg[1] - seg[0]);
+            let d = c_inc - c_ref;
+            let dist = d.length();
+            let separation = dist - r_ref - r_inc;
+            if separation > margin || dist <= 0.0 {
+                return Manifold::EMPTY;
+            }
+            let n = d / dist;
+            let v_ref = if s == 0.0 {
+                ref_edge
+            } else {
+                (ref_edge + 1) % reference.count
+            };
+            let v_inc = if t == 0.0 { i1 } else { i2 };
+            let (va, vb, normal_in_a) = if flip {
+                (v_inc, v_ref, -n)
+            } else {
+                (v_ref, v_inc, n)
+            };
+            // Halfway between the reference surface (c_ref + r_ref n) and the incident one.
+            let mid = c_ref + (r_ref + 0.5 * separation) * n;
+            let mut manifold = Manifold::EMPTY;
+            manifold.normal = xf_a.q.rotate(normal_in_a);
+            manifold.points[0] = ManifoldPoint {
+                point: xf_a.apply(mid),
+                separation,
+                id: (va as u16) << 8 | vb as u16,
+            };
+            manifold.count = 1;
+            return manifold;
+        }
+    }
+
+    // Side planes of the reference edge: its tangent t, bounded by its two end vertices.
     let t = (r2 - r1).normalize();
     let Some(seg) = clip_segment(seg, -t, -t.dot(r1)) else {
         return Manifold::EMPTY;
@@ -232,19 +290,21 @@ fn clip_to_reference(
     // reference edge's end vertex and its end (slot 1) towards the start vertex. A point is
     // named by that pair of vertices, written (A's vertex, B's vertex) whichever polygon is the
     // reference, so the id survives the reference face switching sides between steps.
-    let r_ref = [(ref_edge + 1) % reference.count, ref_edge];
-    let r_inc = [i1, i2];
+    let v_ref = [(ref_edge + 1) % reference.count, ref_edge];
+    let v_inc = [i1, i2];
     for (k, v) in seg.into_iter().enumerate() {
-        let separation = n.dot(v - r1);
+        let core = n.dot(v - r1);
+        let separation = core - r_ref - r_inc;
         if separation > margin {
             continue;
         }
-        // Halfway between the incident vertex and its projection on the reference face.
-        let mid = v - (0.5 * separation) * n;
+        // Halfway between the incident surface (v - r_inc n) and the reference surface
+        // (v's projection on the reference edge, then r_ref out along n).
+        let mid = v + (0.5 * (r_ref - r_inc - core)) * n;
         let (va, vb) = if flip {
-            (r_inc[k], r_ref[k])
+            (v_inc[k], v_ref[k])
         } else {
-            (r_ref[k], r_inc[k])
+            (v_ref[k], v_inc[k])
         };
         let id: FeatureId = (va as u16) << 8 | vb as u16;
         manifold.points[manifold.count] = ManifoldPoint {

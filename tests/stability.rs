@@ -92,6 +92,11 @@ fn deep_overlap_separates_under_the_push_out_cap() {
 }
 
 #[test]
+fn pile_of_mixed_shapes_comes_to_rest() {
+    check(extreme::mixed_pile);
+}
+
+#[test]
 fn bullet_does_not_tunnel_through_a_thin_wall() {
     check(extreme::bullet);
 }

@@ -10,7 +10,9 @@
 //! - bounce: 1 m box dropped from 2 m (bottom to ground), e = 0.8 (both bodies);
 //! - head-on: 1 kg at +4 m/s meets 3 kg at -2 m/s, e = 0.5, no gravity;
 //! - spin: 2 m x 1 m box of 3 kg, torque 2.5 N m, 1 s, no gravity;
-//! - resting stack: 10 boxes of 1 m on the ground, 10 s.
+//! - resting stack: 10 boxes of 1 m on the ground, 10 s;
+//! - disc that rolls: disc of r = 0.5 m from rest, gravity tilted by 30 deg, mu = 0.5, 1 s;
+//! - disc that slides: the same disc with mu = 0.1, 1 s.
 //!
 //! Coefficients are given to both bodies of a pair, so every mixing rule except `Product`
 //! yields the coefficient itself; the expected values use `Settings::*_mixing` to be exact.
@@ -91,6 +93,20 @@ pub fn all() -> Vec<ClosedFormCase> {
             setup: "10 boxes of 1 m stacked exactly on the ground (cases::stack), 10 s",
             expected: "top box stays where it was placed (sinking and drift 0)",
             run: resting_stack,
+        },
+        ClosedFormCase {
+            name: "disc_rolls",
+            title: "Disc rolls down a slope",
+            setup: "disc r = 0.5 m from rest with gravity tilted by 30 deg, mu = 0.5 >= tan(30 deg)/3 = 0.19, 1 s",
+            expected: "rolls without slipping: x = a t^2 / 2 with a = (2/3) g sin theta, v = omega r",
+            run: disc_rolls,
+        },
+        ClosedFormCase {
+            name: "disc_slides",
+            title: "Disc slides down a slope",
+            setup: "disc r = 0.5 m from rest with gravity tilted by 30 deg, mu = 0.1 < tan(30 deg)/3, 1 s",
+            expected: "slides: x = a t^2 / 2 with a = g (sin theta - mu cos theta); spins up at 2 mu g cos theta / r",
+            run: disc_slides,
         },
     ]
 }
@@ -486,6 +502,84 @@ pub fn resting_stack(settings: &Settings, dt: Real) -> Measurement {
             ("top drift (m)", (p.x - p0.x) as f64),
             ("largest top drift during run (m)", max_drift),
             ("penetration at end (m)", max_penetration(&w)),
+        ],
+    )
+}
+
+/// A disc of radius 0.5 m on a 30 deg "slope" (tilted gravity) with friction `mu`, run 1 s
+/// from rest: (world, disc id, measured x, v, omega, t).
+fn disc_on_slope(settings: &Settings, dt: Real, mu: Real) -> (World, bool, f64, f64, f64, f64) {
+    let theta = (30.0 as Real).to_radians();
+    let mut w = new_world(settings, tilted(theta));
+    floor(&mut w, mu, 0.0);
+    let id = w
+        .add_body(&BodyDef::dynamic(Shape::circle(DISC_R), vec2(0.0, DISC_R)).with_friction(mu))
+        .unwrap();
+    let n = steps_for(1.0, dt);
+    let diverged = run(&mut w, dt, n, 1e3, |_| {});
+    let x = pos(&w, id).x as f64;
+    let v = vel(&w, id).x as f64;
+    let omega = w.body(id).map_or(f64::NAN, |b| b.angular_velocity() as f64);
+    let t = w.time();
+    (w, diverged, x, v, omega, t)
+}
+
+/// Radius of the rolling and sliding disc (m).
+const DISC_R: Real = 0.5;
+
+/// Rolling without slipping (mu = 0.5 >= tan theta / 3): a solid disc (I = m r^2 / 2)
+/// accelerates at a = g sin theta / (1 + I / (m r^2)) = (2/3) g sin theta, and its contact
+/// point stays at rest: v + omega r = 0 (it spins clockwise while moving to +x).
+/// Error: |x - a t^2/2| at t = 1 s (m).
+pub fn disc_rolls(settings: &Settings, dt: Real) -> Measurement {
+    let theta = (30.0f64).to_radians();
+    let a = 2.0 / 3.0 * G as f64 * theta.sin();
+    let (w, diverged, x, v, omega, t) = disc_on_slope(settings, dt, 0.5);
+    let expected = 0.5 * a * t * t;
+    finish(
+        "disc_rolls",
+        "m",
+        "|x - a t^2/2| at t = 1 s, a = (2/3) g sin theta",
+        &w,
+        diverged,
+        (x - expected).abs(),
+        vec![
+            ("x (m)", x),
+            ("expected x (m)", expected),
+            ("measured a = 2x/t^2 (m/s^2)", 2.0 * x / (t * t)),
+            ("expected a (m/s^2)", a),
+            ("slip speed v + omega r (m/s)", v + omega * DISC_R as f64),
+            ("speed at 1 s (m/s)", v),
+        ],
+    )
+}
+
+/// Sliding (mu = 0.1 < tan theta / 3): the centre accelerates at g (sin theta - mu cos theta)
+/// while kinetic friction mu m g cos theta spins the disc up at alpha = 2 mu g cos theta / r.
+/// Error: |x - a t^2/2| at t = 1 s (m); the spin error is a detail.
+pub fn disc_slides(settings: &Settings, dt: Real) -> Measurement {
+    let theta = (30.0f64).to_radians();
+    let mu = 0.1;
+    let mu_mixed = settings.friction_mixing.mix(mu, mu) as f64;
+    let a = G as f64 * (theta.sin() - mu_mixed * theta.cos());
+    let alpha = 2.0 * mu_mixed * G as f64 * theta.cos() / DISC_R as f64;
+    let (w, diverged, x, v, omega, t) = disc_on_slope(settings, dt, mu);
+    let expected = 0.5 * a * t * t;
+    finish(
+        "disc_slides",
+        "m",
+        "|x - a t^2/2| at t = 1 s, a = g (sin theta - mu cos theta)",
+        &w,
+        diverged,
+        (x - expected).abs(),
+        vec![
+            ("x (m)", x),
+            ("expected x (m)", expected),
+            ("measured a = 2x/t^2 (m/s^2)", 2.0 * x / (t * t)),
+            ("expected a (m/s^2)", a),
+            ("spin |omega| at 1 s (rad/s)", omega.abs()),
+            ("expected spin alpha t (rad/s)", alpha * t),
+            ("slip speed v + omega r (m/s)", v + omega * DISC_R as f64),
         ],
     )
 }

@@ -5,9 +5,11 @@
 //! separation per point (negative = overlap) and a feature id so the solver can match a point
 //! with the same point last step (warm starting).
 
+mod capsule;
 mod circle;
 mod polygon;
 
+pub use capsule::collide_capsules;
 pub use circle::{collide_circles, collide_polygon_circle};
 pub use polygon::{collide_polygons, collide_rects};
 
@@ -67,8 +69,9 @@ impl Manifold {
 /// bodies at the surface instead of letting them tunnel.
 ///
 /// Every pair of kinds is covered: rectangle pairs by the closed-form box test; anything with a
-/// circle by the one-point circle routines; every other pair (polygons, capsules, rectangles
-/// mixed) by the general clipper on the shapes' cores and radii.
+/// circle by the one-point circle routines; capsule pairs by their segments' closest points;
+/// every other pair (polygons, rectangles, a capsule against either) by the general clipper on
+/// the shapes' cores and radii.
 pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: Real) -> Manifold {
     match (a, b) {
         (Shape::Rect { half_extents: ha }, Shape::Rect { half_extents: hb }) => {
@@ -81,6 +84,16 @@ pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: R
             let (core_a, ra) = core(a);
             collide_polygon_circle(&core_a, ra, xf_a, *rb, xf_b, margin)
         }
+        (
+            Shape::Capsule {
+                half_length: ha,
+                radius: ra,
+            },
+            Shape::Capsule {
+                half_length: hb,
+                radius: rb,
+            },
+        ) => collide_capsules(*ha, *ra, xf_a, *hb, *rb, xf_b, margin),
         (Shape::Circle { radius: ra }, _) => {
             let (core_b, rb) = core(b);
             collide_polygon_circle(&core_b, rb, xf_b, *ra, xf_a, margin).swapped()

@@ -102,7 +102,7 @@ struct Radii {
 
 /// Closest points between segments p1-q1 and p2-q2: (s, t) along each, both clamped to [0, 1]
 /// (the standard clamp-and-recompute solution of the 2x2 normal equations).
-fn segment_closest(p1: Vec2, q1: Vec2, p2: Vec2, q2: Vec2) -> (Real, Real) {
+pub(super) fn segment_closest(p1: Vec2, q1: Vec2, p2: Vec2, q2: Vec2) -> (Real, Real) {
     let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
     let (a, e, f) = (d1.dot(d1), d2.dot(d2), d2.dot(r));
     let c = d1.dot(r);
@@ -202,7 +202,10 @@ fn clip_to_reference(
     // between near-equal candidates from one step to the next (the appendix's eq. 79 idea).
     const RELATIVE_TOL: Real = 0.98;
     const ABSOLUTE_TOL: Real = 0.0005;
-    let flip = sep_b > RELATIVE_TOL * sep_a + ABSOLUTE_TOL;
+    // (Written as sep_a + tol so that it favours A for gaps as well as overlaps: the
+    // appendix's 0.98 sep_a + tol only does for overlaps, and for a speculative gap it would
+    // prefer B's face even when A's separates more.)
+    let flip = sep_b > sep_a + (1.0 - RELATIVE_TOL) * sep_a.abs() + ABSOLUTE_TOL;
     let (reference, incident, ref_edge) = if flip {
         (pb, pa, edge_b)
     } else {
@@ -233,16 +236,24 @@ fn clip_to_reference(
     let r1 = reference.vertices[ref_edge];
     let r2 = reference.vertices[(ref_edge + 1) % reference.count];
 
-    // Rounded cores that do not touch: if the two edges are closest at a vertex of each, the
-    // shapes meet corner to corner, along the line between those vertices.
-    if r_ref + r_inc > 0.0 && sep_a.max(sep_b) > CORE_GAP {
+    // Cores that do not touch: if the two edges are closest at a vertex of each, the shapes
+    // meet corner to corner, along the line between those vertices, and no face normal is
+    // right (it would understate the gap, or clip away every point of a speculative contact).
+    if sep_a.max(sep_b) > CORE_GAP {
         let (s, t) = segment_closest(r1, r2, seg[0], seg[1]);
-        let at_end = |x: Real| x == 0.0 || x == 1.0;
-        if at_end(s) && at_end(t) {
-            let c_ref = r1 + s * (r2 - r1);
-            let c_inc = seg[0] + t * (seg[1] - seg[0]);
-            let d = c_inc - c_ref;
-            let dist = d.length();
+        let c_ref = r1 + s * (r2 - r1);
+        let c_inc = seg[0] + t * (seg[1] - seg[0]);
+        let d = c_inc - c_ref;
+        let dist = d.length();
+        // `x` is the end of its edge (0 or 1) and the other closest point lies beyond that end
+        // (direction `away` from the vertex has a part along the edge pointing out). Parallel
+        // faces side by side fail this: their gap is square to both edges.
+        let past_end = |x: Real, edge: Vec2, away: Vec2| {
+            let along = away.dot(edge);
+            let slack = 1.0e-3 * away.length() * edge.length();
+            (x == 0.0 && along < -slack) || (x == 1.0 && along > slack)
+        };
+        if past_end(s, r2 - r1, d) && past_end(t, seg[1] - seg[0], -d) {
             let separation = dist - r_ref - r_inc;
             if separation > margin || dist <= 0.0 {
                 return Manifold::EMPTY;

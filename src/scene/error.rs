@@ -80,10 +80,36 @@ impl SceneError {
                 value,
                 expected,
             } => (field, Some(value.to_string()), expected),
+            PhysicsError::InvalidShape { field, reason } => {
+                let (value, message) = split_value(&reason);
+                return SceneError::invalid(body, field, value, message);
+            }
             other => {
                 return SceneError::invalid(body, "body", None, other.to_string());
             }
         };
         SceneError::invalid(body, field, value, message)
+    }
+}
+
+/// Split the engine's shape reason into the value it quotes and what is wrong with it:
+/// `= [1, 0.5] turns clockwise there` gives (`[1, 0.5]`, `turns clockwise there`) and
+/// `= 0.8 must be more than ...` gives (`0.8`, `must be more than ...`), so the scene's message
+/// reads `shape.vertices[2] = [1, 0.5]: turns clockwise there`. A reason that quotes no value
+/// first (`must hold 3 to 8 points, got 2`) is kept whole.
+fn split_value(reason: &str) -> (Option<String>, String) {
+    let split = reason.strip_prefix("= ").and_then(|rest| {
+        let end = if rest.starts_with('[') {
+            rest.find(']')? + 1
+        } else {
+            rest.find(' ')?
+        };
+        let (value, message) = rest.split_at(end);
+        let message = message.trim_start();
+        (!message.is_empty()).then(|| (value.to_owned(), message.to_owned()))
+    });
+    match split {
+        Some((value, message)) => (Some(value), message),
+        None => (None, reason.to_owned()),
     }
 }

@@ -6,7 +6,7 @@
 //! in document order, with its name, index and line at hand for the message.
 
 use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
-use crate::physics::{BodyDef, MassSpec, Real, Settings, Shape, Vec2};
+use crate::physics::{BodyDef, MassSpec, Polygon, Real, Rot, Settings, Shape, Vec2};
 use serde::Deserialize;
 use toml::{Spanned, Table};
 
@@ -46,11 +46,88 @@ struct SceneFile {
     pyramid: Vec<Spanned<Table>>,
 }
 
-/// `shape = { type = "rect", width = W, height = H }`, metres.
+/// The `shape` inline table of a `[[body]]`, tagged by `type`; every length in metres.
 #[derive(Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 enum ShapeEntry {
+    /// `{ type = "rect", width = W, height = H }`: a W x H rectangle centred on `position`.
     Rect { width: Real, height: Real },
+    /// `{ type = "circle", radius = R }`: a disc centred on `position`.
+    Circle { radius: Real },
+    /// `{ type = "capsule", length = L, radius = R }`: a stadium L long end to end along the
+    /// body's x axis and 2 R thick, centred on `position`; L > 2 R.
+    Capsule { length: Real, radius: Real },
+    /// `{ type = "polygon", vertices = [[x, y], ...] }`: 3 to 8 points relative to `position`
+    /// in the body's (turned) frame, counter-clockwise, strictly convex. The centre of mass
+    /// goes to their centroid.
+    /// (Read as lists of any length so that a vertex that is not a pair is reported with its
+    /// index, not as toml's bare "invalid length".)
+    Polygon { vertices: Vec<Vec<Real>> },
+}
+
+impl ShapeEntry {
+    /// The engine shape, and where its centre of mass sits relative to the body's `position`
+    /// in the body's frame (m): the centroid of a polygon's vertices, zero for the others.
+    /// The same semantics as the daemon's spawn shapes (`service::intake::shape_from_spec`).
+    fn to_shape(&self, at: &str) -> Result<(Shape, Vec2), SceneError> {
+        let shape = match *self {
+            // Sizes checked below by Shape::validate, which names shape.width / shape.height.
+            ShapeEntry::Rect { width, height } => Shape::rect(width, height),
+            ShapeEntry::Circle { radius } => {
+                check_positive(at, "shape.radius", radius)?;
+                Shape::circle(radius)
+            }
+            ShapeEntry::Capsule { length, radius } => {
+                check_positive(at, "shape.radius", radius)?;
+                check_positive(at, "shape.length", length)?;
+                if length <= 2.0 * radius {
+                    return Err(SceneError::invalid(
+                        at,
+                        "shape.length",
+                        Some(length.to_string()),
+                        format!(
+                            "must be more than twice shape.radius = {radius} (the length is \
+                             end to end, rounded ends included; use a circle for a capsule \
+                             with no straight part)"
+                        ),
+                    ));
+                }
+                Shape::capsule(length, radius)
+            }
+            ShapeEntry::Polygon { ref vertices } => {
+                let mut points = Vec::with_capacity(vertices.len());
+                for (i, v) in vertices.iter().enumerate() {
+                    let field = || format!("shape.vertices[{i}]");
+                    let written = || {
+                        let coords: Vec<String> = v.iter().map(Real::to_string).collect();
+                        Some(format!("[{}]", coords.join(", ")))
+                    };
+                    let &[x, y] = v.as_slice() else {
+                        return Err(SceneError::invalid(
+                            at,
+                            field(),
+                            written(),
+                            "must be a pair [x, y] (metres)",
+                        ));
+                    };
+                    if !(x.is_finite() && y.is_finite()) {
+                        return Err(SceneError::invalid(
+                            at,
+                            field(),
+                            written(),
+                            "coordinates must be finite numbers",
+                        ));
+                    }
+                    points.push(Vec2::new(x, y));
+                }
+                let (polygon, centroid) =
+                    Polygon::new(&points).map_err(|e| SceneError::physics(at, e))?;
+                return Ok((Shape::Polygon(polygon), centroid));
+            }
+        };
+        shape.validate().map_err(|e| SceneError::physics(at, e))?;
+        Ok((shape, Vec2::ZERO))
+    }
 }
 
 /// One `[[body]]` table.
@@ -393,10 +470,20 @@ impl BodyEntry {
             }
         }
         let colour = parse_colour(&at, self.colour.as_deref())?;
-        let ShapeEntry::Rect { width, height } = self.shape;
+        let (shape, centroid) = self.shape.to_shape(&at)?;
+        let mut position = Vec2::new(self.position[0], self.position[1]);
+        if centroid != Vec2::ZERO {
+            // A polygon's vertices are given around `position`; its centre of mass is their
+            // centroid, turned with the body. Checked first so that a bad value is reported as
+            // written rather than as the NaN it would make of the centre.
+            check_finite(&at, "position.x", position.x)?;
+            check_finite(&at, "position.y", position.y)?;
+            check_finite(&at, "angle", self.angle)?;
+            position += Rot::from_angle(self.angle).rotate(centroid);
+        }
         let def = BodyDef {
-            shape: Shape::rect(width, height),
-            position: Vec2::new(self.position[0], self.position[1]),
+            shape,
+            position,
             angle: self.angle,
             linear_velocity: Vec2::new(self.velocity[0], self.velocity[1]),
             angular_velocity: self.angular_velocity,

@@ -24,7 +24,19 @@
 //! density = 1                  # kg/m^2 (or mass = ... kg)
 //! colour = "#d64541"
 //!
-//! [[stack]]                    # generators expand into bodies
+//! [[body]]
+//! name = "ball"
+//! shape = { type = "circle", radius = 0.3 }           # also "capsule" (length, radius)
+//! position = [-2, 3]
+//! density = 1
+//!
+//! [[body]]
+//! name = "wedge"               # vertices in metres around position, counter-clockwise;
+//! shape = { type = "polygon", vertices = [[0, 0], [1, 0], [0, 1]] }
+//! position = [2, 3]            # the centre of mass goes to their centroid, (2.33, 3.33)
+//! density = 1
+//!
+//! [[stack]]                    # generators expand into bodies (square boxes)
 //! count = 5
 //! size = 0.5
 //! x = 4

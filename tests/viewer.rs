@@ -3,6 +3,7 @@
 #![cfg(all(feature = "net", feature = "cli", feature = "tui"))]
 
 use ratatui::backend::TestBackend;
+use ratatui::layout::Size;
 use ratatui::style::Color;
 use ratatui::Terminal;
 use std::collections::BTreeMap;
@@ -10,7 +11,7 @@ use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use tiltbox::client::plain::parse_line;
-use tiltbox::client::render::{render, Status};
+use tiltbox::client::render::{render, Status, Viewport};
 use tiltbox::client::world::WorldView;
 use tiltbox::protocol::*;
 use tiltbox::service::{Server, ServerConfig, ServerOptions};
@@ -306,4 +307,295 @@ async fn plain_output_parses_back_to_the_poses_published() {
     drop(_sub);
     let _ = session.close().await;
     server.shutdown().await.unwrap();
+}
+
+// ---- shapes: which braille dots each shape lights ----
+
+const GREEN: Colour = Colour {
+    r: 60,
+    g: 180,
+    b: 90,
+};
+
+/// A body of `shape` at `pos`, turned by `angle`.
+fn shaped(index: u32, colour: Colour, pos: (f32, f32), angle: f32, shape: ShapeSpec) -> BodyInfo {
+    let mut b = body(index, false, colour, pos, (1.0, 1.0));
+    b.shape = shape;
+    b.angle = angle;
+    b
+}
+
+/// The walls of [`scene`] (inner corners (0, 0) and (20, 10)) and `bodies`.
+fn walled(bodies: Vec<BodyInfo>) -> WorldView {
+    let mut s = scene();
+    s.bodies.truncate(4);
+    s.bodies.extend(bodies);
+    WorldView::from_scene(s)
+}
+
+/// A frame of `view` at 82 x 25 cells (164 x 96 dots, about 0.14 m a dot), read back dot by
+/// dot.
+struct Frame {
+    t: Terminal<TestBackend>,
+    x_bounds: [f64; 2],
+    y_bounds: [f64; 2],
+    dots: (usize, usize),
+}
+
+impl Frame {
+    const W: u16 = 82;
+    const H: u16 = 25;
+
+    fn of(view: &WorldView) -> Frame {
+        let status = Status {
+            world: "test".into(),
+            alive: true,
+            ..Status::default()
+        };
+        let t = draw(view, &status, Frame::W, Frame::H);
+        // the canvas is every row but the status line
+        let vp = Viewport::fit(view.bounds().unwrap(), Size::new(Frame::W, Frame::H - 1));
+        Frame {
+            t,
+            x_bounds: vp.x_bounds,
+            y_bounds: vp.y_bounds,
+            dots: (2 * Frame::W as usize, 4 * (Frame::H as usize - 1)),
+        }
+    }
+
+    /// The colour of the cell holding the dot nearest world point (x, y) when that dot is lit
+    /// (ratatui's mapping: a dot every `width / (dots - 1)` metres, from the top left).
+    fn lit(&self, x: f32, y: f32) -> Option<Color> {
+        let ([l, r], [b, t]) = (self.x_bounds, self.y_bounds);
+        let gx = ((x as f64 - l) * (self.dots.0 - 1) as f64 / (r - l)).round() as usize;
+        let gy = ((t - y as f64) * (self.dots.1 - 1) as f64 / (t - b)).round() as usize;
+        assert!(
+            gx < self.dots.0 && gy < self.dots.1,
+            "({x}, {y}) on the canvas"
+        );
+        let cell = &self.t.backend().buffer()[((gx / 2) as u16, (gy / 4) as u16)];
+        let ch = cell.symbol().chars().next().unwrap_or(' ');
+        let bits = match ch {
+            '\u{2800}'..='\u{28ff}' => ch as u32 - 0x2800,
+            _ => 0,
+        };
+        // Unicode braille: dots 1-3 and 7 in the left column, 4-6 and 8 in the right
+        const BIT: [[u32; 2]; 4] = [[0x01, 0x08], [0x02, 0x10], [0x04, 0x20], [0x40, 0x80]];
+        (bits & BIT[gy % 4][gx % 2] != 0).then_some(cell.fg)
+    }
+
+    /// Lit dots in cells of colour `c`.
+    fn count(&self, c: Colour) -> u32 {
+        let buf = self.t.backend().buffer();
+        (0..Frame::H - 1)
+            .flat_map(|y| (0..Frame::W).map(move |x| (x, y)))
+            .map(|p| &buf[p])
+            .filter(|cell| cell.fg == rgb(c))
+            .filter_map(|cell| cell.symbol().chars().next())
+            .filter(|ch| ('\u{2800}'..='\u{28ff}').contains(ch))
+            .map(|ch| (ch as u32 - 0x2800).count_ones())
+            .sum()
+    }
+}
+
+/// World point `centre + rotate(angle) (lx, ly)`.
+fn at(centre: (f32, f32), angle: f32, lx: f32, ly: f32) -> (f32, f32) {
+    let (s, c) = angle.sin_cos();
+    (centre.0 + c * lx - s * ly, centre.1 + s * lx + c * ly)
+}
+
+fn turn(view: &mut WorldView, frame: u64, index: u32, pos: (f32, f32), angle: f32) {
+    let s = Snapshot {
+        frame,
+        time: frame as f64 / 60.0,
+        gravity: Vector::new(0.0, -9.81),
+        keyframe: false,
+        poses: vec![Pose {
+            id: BodyRef {
+                index,
+                generation: 0,
+            },
+            x: pos.0,
+            y: pos.1,
+            angle,
+        }],
+    };
+    assert_eq!(
+        view.apply_snapshot(&s),
+        tiltbox::client::world::Applied::Applied
+    );
+}
+
+#[test]
+fn a_circle_is_a_disc_where_a_square_of_its_width_fills_its_corners() {
+    let (circle, square) = ((5.1, 5.2), (14.1, 5.2));
+    let view = walled(vec![
+        shaped(4, RED, circle, 0.0, ShapeSpec::Circle { radius: 1.5 }),
+        shaped(
+            5,
+            BLUE,
+            square,
+            0.0,
+            ShapeSpec::Rect {
+                width: 3.0,
+                height: 3.0,
+            },
+        ),
+    ]);
+    let f = Frame::of(&view);
+    assert_eq!(f.lit(circle.0, circle.1), Some(rgb(RED)), "circle centre");
+    assert_eq!(f.lit(square.0, square.1), Some(rgb(BLUE)), "square centre");
+    for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+        // just inside the 3 m x 3 m bounding box's corners
+        let (dx, dy) = (1.45 * sx, 1.45 * sy);
+        assert_eq!(
+            f.lit(square.0 + dx, square.1 + dy),
+            Some(rgb(BLUE)),
+            "square corner {sx},{sy}"
+        );
+        assert_eq!(
+            f.lit(circle.0 + dx, circle.1 + dy),
+            None,
+            "circle's box corner {sx},{sy}"
+        );
+    }
+    // the disc reaches its box's edges midway, but for the rotation mark along +x
+    for (ex, ey) in [(-1.4, 0.0), (0.0, 1.4), (0.0, -1.4)] {
+        assert_eq!(
+            f.lit(circle.0 + ex, circle.1 + ey),
+            Some(rgb(RED)),
+            "circle rim ({ex}, {ey})"
+        );
+    }
+    assert_eq!(f.lit(circle.0 + 1.4, circle.1), None, "the mark");
+    // about pi/4 of the square's dots (the mark and the half-dot rims make it a little off)
+    let ratio = f.count(RED) as f32 / f.count(BLUE) as f32;
+    assert!((0.68..0.86).contains(&ratio), "disc / square dots {ratio}");
+}
+
+#[test]
+fn a_circles_rotation_mark_turns_with_it() {
+    // off the dot grid's half-way lines, so that "the nearest dot" is never a tie
+    let c = (10.3, 5.2);
+    let mut view = walled(vec![shaped(
+        4,
+        GREEN,
+        c,
+        0.0,
+        ShapeSpec::Circle { radius: 2.0 },
+    )]);
+    // local +x is marked: an unlit radius from a little out of the centre to the rim
+    let marked = |f: &Frame, angle: f32| -> Vec<bool> {
+        [0.0f32, 1.0, 2.0, 3.0]
+            .iter()
+            .map(|q| {
+                let (x, y) = at(c, angle + q * std::f32::consts::FRAC_PI_2, 1.2, 0.0);
+                f.lit(x, y).is_none()
+            })
+            .collect()
+    };
+    let f = Frame::of(&view);
+    assert_eq!(f.lit(c.0, c.1), Some(rgb(GREEN)));
+    // quarter turns from the body's x axis: only the first is the mark
+    assert_eq!(marked(&f, 0.0), [true, false, false, false]);
+    let before = f.count(GREEN);
+    turn(&mut view, 11, 4, c, std::f32::consts::FRAC_PI_2);
+    let f = Frame::of(&view);
+    assert_eq!(marked(&f, 0.0), [false, true, false, false], "mark now up");
+    assert_eq!(f.lit(c.0, c.1), Some(rgb(GREEN)));
+    // rolled a little further and along: the mark follows the angle, not the axes
+    let c = (12.1, 4.9);
+    turn(&mut view, 12, 4, c, 2.4);
+    let f = Frame::of(&view);
+    let along = |f: &Frame, a: f32| {
+        let (x, y) = at(c, a, 1.2, 0.0);
+        f.lit(x, y)
+    };
+    assert_eq!(along(&f, 2.4), None, "mark at 2.4 rad");
+    assert_eq!(along(&f, 2.4 + 0.6), Some(rgb(GREEN)));
+    assert_eq!(along(&f, 2.4 - 0.6), Some(rgb(GREEN)));
+    // the same disc otherwise: a mark is a few dots, whatever the angle
+    let after = f.count(GREEN);
+    assert!(before.abs_diff(after) <= 4, "{before} dots then {after}");
+}
+
+#[test]
+fn a_capsule_is_a_stadium_along_its_axis() {
+    let (flat, upright) = ((5.0, 5.0), (15.0, 5.0));
+    let capsule = ShapeSpec::Capsule {
+        length: 6.0,
+        radius: 1.0,
+    };
+    let view = walled(vec![
+        shaped(4, RED, flat, 0.0, capsule.clone()),
+        shaped(5, BLUE, upright, std::f32::consts::FRAC_PI_2, capsule),
+    ]);
+    let f = Frame::of(&view);
+    for (c, angle, colour) in [
+        (flat, 0.0, RED),
+        (upright, std::f32::consts::FRAC_PI_2, BLUE),
+    ] {
+        let p = |lx, ly| {
+            let (x, y) = at(c, angle, lx, ly);
+            f.lit(x, y)
+        };
+        for t in [-2.9, -2.0, -1.0, 0.0, 1.0, 2.0, 2.9] {
+            assert_eq!(p(t, 0.0), Some(rgb(colour)), "axis at {t} ({angle} rad)");
+        }
+        // straight sides between the end discs' centres
+        for (lx, ly) in [(-1.9, 0.95), (1.9, -0.95), (0.0, 0.95)] {
+            assert_eq!(p(lx, ly), Some(rgb(colour)), "side ({lx}, {ly})");
+        }
+        // rounded ends: the bounding box's corners are empty
+        for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            assert_eq!(p(2.95 * sx, 0.95 * sy), None, "box corner {sx},{sy}");
+        }
+        // nothing across the axis beyond the radius
+        assert_eq!(p(0.0, 1.5), None);
+    }
+}
+
+#[test]
+fn a_triangle_fills_its_half_of_its_bounding_box() {
+    // legs of 4.5 m; vertices centred on the centroid, counter-clockwise
+    let c = (6.0, 5.0);
+    let mut view = walled(vec![shaped(
+        4,
+        GREEN,
+        c,
+        0.0,
+        ShapeSpec::Polygon {
+            vertices: vec![
+                Vector::new(-1.5, -1.5),
+                Vector::new(3.0, -1.5),
+                Vector::new(-1.5, 3.0),
+            ],
+        },
+    )]);
+    let f = Frame::of(&view);
+    let p = |f: &Frame, dx: f32, dy: f32| f.lit(c.0 + dx, c.1 + dy);
+    for (dx, dy) in [
+        (0.0, 0.0),
+        (0.3, 0.3),
+        (-0.3, 0.2),
+        (-1.4, -1.4),
+        (2.8, -1.4),
+    ] {
+        assert_eq!(p(&f, dx, dy), Some(rgb(GREEN)), "inside ({dx}, {dy})");
+    }
+    // the bounding box's corner opposite the right angle, and beyond the hypotenuse
+    assert_eq!(p(&f, 2.9, 2.9), None);
+    assert_eq!(p(&f, 1.2, 1.2), None);
+    // half a box: about half the dots of the 4.5 m square it spans
+    let dots = f.count(GREEN) as f32;
+    let per_m = (Frame::W as f64 * 2.0 - 1.0) / (f.x_bounds[1] - f.x_bounds[0]);
+    let half = 0.5 * (4.5 * per_m as f32).powi(2);
+    assert!((0.85..1.3).contains(&(dots / half)), "{dots} dots, ~{half}");
+    // turned half a turn: the right angle is now up and to the right
+    turn(&mut view, 11, 4, c, std::f32::consts::PI);
+    let f = Frame::of(&view);
+    assert_eq!(p(&f, 1.4, 1.4), Some(rgb(GREEN)));
+    assert_eq!(p(&f, 0.0, 0.0), Some(rgb(GREEN)));
+    assert_eq!(p(&f, -1.2, -1.2), None);
+    assert_eq!(p(&f, -1.4, -1.4), None);
 }

@@ -1,15 +1,19 @@
 //! The viewer's drawing, a pure function: (world view, status, area) to ratatui cells. Tests
 //! render it into ratatui's `TestBackend`.
 //!
-//! Bodies are filled rotated rectangles on a braille canvas (2 x 4 dots per cell), in each
-//! body's colour, static ones first and dynamic ones over them (a cell has one colour: the
-//! last body painted in it). The view fits the walls (the
-//! static bodies; every body if there are none) into the area with equal scale on both axes:
-//! a braille dot is about as wide as it is tall, so the same metres per dot horizontally and
-//! vertically keep the shapes square. The last row is the status line.
+//! Bodies are filled shapes on a braille canvas (2 x 4 dots per cell), in each body's colour:
+//! rotated rectangles, discs with a rotation mark (a radius line of unlit dots along the
+//! body's local x axis, so rolling shows), capsules (stadiums) and polygons. Each shape is
+//! painted dot by dot over its bounding box (clipped to the canvas), a dot lit when its centre
+//! passes the shape's point-in-shape test grown by half a dot, so thin bodies still show.
+//! Static bodies are painted first and dynamic ones over them (a cell has one colour: the
+//! last body painted in it). The view fits the walls (the static bodies; every body if there
+//! are none) into the area with equal scale on both axes: a braille dot is about as wide as it
+//! is tall, so the same metres per dot horizontally and vertically keep the shapes square. The
+//! last row is the status line.
 
-use super::world::{ViewBody, WorldView};
-use crate::protocol::Vector;
+use super::world::{capsule_half_core, ViewBody, WorldView};
+use crate::protocol::{ShapeSpec, Vector};
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Rect, Size};
 use ratatui::style::{Color, Modifier, Style};
@@ -63,33 +67,182 @@ impl Viewport {
     }
 }
 
-/// A filled rotated rectangle, painted dot by dot.
-struct FilledRect {
-    corners: [(f32, f32); 4],
-    centre: (f64, f64),
-    angle: f64,
-    half: (f64, f64),
-    colour: Color,
+/// How a shape is tested, in the body's frame (x along the body's angle, metres).
+#[derive(Debug)]
+enum Fill {
+    /// Half extents of a rectangle.
+    Rect { hx: f64, hy: f64 },
+    /// A disc, with its rotation mark: a radius line of unlit dots along local +x, from a
+    /// little out of the centre through the rim, when the radius is at least two dots.
+    Circle { r: f64 },
+    /// A capsule: its core segment runs from `(-half, 0)` to `(half, 0)`.
+    Capsule { half: f64, r: f64 },
+    /// A convex polygon as half-planes `n . p <= c` (`n` the unit outward normal of an edge).
+    Convex { planes: Vec<(f64, f64, f64)> },
+    /// Any other polygon (not convex, winding round more than once, no area, under three
+    /// vertices): even-odd inside, or within the tolerance of an edge.
+    General { vertices: Vec<(f64, f64)> },
 }
 
-impl FilledRect {
-    fn of(b: &ViewBody) -> FilledRect {
-        let (width, height) = match &b.info.shape {
-            crate::protocol::ShapeSpec::Rect { width, height } => (*width, *height),
-            _ => (0.1, 0.1), // TEMPORARY until the viewer learns the other shapes
-        };
-        let c = b.info.colour;
-        FilledRect {
-            corners: b.corners(),
-            centre: (b.x as f64, b.y as f64),
-            angle: b.angle as f64,
-            half: (width as f64 * 0.5, height as f64 * 0.5),
-            colour: Color::Rgb(c.r, c.g, c.b),
+impl Fill {
+    /// The test for a wire shape (a convex polygon of either winding gets half-planes).
+    fn of(shape: &ShapeSpec) -> Fill {
+        match shape {
+            ShapeSpec::Rect { width, height } => Fill::Rect {
+                hx: *width as f64 * 0.5,
+                hy: *height as f64 * 0.5,
+            },
+            ShapeSpec::Circle { radius } => Fill::Circle { r: *radius as f64 },
+            ShapeSpec::Capsule { length, radius } => Fill::Capsule {
+                half: capsule_half_core(*length, *radius) as f64,
+                r: *radius as f64,
+            },
+            ShapeSpec::Polygon { vertices } => {
+                let v: Vec<(f64, f64)> =
+                    vertices.iter().map(|p| (p.x as f64, p.y as f64)).collect();
+                match convex_planes(&v) {
+                    Some(planes) => Fill::Convex { planes },
+                    None => Fill::General { vertices: v },
+                }
+            }
+        }
+    }
+
+    /// Whether the point `(x, y)` (body frame) is painted, the shape grown by `tol` (half a
+    /// dot, so that thin bodies still show as a line of dots); `dot` is the dot pitch (m).
+    fn contains(&self, x: f64, y: f64, tol: f64, dot: f64) -> bool {
+        match self {
+            Fill::Rect { hx, hy } => x.abs() <= hx + tol && y.abs() <= hy + tol,
+            Fill::Circle { r } => {
+                let rr = r + tol;
+                if x * x + y * y > rr * rr {
+                    return false;
+                }
+                // the mark, a dot wide (two where the axis runs half-way between two rows of
+                // dots: never none); too small a disc would be all mark
+                let mark = *r >= 2.0 * dot && x > (0.35 * r).max(dot) && y.abs() <= 0.55 * dot;
+                !mark
+            }
+            Fill::Capsule { half, r } => {
+                let ex = (x.abs() - half).max(0.0);
+                let rr = r + tol;
+                ex * ex + y * y <= rr * rr
+            }
+            Fill::Convex { planes } => planes.iter().all(|(nx, ny, c)| nx * x + ny * y <= c + tol),
+            Fill::General { vertices } => {
+                point_in_polygon(vertices, x, y) || near_outline(vertices, x, y, tol)
+            }
         }
     }
 }
 
-impl Shape for FilledRect {
+/// The half-planes of a convex polygon with either winding (`None` when it has fewer than three
+/// vertices, no area, is not convex or winds round more than once). Zero-length edges are
+/// skipped.
+fn convex_planes(v: &[(f64, f64)]) -> Option<Vec<(f64, f64, f64)>> {
+    let n = v.len();
+    if n < 3 {
+        return None;
+    }
+    let edge = |i: usize| {
+        let (a, b) = (v[i], v[(i + 1) % n]);
+        (b.0 - a.0, b.1 - a.1)
+    };
+    let area2: f64 = (0..n)
+        .map(|i| v[i].0 * v[(i + 1) % n].1 - v[(i + 1) % n].0 * v[i].1)
+        .sum();
+    let scale = (0..n)
+        .map(|i| edge(i).0.hypot(edge(i).1))
+        .fold(0.0, f64::max);
+    if area2.is_nan() || area2.abs() <= 1e-9 * scale * scale {
+        return None; // no area
+    }
+    let sign = area2.signum();
+    let mut planes = Vec::with_capacity(n);
+    let mut turning = 0.0;
+    for (i, &(vx, vy)) in v.iter().enumerate() {
+        let (ex, ey) = edge(i);
+        let (fx, fy) = edge((i + 1) % n);
+        let cross = ex * fy - ey * fx;
+        if sign * cross < -1e-9 * scale * scale {
+            return None; // a reflex vertex
+        }
+        turning += (sign * cross).atan2(ex * fx + ey * fy);
+        let len = ex.hypot(ey);
+        if len <= 1e-12 * scale {
+            continue;
+        }
+        // outward normal: right of the edge for counter-clockwise, left for clockwise
+        let (nx, ny) = (sign * ey / len, -sign * ex / len);
+        planes.push((nx, ny, nx * vx + ny * vy));
+    }
+    // once round: a star turns the same way at every vertex but twice round
+    (turning < 2.5 * std::f64::consts::PI).then_some(planes)
+}
+
+/// Even-odd rule (crossing number).
+fn point_in_polygon(v: &[(f64, f64)], x: f64, y: f64) -> bool {
+    let n = v.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (v[i], v[(i + 1) % n]);
+        if (a.1 > y) != (b.1 > y) && x < a.0 + (y - a.1) / (b.1 - a.1) * (b.0 - a.0) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// Whether `(x, y)` is within `tol` of an edge (or of the only vertex).
+fn near_outline(v: &[(f64, f64)], x: f64, y: f64, tol: f64) -> bool {
+    let n = v.len();
+    (0..n).any(|i| {
+        let (a, b) = (v[i], v[(i + 1) % n]);
+        let (ex, ey) = (b.0 - a.0, b.1 - a.1);
+        let (px, py) = (x - a.0, y - a.1);
+        let len2 = ex * ex + ey * ey;
+        let t = if len2 > 0.0 {
+            ((px * ex + py * ey) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (dx, dy) = (px - t * ex, py - t * ey);
+        dx * dx + dy * dy <= tol * tol
+    })
+}
+
+/// One body's filled shape, painted dot by dot: every dot of its bounding box (grown by half a
+/// dot, clipped to the canvas) whose centre passes the shape's point-in-shape test.
+struct FilledShape {
+    fill: Fill,
+    /// World bounding box `(min_x, min_y, max_x, max_y)`, metres.
+    aabb: (f64, f64, f64, f64),
+    centre: (f64, f64),
+    angle: f64,
+    colour: Color,
+}
+
+impl FilledShape {
+    /// `None` when the body has nothing to draw (no vertices, numbers not finite).
+    fn of(b: &ViewBody) -> Option<FilledShape> {
+        let (x0, y0, x1, y1) = b.aabb()?;
+        let c = b.info.colour;
+        let centre = (b.x as f64, b.y as f64);
+        let angle = b.angle as f64;
+        if !(centre.0.is_finite() && centre.1.is_finite() && angle.is_finite()) {
+            return None;
+        }
+        Some(FilledShape {
+            fill: Fill::of(&b.info.shape),
+            aabb: (x0 as f64, y0 as f64, x1 as f64, y1 as f64),
+            centre,
+            angle,
+            colour: Color::Rgb(c.r, c.g, c.b),
+        })
+    }
+}
+
+impl Shape for FilledShape {
     fn draw(&self, painter: &mut Painter) {
         let ([l, r], [b, t]) = {
             let (x, y) = painter.bounds();
@@ -103,13 +256,13 @@ impl Shape for FilledRect {
             return;
         }
         let (dx, dy) = ((r - l) / gx_max as f64, (t - b) / gy_max as f64);
-        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-        for (x, y) in self.corners {
-            let (x, y) = (x as f64, y as f64);
-            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
-        }
-        if !(x0.is_finite() && x1.is_finite() && y0.is_finite() && y1.is_finite()) {
-            return;
+        let dot = dx.max(dy);
+        // half a dot of tolerance: thin bodies still show as a line of dots
+        let tol = 0.5 * dot;
+        let (x0, y0, x1, y1) = self.aabb;
+        let (x0, y0, x1, y1) = (x0 - tol, y0 - tol, x1 + tol, y1 + tol);
+        if x1 < l || x0 > r || y1 < b || y0 > t {
+            return; // off the canvas
         }
         let clamp = |v: f64, max: usize| v.clamp(0.0, max as f64) as usize;
         let (gx0, gx1) = (
@@ -121,14 +274,12 @@ impl Shape for FilledRect {
             clamp(((t - y0) / dy).ceil(), gy_max),
         );
         let (s, c) = self.angle.sin_cos();
-        // half a dot of tolerance: thin bodies still show as a line of dots
-        let (hx, hy) = (self.half.0 + dx * 0.5, self.half.1 + dy * 0.5);
         for gy in gy0..=gy1 {
             let wy = t - gy as f64 * dy - self.centre.1;
             for gx in gx0..=gx1 {
                 let wx = l + gx as f64 * dx - self.centre.0;
                 let (lx, ly) = (c * wx + s * wy, -s * wx + c * wy);
-                if lx.abs() <= hx && ly.abs() <= hy {
+                if self.fill.contains(lx, ly, tol, dot) {
                     painter.paint(gx, gy, self.colour);
                 }
             }
@@ -214,10 +365,10 @@ pub fn render(view: Option<&WorldView>, status: &Status, area: Rect, buf: &mut B
     let Some(view) = view else { return };
     let Some(bounds) = view.bounds() else { return };
     let vp = Viewport::fit(bounds, canvas_area.as_size());
-    let shapes: Vec<(bool, FilledRect)> = view
+    let shapes: Vec<(bool, FilledShape)> = view
         .bodies
         .values()
-        .map(|b| (b.info.is_static, FilledRect::of(b)))
+        .filter_map(|b| Some((b.info.is_static, FilledShape::of(b)?)))
         .collect();
     Canvas::default()
         .marker(Marker::Braille)
@@ -234,4 +385,94 @@ pub fn render(view: Option<&WorldView>, status: &Status, area: Rect, buf: &mut B
             }
         })
         .render(canvas_area, buf);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn poly(v: &[(f32, f32)]) -> Fill {
+        Fill::of(&ShapeSpec::Polygon {
+            vertices: v.iter().map(|&(x, y)| Vector::new(x, y)).collect(),
+        })
+    }
+
+    #[test]
+    fn point_in_shape_tests_match_the_geometry() {
+        let (tol, dot) = (0.0, 0.1);
+        let rect = Fill::of(&ShapeSpec::Rect {
+            width: 2.0,
+            height: 1.0,
+        });
+        assert!(rect.contains(0.99, 0.49, tol, dot));
+        assert!(!rect.contains(1.01, 0.0, tol, dot) && !rect.contains(0.0, 0.51, tol, dot));
+        // the tolerance grows every shape by that much
+        assert!(rect.contains(1.04, 0.0, 0.05, dot));
+
+        let disc = Fill::of(&ShapeSpec::Circle { radius: 1.0 });
+        assert!(disc.contains(0.0, 0.0, tol, dot) && disc.contains(0.0, -0.99, tol, dot));
+        assert!(disc.contains(-0.7, 0.7, tol, dot));
+        assert!(!disc.contains(0.72, 0.72, tol, dot), "bounding-box corner");
+        // the mark: along +x, beyond the centre; not along -x or y
+        assert!(!disc.contains(0.6, 0.0, tol, dot) && !disc.contains(0.99, 0.04, tol, dot));
+        assert!(disc.contains(0.05, 0.0, tol, dot) && disc.contains(0.6, 0.1, tol, dot));
+        assert!(disc.contains(-0.6, 0.0, tol, dot) && disc.contains(0.0, 0.6, tol, dot));
+        // a disc under two dots across has no mark
+        let small = Fill::of(&ShapeSpec::Circle { radius: 0.15 });
+        assert!(small.contains(0.12, 0.0, tol, dot));
+
+        let capsule = Fill::of(&ShapeSpec::Capsule {
+            length: 4.0,
+            radius: 0.5,
+        });
+        assert!(capsule.contains(1.99, 0.0, tol, dot) && capsule.contains(-1.5, 0.49, tol, dot));
+        assert!(capsule.contains(1.5 + 0.35, 0.35, tol, dot));
+        assert!(
+            !capsule.contains(1.9, 0.45, tol, dot),
+            "rounded end, not a box"
+        );
+        assert!(!capsule.contains(2.01, 0.0, tol, dot) && !capsule.contains(0.0, 0.51, tol, dot));
+    }
+
+    #[test]
+    fn polygons_of_either_winding_and_non_convex_ones_are_filled() {
+        let (tol, dot) = (0.0, 0.1);
+        let ccw = [(-1.0, -1.0), (2.0, -1.0), (-1.0, 2.0)];
+        let mut cw = ccw;
+        cw.reverse();
+        for (name, f) in [("ccw", poly(&ccw)), ("cw", poly(&cw))] {
+            assert!(matches!(f, Fill::Convex { .. }), "{name}");
+            assert!(f.contains(0.0, 0.0, tol, dot), "{name} centroid");
+            assert!(f.contains(-0.95, -0.95, tol, dot), "{name} right angle");
+            assert!(!f.contains(1.0, 1.0, tol, dot), "{name} far corner");
+            assert!(!f.contains(-1.05, 0.0, tol, dot), "{name} left of it");
+        }
+        // an L (not convex): the notch is empty, both arms are filled
+        let l = poly(&[
+            (0.0, 0.0),
+            (2.0, 0.0),
+            (2.0, 1.0),
+            (1.0, 1.0),
+            (1.0, 2.0),
+            (0.0, 2.0),
+        ]);
+        assert!(matches!(l, Fill::General { .. }));
+        assert!(l.contains(1.5, 0.5, tol, dot) && l.contains(0.5, 1.5, tol, dot));
+        assert!(!l.contains(1.5, 1.5, tol, dot));
+        // a pentagram turns left at every vertex but is no convex polygon: its points are
+        // filled (even-odd leaves the inner pentagon empty)
+        let star: Vec<(f32, f32)> = (0..5)
+            .map(|k| {
+                let a = std::f32::consts::FRAC_PI_2 + k as f32 * 4.0 * std::f32::consts::PI / 5.0;
+                (a.cos(), a.sin())
+            })
+            .collect();
+        let star = poly(&star);
+        assert!(matches!(star, Fill::General { .. }));
+        assert!(star.contains(0.0, 0.9, tol, dot) && !star.contains(0.0, 0.0, tol, dot));
+        // no area: drawn as its outline within the tolerance
+        let flat = poly(&[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]);
+        assert!(flat.contains(1.5, 0.02, 0.05, dot) && !flat.contains(1.5, 0.2, 0.05, dot));
+        assert!(!poly(&[]).contains(0.0, 0.0, 0.05, dot));
+    }
 }

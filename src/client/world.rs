@@ -42,20 +42,57 @@ impl ViewBody {
         }
     }
 
-    /// The four corners of the body's rectangle in world coordinates, counter-clockwise.
-    pub fn corners(&self) -> [(f32, f32); 4] {
-        // TEMPORARY: non-rectangles drawn by their bounding box until the viewer learns them.
-        let (width, height) = match &self.info.shape {
-            ShapeSpec::Rect { width, height } => (*width, *height),
-            ShapeSpec::Circle { radius } => (2.0 * radius, 2.0 * radius),
-            ShapeSpec::Capsule { length, radius } => (*length, 2.0 * radius),
-            ShapeSpec::Polygon { .. } => (0.1, 0.1),
-        };
-        let (hw, hh) = (width * 0.5, height * 0.5);
+    /// The body's axis-aligned bounding box in world coordinates at its current pose,
+    /// `(min_x, min_y, max_x, max_y)` in metres: exact for every shape (a rotated rectangle's
+    /// corners, a disc, a capsule's two end discs, a polygon's vertices). `None` when there is
+    /// nothing to bound (a polygon without vertices) or a number is not finite.
+    pub fn aabb(&self) -> Option<(f32, f32, f32, f32)> {
         let (s, c) = self.angle.sin_cos();
-        [(-hw, -hh), (hw, -hh), (hw, hh), (-hw, hh)]
-            .map(|(lx, ly)| (self.x + c * lx - s * ly, self.y + s * lx + c * ly))
+        let (hx, hy) = match &self.info.shape {
+            ShapeSpec::Rect { width, height } => {
+                let (hw, hh) = (width * 0.5, height * 0.5);
+                (hw * c.abs() + hh * s.abs(), hw * s.abs() + hh * c.abs())
+            }
+            ShapeSpec::Circle { radius } => (*radius, *radius),
+            ShapeSpec::Capsule { length, radius } => {
+                let half = capsule_half_core(*length, *radius);
+                (half * c.abs() + radius, half * s.abs() + radius)
+            }
+            ShapeSpec::Polygon { vertices } => {
+                let mut it = vertices
+                    .iter()
+                    .map(|v| (self.x + c * v.x - s * v.y, self.y + s * v.x + c * v.y));
+                let (x0, y0) = it.next()?;
+                let b = it.fold((x0, y0, x0, y0), |(a, b, c, d), (x, y)| {
+                    (a.min(x), b.min(y), c.max(x), d.max(y))
+                });
+                return finite(b);
+            }
+        };
+        finite((self.x - hx, self.y - hy, self.x + hx, self.y + hy))
     }
+}
+
+/// Half the length of a capsule's core segment (between the centres of its end discs): the
+/// capsule is `length` end to end with ends of `radius`. Never negative.
+pub fn capsule_half_core(length: f32, radius: f32) -> f32 {
+    (length * 0.5 - radius).max(0.0)
+}
+
+/// A short description of a shape with its sizes (m), for body listings and logs:
+/// `rect 1x0.5`, `circle r=0.5`, `capsule l=2 r=0.25`, `polygon 5 vertices`.
+pub fn describe_shape(shape: &ShapeSpec) -> String {
+    match shape {
+        ShapeSpec::Rect { width, height } => format!("rect {width}x{height}"),
+        ShapeSpec::Circle { radius } => format!("circle r={radius}"),
+        ShapeSpec::Capsule { length, radius } => format!("capsule l={length} r={radius}"),
+        ShapeSpec::Polygon { vertices } => format!("polygon {} vertices", vertices.len()),
+    }
+}
+
+fn finite(b: (f32, f32, f32, f32)) -> Option<(f32, f32, f32, f32)> {
+    let (a, b2, c, d) = b;
+    (a.is_finite() && b2.is_finite() && c.is_finite() && d.is_finite()).then_some(b)
 }
 
 /// What became of a snapshot.
@@ -200,16 +237,11 @@ impl WorldView {
     /// walls) when there are any, else every body. `None` for an empty world.
     pub fn bounds(&self) -> Option<(f32, f32, f32, f32)> {
         let any_static = self.bodies.values().any(|b| b.info.is_static);
-        let mut it = self
-            .bodies
+        self.bodies
             .values()
             .filter(|b| !any_static || b.info.is_static)
-            .flat_map(|b| b.corners())
-            .filter(|(x, y)| x.is_finite() && y.is_finite());
-        let (x0, y0) = it.next()?;
-        Some(it.fold((x0, y0, x0, y0), |(a, b, c, d), (x, y)| {
-            (a.min(x), b.min(y), c.max(x), d.max(y))
-        }))
+            .filter_map(ViewBody::aabb)
+            .reduce(|(a, b, c, d), (x0, y0, x1, y1)| (a.min(x0), b.min(y0), c.max(x1), d.max(y1)))
     }
 
     /// Dynamic bodies.
@@ -403,5 +435,82 @@ mod tests {
         j.receive(snap(20, true, vec![pose(0, -2.5)]));
         assert_eq!(j.view().unwrap().bodies[&pose(0, 0.0).id].x, -2.5);
         assert_eq!(j.view().unwrap().bounds().unwrap(), (-3.0, 0.5, -2.0, 1.5));
+    }
+
+    fn shaped(shape: ShapeSpec, x: f32, y: f32, angle: f32) -> ViewBody {
+        let mut b = ViewBody::new(info(0, false, 0.0), 0);
+        b.info.shape = shape;
+        (b.x, b.y, b.angle) = (x, y, angle);
+        b
+    }
+
+    fn close(a: Option<(f32, f32, f32, f32)>, e: (f32, f32, f32, f32)) -> bool {
+        let a = a.unwrap();
+        [a.0 - e.0, a.1 - e.1, a.2 - e.2, a.3 - e.3]
+            .iter()
+            .all(|d| d.abs() < 1e-5)
+    }
+
+    #[test]
+    fn bounding_boxes_follow_each_shape_and_its_angle() {
+        use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
+        let rect = ShapeSpec::Rect {
+            width: 2.0,
+            height: 1.0,
+        };
+        let a = shaped(rect.clone(), 1.0, 2.0, 0.0).aabb();
+        assert!(close(a, (0.0, 1.5, 2.0, 2.5)), "{a:?}");
+        let a = shaped(rect, 1.0, 2.0, FRAC_PI_2).aabb();
+        assert!(close(a, (0.5, 1.0, 1.5, 3.0)), "{a:?}");
+        // a disc's box does not turn with it
+        let a = shaped(ShapeSpec::Circle { radius: 0.5 }, 1.0, 2.0, 0.7).aabb();
+        assert!(close(a, (0.5, 1.5, 1.5, 2.5)), "{a:?}");
+        let capsule = ShapeSpec::Capsule {
+            length: 4.0,
+            radius: 0.5,
+        };
+        let a = shaped(capsule.clone(), 0.0, 0.0, 0.0).aabb();
+        assert!(close(a, (-2.0, -0.5, 2.0, 0.5)), "{a:?}");
+        // at 45 degrees: the end discs' centres at +-1.5/sqrt 2, plus the radius
+        let h = 1.5 * FRAC_PI_4.cos() + 0.5;
+        let a = shaped(capsule, 0.0, 0.0, FRAC_PI_4).aabb();
+        assert!(close(a, (-h, -h, h, h)), "{a:?}");
+        let triangle = ShapeSpec::Polygon {
+            vertices: vec![
+                Vector::new(-1.0, -1.0),
+                Vector::new(2.0, -1.0),
+                Vector::new(-1.0, 2.0),
+            ],
+        };
+        let a = shaped(triangle.clone(), 10.0, 0.0, 0.0).aabb();
+        assert!(close(a, (9.0, -1.0, 12.0, 2.0)), "{a:?}");
+        let a = shaped(triangle, 10.0, 0.0, std::f32::consts::PI).aabb();
+        assert!(close(a, (8.0, -2.0, 11.0, 1.0)), "{a:?}");
+        let empty = ShapeSpec::Polygon { vertices: vec![] };
+        assert_eq!(shaped(empty, 0.0, 0.0, 0.0).aabb(), None);
+        let nan = ShapeSpec::Circle { radius: f32::NAN };
+        assert_eq!(shaped(nan, 0.0, 0.0, 0.0).aabb(), None);
+    }
+
+    #[test]
+    fn shapes_are_described_with_their_sizes() {
+        let d = |s| describe_shape(&s);
+        assert_eq!(
+            d(ShapeSpec::Rect {
+                width: 1.0,
+                height: 0.5
+            }),
+            "rect 1x0.5"
+        );
+        assert_eq!(d(ShapeSpec::Circle { radius: 0.5 }), "circle r=0.5");
+        assert_eq!(
+            d(ShapeSpec::Capsule {
+                length: 2.0,
+                radius: 0.25
+            }),
+            "capsule l=2 r=0.25"
+        );
+        let vertices = vec![Vector::new(0.0, 0.0); 5];
+        assert_eq!(d(ShapeSpec::Polygon { vertices }), "polygon 5 vertices");
     }
 }

@@ -127,3 +127,39 @@ fn with_sleep_off_nothing_sleeps() {
     }
     assert_eq!(w.awake_count(), 3);
 }
+
+#[test]
+fn a_neighbour_resting_inside_the_speculative_margin_does_not_wake_a_sleeper() {
+    // One sleeping box; a new box set down beside it with a 1.5 cm gap: inside the soft
+    // step's 2 cm speculative margin, but nothing closes that gap. It used to wake the sleeper
+    // every time the newcomer's island was stepped, so the pair never slept.
+    let (mut w, _, ids) = resting_stack(1);
+    let sleeper = ids[0];
+    assert!(!w.body(sleeper).unwrap().is_awake());
+    let resting_y = w.body(sleeper).unwrap().position().y;
+    let gap = 0.015;
+    assert!(gap < w.settings().speculative_distance);
+    let newcomer = w
+        .add_body(&BodyDef::dynamic(
+            Shape::rect(1.0, 1.0),
+            vec2(1.0 + gap, resting_y),
+        ))
+        .unwrap();
+    let mut woke = 0;
+    for _ in 0..120 {
+        w.step(DT).unwrap();
+        woke += usize::from(w.body(sleeper).unwrap().is_awake());
+    }
+    assert_eq!(woke, 0, "the sleeper never woke");
+    assert!(
+        !w.body(newcomer).unwrap().is_awake(),
+        "the newcomer fell asleep too"
+    );
+    // The speculative contact still holds: a push towards the sleeper wakes it.
+    w.set_velocity(newcomer, vec2(-3.0, 0.0), 0.0).unwrap();
+    w.step(DT).unwrap();
+    assert!(
+        w.body(sleeper).unwrap().is_awake(),
+        "a closing neighbour wakes it"
+    );
+}

@@ -100,6 +100,9 @@ pub(crate) struct Contact {
     pub count: usize,
     /// Soft step: this contact's spring for the current step.
     pub softness: Softness,
+    /// Soft step: the spring's frequency last step (Hz), carried over so that load-aware
+    /// stiffening can let it fall only slowly (0 for a new contact).
+    pub hertz: Real,
     /// Two-point contacts: the normal block and its inverse for this step (None: solve the
     /// points one at a time).
     pub block: Option<BlockMass>,

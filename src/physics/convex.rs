@@ -17,6 +17,11 @@ pub const MAX_VERTICES: usize = 8;
 /// narrow phase.
 const MIN_TURN_SIN: Real = 1.0e-3;
 
+/// Smallest extent a polygon may have (m): 0.1 mm.
+pub const MIN_SPAN: Real = 1.0e-4;
+/// Largest extent a polygon may have (m): 100 km.
+pub const MAX_SPAN: Real = 1.0e5;
+
 /// A convex polygon in body coordinates (m), counter-clockwise, centred on its centroid, with
 /// outward unit edge normals. Edge `i` runs from `vertices[i]` to `vertices[(i + 1) % count]`
 /// and has `normals[i]`.
@@ -61,9 +66,16 @@ impl Polygon {
     /// collinear vertices, clockwise order and any non-convex corner, naming the vertex.
     pub fn new(points: &[Vec2]) -> Result<(Polygon, Vec2), PhysicsError> {
         check_points(points)?;
-        let centroid = centroid_of(points);
-        let centred: Vec<Vec2> = points.iter().map(|&p| p - centroid).collect();
-        Ok((Polygon::from_checked(&centred), centroid))
+        // Twice: vertices drawn far from their origin lose digits in the first subtraction, so
+        // the first centroid is off by up to a rounding step of the coordinates; the second,
+        // computed near the origin, takes that out (a 5 cm polygon drawn at (999, 999) would
+        // otherwise fail `Polygon::centred` when read back).
+        let first = centroid_of(points);
+        let once: Vec<Vec2> = points.iter().map(|&p| p - first).collect();
+        let second = centroid_of(&once);
+        let centred: Vec<Vec2> = once.iter().map(|&p| p - second).collect();
+        check_points(&centred)?;
+        Ok((Polygon::from_checked(&centred), first + second))
     }
 
     /// A polygon from vertices that are already centred on their centroid (a polygon read
@@ -224,6 +236,14 @@ fn check_points(points: &[Vec2]) -> Result<(), PhysicsError> {
         .iter()
         .flat_map(|p| [(p.x - points[0].x).abs(), (p.y - points[0].y).abs()])
         .fold(0.0 as Real, Real::max);
+    // Outside this range the products below under- or overflow in f32 and the checks would
+    // blame the wrong thing; no simulated body is that small or that large anyway.
+    if !(MIN_SPAN..=MAX_SPAN).contains(&size) {
+        return Err(bad(
+            "shape.vertices".into(),
+            format!("span {size} m: a polygon must span {MIN_SPAN} m to {MAX_SPAN} m"),
+        ));
+    }
     for i in 0..n {
         let (p, q) = (points[i], points[(i + 1) % n]);
         if (q - p).length() <= 1.0e-4 * size {
@@ -366,6 +386,20 @@ mod tests {
             .collect();
         let s = msg(&star);
         assert!(s.contains("more than once"), "{s}");
+    }
+
+    #[test]
+    fn a_small_polygon_drawn_far_away_reads_back() {
+        // A 5 cm pentagon around (999, 999): its centred form must pass `centred`.
+        let pts: Vec<Vec2> = (0..5)
+            .map(|k| {
+                let a = k as Real * 2.0 * super::super::math::PI / 5.0;
+                vec2(999.0 + 0.025 * a.cos(), 999.0 + 0.025 * a.sin())
+            })
+            .collect();
+        let (p, c) = Polygon::new(&pts).unwrap();
+        assert!((c - vec2(999.0, 999.0)).length() < 1e-3);
+        assert_eq!(Polygon::centred(p.vertices()).unwrap(), p);
     }
 
     #[test]

@@ -104,6 +104,8 @@ pub struct ContactState {
     pub points: Vec<PointState>,
     /// Soft step spring: bias_rate, mass_scale, impulse_scale.
     pub softness: [Real; 3],
+    /// Soft step spring frequency last step (Hz).
+    pub hertz: Real,
     /// Block solver matrices k and inv, row major.
     pub block: Option<[Real; 8]>,
 }
@@ -188,6 +190,7 @@ fn contact_state(c: &Contact) -> ContactState {
             c.softness.mass_scale,
             c.softness.impulse_scale,
         ],
+        hertz: c.hertz,
         block: c.block.map(|b| {
             [
                 b.k[0][0],
@@ -299,6 +302,7 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             mass_scale: s.softness[1],
             impulse_scale: s.softness[2],
         },
+        hertz: s.hertz,
         block,
     })
 }

@@ -684,14 +684,30 @@ impl World {
             else {
                 continue;
             };
-            let margin = speculative + closing_reach(a, b, g, dt);
-            let manifold = collide(&a.shape, a.transform(), &b.shape, b.transform(), margin);
+            let reach = closing_reach(a, b, g, dt);
+            let manifold = collide(
+                &a.shape,
+                a.transform(),
+                &b.shape,
+                b.transform(),
+                speculative + reach,
+            );
             if manifold.count == 0 {
                 continue;
             }
-            for (i, body) in [(ia, a), (ib, b)] {
-                if !body.awake {
-                    self.wake_queue.push(i);
+            // Wake a sleeping body only if the gap can close this step. A speculative point
+            // farther out than that treats the sleeper as fixed; waking on it made a body
+            // resting 2 cm from an awake neighbour sleep and wake every 0.5 s forever.
+            let nearest = manifold
+                .points()
+                .iter()
+                .map(|p| p.separation)
+                .fold(Real::INFINITY, Real::min);
+            if nearest <= reach + self.settings.linear_slop {
+                for (i, body) in [(ia, a), (ib, b)] {
+                    if !body.awake {
+                        self.wake_queue.push(i);
+                    }
                 }
             }
             // Both lists are sorted by key: advance the cursor in the old one.
@@ -710,6 +726,7 @@ impl World {
                 points: [ContactPoint::default(); 2],
                 count: manifold.count,
                 softness: Softness::RIGID,
+                hertz: previous.map_or(0.0, |c| c.hertz),
                 block: None,
             };
             for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {

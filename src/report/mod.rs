@@ -400,11 +400,13 @@ pub struct SuiteResults {
     pub soft_step_stiff: Vec<Verdict>,
 }
 
-/// The named stiffer soft-step configuration of the third column: 8 substeps, 4 relax passes.
+/// The named stiffer soft-step configuration of the third column: 8 substeps, 4 relax passes,
+/// load-aware stiffening up to half the substep rate.
 pub fn stiff_soft_step() -> Settings {
     Settings {
         substeps: 8,
         relax_iterations: 4,
+        max_contact_hertz_ratio: 0.5,
         ..Settings::soft_step()
     }
 }
@@ -539,8 +541,8 @@ pub fn markdown(r: &Report) -> String {
         "Each case runs at 60 Hz (except `huge_dt`) with the solver's defaults: \
          `Settings::soft_step()` ({} substeps, {} Hz contacts, damping ratio {}, push-out {} m/s, \
          load-aware stiffening on, slop {} m) and `Settings::sequential()` (10 iterations, \
-         Baumgarte 0.2, slop 10 mm); the last column is the soft step with 8 substeps and 4 relax \
-         passes. Sleeping is turned off (a sleeping stack cannot drift) except \
+         Baumgarte 0.2, slop 10 mm); the last column is the soft step with 8 substeps, 4 relax passes and \
+         load-aware stiffening up to half the substep rate. Sleeping is turned off (a sleeping stack cannot drift) except \
          in `pyramid_sleeps`. The criterion column is the soft step's text; limits written in slops \
          use each solver's own slop. The CI versions are `tests/stability.rs` (soft step; see its \
          header for the cases it asserts in another configuration).\n",

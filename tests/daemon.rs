@@ -627,3 +627,343 @@ async fn a_scene_file_is_served_and_reloaded_on_reset() {
     server.shutdown().await.unwrap();
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A flat static floor 40 m wide whose top is at y = `GROUND_TOP`, no gravity until the
+/// test sets it: spawned bodies stay exactly where they were put until then.
+const GROUND_TOP: f32 = 0.0;
+const FLOOR_SCENE: &str = r#"
+name = "floor"
+gravity = [0.0, 0.0]
+
+[[body]]
+name = "floor"
+static = true
+shape = { type = "rect", width = 40.0, height = 1.0 }
+position = [0.0, -0.5]
+"#;
+
+async fn serve_floor(port: u16) -> Server {
+    let scene = tiltbox::scene::Scene::from_toml_str(FLOOR_SCENE).unwrap();
+    let options = ServerOptions {
+        source: Some(tiltbox::service::SceneSource::Given(Box::new(scene))),
+        ..Default::default()
+    };
+    Server::start(&config(port), options)
+        .await
+        .expect("daemon starts")
+}
+
+fn shaped(name: &str, shape: ShapeSpec, x: f32, y: f32, angle: f32) -> SpawnBody {
+    SpawnBody {
+        shape,
+        angle,
+        restitution: 0.0,
+        ..brick(name, x, y)
+    }
+}
+
+/// Area centroid of a simple polygon (shoelace formula), in f64:
+/// A = 1/2 sum cross(p_i, p_i+1), C = 1/(6A) sum (p_i + p_i+1) cross(p_i, p_i+1).
+fn shoelace_centroid(v: &[(f64, f64)]) -> (f64, f64) {
+    let (mut a, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    for i in 0..v.len() {
+        let (p, q) = (v[i], v[(i + 1) % v.len()]);
+        let cross = p.0 * q.1 - q.0 * p.1;
+        a += 0.5 * cross;
+        cx += (p.0 + q.0) * cross;
+        cy += (p.1 + q.1) * cross;
+    }
+    (cx / (6.0 * a), cy / (6.0 * a))
+}
+
+fn rotate(angle: f64, v: (f64, f64)) -> (f64, f64) {
+    let (s, c) = angle.sin_cos();
+    (c * v.0 - s * v.1, s * v.0 + c * v.1)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn circle_capsule_and_off_centre_polygon_spawn_where_asked_and_the_circle_settles() {
+    let server = serve_floor(17600).await;
+    let mut c = Client::connect(17600, server.keys()).await;
+    let initial = c.scene().await;
+    assert_eq!(initial.bodies.len(), 1);
+
+    const R: f32 = 0.25;
+    let (cap_len, cap_r) = (1.2f32, 0.2f32);
+    // A trapezoid drawn off its centroid, relative to the spawn position (5, 1), turned 0.4.
+    let quad = [(1.0, 0.0), (3.0, 0.0), (3.0, 1.0), (1.0, 2.0)];
+    let (px, py, pangle) = (5.0f32, 1.0f32, 0.4f32);
+    let spawn = Spawn {
+        bodies: vec![
+            shaped("ball", ShapeSpec::Circle { radius: R }, 0.0, 1.5, 0.0),
+            shaped(
+                "pill",
+                ShapeSpec::Capsule {
+                    length: cap_len,
+                    radius: cap_r,
+                },
+                -6.0,
+                1.0,
+                0.3,
+            ),
+            shaped(
+                "wedge",
+                ShapeSpec::Polygon {
+                    vertices: quad
+                        .iter()
+                        .map(|&(x, y)| Vector::new(x as f32, y as f32))
+                        .collect(),
+                },
+                px,
+                py,
+                pangle,
+            ),
+        ],
+    };
+    c.put(c.keys.spawn(), &spawn).await;
+    let ev = c.event_where(|_| true).await;
+    let EventKind::Added { bodies: added } = ev.kind else {
+        panic!("expected Added, got {ev:?}")
+    };
+    assert_eq!(added.len(), 3);
+    c.snapshot_where(|s| s.frame >= ev.frame).await;
+    let scene = c.scene().await;
+    assert_eq!(scene.bodies.len(), 4);
+    let by_name = |name: &str| {
+        scene
+            .bodies
+            .iter()
+            .find(|b| b.name == name)
+            .unwrap_or_else(|| panic!("{name} in {scene:?}"))
+            .clone()
+    };
+    let (ball, pill, wedge) = (by_name("ball"), by_name("pill"), by_name("wedge"));
+    for (b, a) in [&ball, &pill, &wedge].into_iter().zip(&added) {
+        assert_eq!(b.id, a.id);
+        assert_eq!(
+            b.shape, a.shape,
+            "the scene and the event agree on the shape"
+        );
+    }
+
+    // no gravity yet, no velocity: everything is exactly where it was put
+    assert_eq!(ball.shape, ShapeSpec::Circle { radius: R });
+    assert_eq!(ball.position, Vector::new(0.0, 1.5));
+    // mass = density pi r^2
+    assert!((ball.mass - std::f32::consts::PI * R * R).abs() < 1e-6);
+    let ShapeSpec::Capsule { length, radius } = pill.shape else {
+        panic!("{:?}", pill.shape)
+    };
+    assert!(
+        (length - cap_len).abs() < 1e-6 && radius == cap_r,
+        "{:?}",
+        pill.shape
+    );
+    assert_eq!((pill.position, pill.angle), (Vector::new(-6.0, 1.0), 0.3));
+    // capsule area: a 2 (L/2 - r) x 2 r rectangle plus a disc of radius r
+    let cap_area =
+        2.0 * (cap_len / 2.0 - cap_r) * 2.0 * cap_r + std::f32::consts::PI * cap_r * cap_r;
+    assert!(
+        (pill.mass - cap_area).abs() < 1e-5,
+        "{} vs {cap_area}",
+        pill.mass
+    );
+
+    // the polygon: its centre of mass is the spawn position plus its centroid, turned
+    let centroid = shoelace_centroid(&quad);
+    let turned = rotate(pangle as f64, centroid);
+    let want = (px as f64 + turned.0, py as f64 + turned.1);
+    let got = (wedge.position.x as f64, wedge.position.y as f64);
+    assert!(
+        (got.0 - want.0).abs() < 1e-5 && (got.1 - want.1).abs() < 1e-5,
+        "wedge at {got:?}, closed form {want:?} (centroid {centroid:?})"
+    );
+    assert_eq!(wedge.angle, pangle);
+    let ShapeSpec::Polygon { vertices } = &wedge.shape else {
+        panic!("{:?}", wedge.shape)
+    };
+    assert_eq!(vertices.len(), 4);
+    for (v, q) in vertices.iter().zip(quad) {
+        // reported relative to the centroid, same order
+        let (dx, dy) = (q.0 - centroid.0, q.1 - centroid.1);
+        assert!(
+            (v.x as f64 - dx).abs() < 1e-5 && (v.y as f64 - dy).abs() < 1e-5,
+            "{v:?} vs ({dx}, {dy})"
+        );
+    }
+    // trapezoid area: (2 + 1) / 2 x 2 = 3 m^2, density 1
+    assert!((wedge.mass - 3.0).abs() < 1e-5, "{}", wedge.mass);
+
+    // now gravity: the ball falls onto the floor and rests on it, its centre one radius up
+    c.put(c.keys.gravity(), &SetGravity { x: 0.0, y: -9.81 })
+        .await;
+    let g = c
+        .snapshot_where(|s| s.gravity == Vector::new(0.0, -9.81))
+        .await
+        .frame;
+    // free fall from 1.5 - 0.25 = 1.25 m above the floor takes sqrt(2 h / g) = 0.5 s
+    // = 30 frames; from 2 s after the gravity change every pose of the ball sent (deltas,
+    // and at least one keyframe, which carries resting bodies too) must be within 1 cm.
+    let settled_from = g + 120;
+    let (mut checked, mut keyframes) = (0, 0);
+    let (mut last_ball, mut last_pill) = (None, None);
+    while keyframes < 2 || checked < 2 {
+        let s = c.snapshot_where(|_| true).await;
+        if s.frame < settled_from {
+            continue;
+        }
+        keyframes += s.keyframe as u32;
+        for p in &s.poses {
+            if p.id == ball.id {
+                let err = (p.y - (GROUND_TOP + R)).abs();
+                assert!(
+                    err < 0.01,
+                    "frame {}: ball at y = {} (closed form {}), off by {err}",
+                    s.frame,
+                    p.y,
+                    GROUND_TOP + R
+                );
+                assert!(p.x.abs() < 0.01, "the ball rolled to x = {}", p.x);
+                checked += 1;
+                last_ball = Some(*p);
+            }
+            if p.id == pill.id {
+                last_pill = Some(*p);
+            }
+        }
+    }
+    // the capsule lies on its side: centre one radius above the floor, axis level
+    let pill_pose = last_pill.expect("the capsule is in the keyframes");
+    eprintln!("resting: ball {last_ball:?}, capsule {pill_pose:?}");
+    assert!(
+        (pill_pose.y - (GROUND_TOP + cap_r)).abs() < 0.01 && pill_pose.angle.sin().abs() < 0.02,
+        "capsule at {pill_pose:?}"
+    );
+    let end = c.scene().await;
+    assert_eq!(end.bodies.len(), 4);
+    assert!(end
+        .bodies
+        .iter()
+        .all(|b| b.position.x.is_finite() && b.position.y.is_finite()));
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn refused_shape_spawns_name_the_field_and_add_nothing() {
+    let server = serve_floor(17601).await;
+    let mut c = Client::connect(17601, server.keys()).await;
+    let k = c.keys.clone();
+    let before = c.scene().await.bodies.len();
+
+    let poly = |points: &[(f32, f32)]| ShapeSpec::Polygon {
+        vertices: points.iter().map(|&(x, y)| Vector::new(x, y)).collect(),
+    };
+    let nonagon: Vec<(f32, f32)> = (0..9)
+        .map(|i| {
+            let a = i as f32 * std::f32::consts::TAU / 9.0;
+            (a.cos(), a.sin())
+        })
+        .collect();
+    let huge: Vec<(f32, f32)> = (0..10_000)
+        .map(|i| {
+            let a = i as f32 * std::f32::consts::TAU / 10_000.0;
+            (a.cos(), a.sin())
+        })
+        .collect();
+    let ok_ball = shaped("ok", ShapeSpec::Circle { radius: 0.3 }, 0.0, 2.0, 0.0);
+    let body = |shape| shaped("bad", shape, 0.0, 2.0, 0.0);
+    let cases: Vec<(Vec<SpawnBody>, &str)> = vec![
+        (
+            vec![body(poly(&[(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)]))],
+            "bodies[0]: shape.vertices[1] = [0, 1] turns clockwise there",
+        ),
+        (
+            vec![body(poly(&nonagon))],
+            "bodies[0]: shape.vertices must hold 3 to 8 points, got 9",
+        ),
+        (
+            vec![body(ShapeSpec::Circle { radius: f32::NAN })],
+            "bodies[0]: shape.radius must be a finite number, got NaN",
+        ),
+        (
+            vec![body(ShapeSpec::Capsule {
+                length: 0.8,
+                radius: 0.5,
+            })],
+            "bodies[0]: shape.length = 0.8 must be more than twice shape.radius = 0.5",
+        ),
+        (
+            vec![body(ShapeSpec::Circle { radius: 0.004 })],
+            "bodies[0]: shape.radius = 0.004 is too small: the diameter 0.008 must be >= 0.01",
+        ),
+        (
+            vec![body(poly(&[(5000.0, 0.0), (5001.0, 0.0), (5000.0, 1.0)]))],
+            "bodies[0]: shape.vertices[0].x = 5000 is out of range",
+        ),
+        // a NaN angle on an off-centre polygon is named as the angle, not as the centre of
+        // mass it would have made
+        (
+            vec![shaped(
+                "bad",
+                poly(&[(1.0, 0.0), (2.0, 0.0), (1.0, 1.0)]),
+                0.0,
+                2.0,
+                f32::NAN,
+            )],
+            "bodies[0]: angle must be a finite number, got NaN",
+        ),
+        // all or nothing: the good ball before the bad polygon is not added either
+        (
+            vec![
+                ok_ball.clone(),
+                body(poly(&[(0.0, 0.0), (f32::NAN, 0.0), (0.0, 1.0)])),
+            ],
+            "bodies[1]: shape.vertices[1] must be finite, got [NaN, 0]",
+        ),
+        // 10,000 vertices: version 1 + count 1 + Some("bad") 5 + variant 1 + varint(10000) 2
+        // + 80,000 + the other fields 39 = 80,049 bytes, refused by size before decoding
+        (
+            vec![body(poly(&huge))],
+            "payload of 80049 bytes is larger than limits.max_payload_bytes = 65536",
+        ),
+    ];
+    let mut last = 0;
+    for (bodies, want) in cases {
+        c.put(k.spawn(), &Spawn { bodies }).await;
+        // commands are applied in arrival order: the next event is this one's refusal
+        let ev = c.event_where(|_| true).await;
+        match &ev.kind {
+            EventKind::Rejected { key, reason } => {
+                assert_eq!(*key, k.spawn());
+                assert!(reason.contains(want), "{reason:?} should say {want:?}");
+            }
+            other => panic!("expected a refusal saying {want:?}, got {other:?}"),
+        }
+        last = ev.frame;
+    }
+    c.snapshot_where(|s| s.frame >= last).await;
+    let scene = c.scene().await;
+    assert!(scene.frame >= last);
+    assert_eq!(scene.bodies.len(), before, "nothing was added: {scene:?}");
+    assert!(scene
+        .bodies
+        .iter()
+        .all(|b| b.name != "ok" && b.name != "bad"));
+
+    // the same path accepts a good one
+    c.put(
+        k.spawn(),
+        &Spawn {
+            bodies: vec![ok_ball],
+        },
+    )
+    .await;
+    let ev = c.event_where(|_| true).await;
+    assert!(
+        matches!(&ev.kind, EventKind::Added { bodies } if bodies.len() == 1 && bodies[0].shape == ShapeSpec::Circle { radius: 0.3 }),
+        "{ev:?}"
+    );
+    c.snapshot_where(|s| s.frame >= ev.frame).await;
+    assert_eq!(c.scene().await.bodies.len(), before + 1);
+    server.shutdown().await.unwrap();
+}

@@ -170,6 +170,224 @@ fn the_documented_command_and_event_examples_are_exact() {
     }
 }
 
+/// The circle and polygon spawns of docs/protocol.md, built as messages.
+fn ball_and_triangle() -> (Spawn, Spawn) {
+    let body = |name: Option<&str>, shape, position, restitution, colour| SpawnBody {
+        name: name.map(Into::into),
+        shape,
+        position,
+        angle: 0.0,
+        velocity: Vector::new(0.0, 0.0),
+        angular_velocity: 0.0,
+        density: 1.0,
+        friction: 0.5,
+        restitution,
+        colour,
+    };
+    let ball = body(
+        Some("ball"),
+        ShapeSpec::Circle { radius: 0.25 },
+        Vector::new(0.0, 3.0),
+        0.5,
+        Colour {
+            r: 0x3a,
+            g: 0x7b,
+            b: 0xd5,
+        },
+    );
+    let triangle = body(
+        None,
+        ShapeSpec::Polygon {
+            vertices: vec![
+                Vector::new(0.0, 0.0),
+                Vector::new(1.5, 0.0),
+                Vector::new(0.0, 0.75),
+            ],
+        },
+        Vector::new(-1.0, 2.0),
+        0.0,
+        Colour {
+            r: 0x2e,
+            g: 0xcc,
+            b: 0x71,
+        },
+    );
+    (
+        Spawn { bodies: vec![ball] },
+        Spawn {
+            bodies: vec![triangle],
+        },
+    )
+}
+
+/// The bytes of the two shape examples, derived by hand from postcard's rules (not copied
+/// from the encoder): enum variants and lengths are varints (all < 128 here, so one byte
+/// each), `Option` is a 0/1 tag, an f32 is its IEEE 754 bits little-endian.
+///
+/// f32 bits: 0.0 = 0x00000000, 0.25 = 0x3e800000 (exponent 125 = 0x7d: 0 01111101 000..,
+/// sign+exponent bits 0011 1110 1 -> 0x3e80), 0.5 = 0x3f000000 (exponent 126),
+/// 0.75 = 0x3f400000 (exponent 126, mantissa .1), 1.0 = 0x3f800000 (exponent 127),
+/// 1.5 = 0x3fc00000 (exponent 127, mantissa .1), 2.0 = 0x40000000 (exponent 128),
+/// 3.0 = 0x40400000 (exponent 128, mantissa .1), -1.0 = 0xbf800000 (sign bit + 1.0).
+/// Little-endian puts the low byte first: 0.25 -> 00 00 80 3e.
+fn hand_derived_shape_examples() -> (Vec<u8>, Vec<u8>) {
+    const ZERO: [u8; 4] = [0x00, 0x00, 0x00, 0x00];
+    const QUARTER: [u8; 4] = [0x00, 0x00, 0x80, 0x3e];
+    const HALF: [u8; 4] = [0x00, 0x00, 0x00, 0x3f];
+    const THREE_QUARTERS: [u8; 4] = [0x00, 0x00, 0x40, 0x3f];
+    const ONE: [u8; 4] = [0x00, 0x00, 0x80, 0x3f];
+    const ONE_AND_HALF: [u8; 4] = [0x00, 0x00, 0xc0, 0x3f];
+    const TWO: [u8; 4] = [0x00, 0x00, 0x00, 0x40];
+    const THREE: [u8; 4] = [0x00, 0x00, 0x40, 0x40];
+    const MINUS_ONE: [u8; 4] = [0x00, 0x00, 0x80, 0xbf];
+
+    let mut ball = vec![
+        0x01, // protocol version
+        0x01, // Spawn.bodies: varint length 1
+        0x01, // name: Some
+        0x04, // name: varint byte length 4
+        b'b', b'a', b'l', b'l', // "ball" = 62 61 6c 6c
+        0x01, // shape: ShapeSpec variant 1 = Circle
+    ];
+    for field in [
+        QUARTER, // radius 0.25
+        ZERO,    // position.x 0
+        THREE,   // position.y 3
+        ZERO,    // angle
+        ZERO,    // velocity.x
+        ZERO,    // velocity.y
+        ZERO,    // angular_velocity
+        ONE,     // density 1
+        HALF,    // friction 0.5
+        HALF,    // restitution 0.5
+    ] {
+        ball.extend(field);
+    }
+    ball.extend([0x3a, 0x7b, 0xd5]); // colour r, g, b (u8 each)
+                                     // 1 + 1 + 1 + 1 + 4 + 1 + 10 * 4 + 3
+    assert_eq!(ball.len(), 52);
+
+    let mut triangle = vec![
+        0x01, // protocol version
+        0x01, // Spawn.bodies: varint length 1
+        0x00, // name: None
+        0x03, // shape: ShapeSpec variant 3 = Polygon
+        0x03, // vertices: varint length 3
+    ];
+    for field in [
+        ZERO,           // vertices[0].x 0
+        ZERO,           // vertices[0].y 0
+        ONE_AND_HALF,   // vertices[1].x 1.5
+        ZERO,           // vertices[1].y 0
+        ZERO,           // vertices[2].x 0
+        THREE_QUARTERS, // vertices[2].y 0.75
+        MINUS_ONE,      // position.x -1
+        TWO,            // position.y 2
+        ZERO,           // angle
+        ZERO,           // velocity.x
+        ZERO,           // velocity.y
+        ZERO,           // angular_velocity
+        ONE,            // density 1
+        HALF,           // friction 0.5
+        ZERO,           // restitution 0
+    ] {
+        triangle.extend(field);
+    }
+    triangle.extend([0x2e, 0xcc, 0x71]); // colour
+                                         // 5 + 15 * 4 + 3
+    assert_eq!(triangle.len(), 68);
+    (ball, triangle)
+}
+
+#[test]
+fn the_documented_circle_and_polygon_spawns_are_exact_and_land_where_the_doc_says() {
+    let doc = doc();
+    let (ball, triangle) = ball_and_triangle();
+    let (ball_bytes, triangle_bytes) = hand_derived_shape_examples();
+    // postcard agrees with the hand derivation, and the doc shows exactly those bytes
+    assert_eq!(encode(&ball).unwrap(), ball_bytes);
+    assert_eq!(encode(&triangle).unwrap(), triangle_bytes);
+    assert!(
+        doc.contains(&hex(&ball_bytes)),
+        "docs/protocol.md must contain the circle spawn:\n{}",
+        hex(&ball_bytes)
+    );
+    assert!(
+        doc.contains(&hex(&triangle_bytes)),
+        "docs/protocol.md must contain the polygon spawn:\n{}",
+        hex(&triangle_bytes)
+    );
+    assert!(doc.contains("(52 bytes)") && doc.contains("(68 bytes)"));
+    assert_eq!(decode::<Spawn>(&ball_bytes).unwrap(), ball);
+    assert_eq!(decode::<Spawn>(&triangle_bytes).unwrap(), triangle);
+
+    // What the daemon makes of them: the Added events the doc describes.
+    let limits = ServerConfig::default().limits;
+    let mut sim = example_sim();
+    let mut added = |bytes: &[u8]| {
+        let command = tiltbox::service::intake::parse(CommandKey::Spawn, bytes, &limits);
+        match sim.apply(Incoming {
+            key: CommandKey::Spawn,
+            command,
+        }) {
+            Some(Event {
+                kind: EventKind::Added { mut bodies },
+                ..
+            }) if bodies.len() == 1 => bodies.remove(0),
+            other => panic!("{other:?}"),
+        }
+    };
+    let b = added(&ball_bytes);
+    assert_eq!(b.shape, ShapeSpec::Circle { radius: 0.25 });
+    assert_eq!(b.position, Vector::new(0.0, 3.0));
+    assert!(
+        (b.mass - std::f32::consts::PI / 16.0).abs() < 1e-6,
+        "{}",
+        b.mass
+    );
+    // 43 + 4 name bytes + 5 shape bytes
+    assert_eq!(
+        postcard::to_allocvec(&b).unwrap().len(),
+        52,
+        "circle BodyInfo"
+    );
+
+    let t = added(&triangle_bytes);
+    // the centroid of a triangle is the mean of its vertices: (1.5 / 3, 0.75 / 3)
+    let c = (0.5f32, 0.25f32);
+    assert_eq!(t.position, Vector::new(-1.0 + c.0, 2.0 + c.1));
+    assert_eq!(t.position, Vector::new(-0.5, 2.25), "the doc's figures");
+    assert_eq!(
+        t.shape,
+        ShapeSpec::Polygon {
+            vertices: vec![
+                Vector::new(-0.5, -0.25),
+                Vector::new(1.0, -0.25),
+                Vector::new(-0.5, 0.5),
+            ],
+        }
+    );
+    // area 1.5 x 0.75 / 2 = 0.5625 m^2 at density 1
+    assert!((t.mass - 0.5625).abs() < 1e-6, "{}", t.mass);
+    // 43 + 0 name bytes + 2 + 3 x 8 shape bytes
+    assert_eq!(
+        postcard::to_allocvec(&t).unwrap().len(),
+        69,
+        "triangle BodyInfo"
+    );
+    // and an octagon: 43 + 2 + 8 x 8
+    let octagon = BodyInfo {
+        shape: ShapeSpec::Polygon {
+            vertices: vec![Vector::new(0.0, 0.0); 8],
+        },
+        ..t
+    };
+    assert_eq!(postcard::to_allocvec(&octagon).unwrap().len(), 109);
+    for figure in ["48 for a circle", "69 for a triangle", "109 for an octagon"] {
+        assert!(doc.contains(figure), "{figure}");
+    }
+}
+
 #[test]
 fn config_server_toml_is_the_embedded_default() {
     let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/config/server.toml"));

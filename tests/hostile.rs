@@ -64,6 +64,52 @@ fn field(rng: &mut Rng, lo: f32, hi: f32) -> f32 {
     }
 }
 
+/// A convex polygon of `n` vertices on a circle of radius `r` around (`ox`, `oy`) (off the
+/// spawn position, so the daemon moves the body to the centroid).
+fn ring(n: usize, r: f32, ox: f32, oy: f32, a0: f32) -> Vec<Vector> {
+    (0..n)
+        .map(|k| {
+            let a = a0 + k as f32 * std::f32::consts::TAU / n.max(1) as f32;
+            Vector::new(ox + r * a.cos(), oy + r * a.sin())
+        })
+        .collect()
+}
+
+/// Any of the four shape kinds, mostly valid, sometimes broken: sizes at edge values, a
+/// capsule no longer than its ends, polygons with too few or too many vertices, clockwise,
+/// dented, with a repeated vertex or a non-finite coordinate.
+fn shape(rng: &mut Rng) -> ShapeSpec {
+    match rng.next() % 4 {
+        0 => ShapeSpec::Rect {
+            width: field(rng, 0.01, 3.0),
+            height: field(rng, 0.01, 3.0),
+        },
+        1 => ShapeSpec::Circle {
+            radius: field(rng, 0.005, 1.5),
+        },
+        // length from 0.05 to 3 m, radius up to 0.6 m: about one in five is too short
+        2 => ShapeSpec::Capsule {
+            length: field(rng, 0.05, 3.0),
+            radius: field(rng, 0.005, 0.6),
+        },
+        _ => {
+            let n = rng.pick(&[3usize, 3, 4, 5, 6, 7, 8, 8, 0, 2, 9, 40]);
+            let (ox, oy) = (field(rng, -2.0, 2.0), field(rng, -2.0, 2.0));
+            let mut vertices = ring(n, field(rng, 0.02, 1.5), ox, oy, field(rng, 0.0, 6.3));
+            if n >= 3 {
+                match rng.next() % 10 {
+                    0 => vertices.reverse(),                // clockwise
+                    1 => vertices[1] = Vector::new(ox, oy), // a dent at the centre
+                    2 => vertices[2] = vertices[1],         // repeated
+                    3 => vertices[0].x = rng.pick(&EDGE),
+                    _ => {}
+                }
+            }
+            ShapeSpec::Polygon { vertices }
+        }
+    }
+}
+
 fn body(rng: &mut Rng) -> SpawnBody {
     let name_len = rng.pick(&[0usize, 3, 40, 0, 3, 40, 65, 5000]);
     SpawnBody {
@@ -72,10 +118,7 @@ fn body(rng: &mut Rng) -> SpawnBody {
         } else {
             Some("n".repeat(name_len))
         },
-        shape: ShapeSpec::Rect {
-            width: field(rng, 0.01, 3.0),
-            height: field(rng, 0.01, 3.0),
-        },
+        shape: shape(rng),
         position: Vector::new(field(rng, -8.0, 8.0), field(rng, -1.0, 30.0)),
         angle: field(rng, -7.0, 7.0),
         velocity: Vector::new(field(rng, -70.0, 70.0), field(rng, -70.0, 70.0)),
@@ -173,7 +216,10 @@ fn assert_sane(sim: &Simulation, limits: &Limits, at: usize) {
     );
     let g = w.gravity();
     assert!(g.x.is_finite() && g.y.is_finite(), "gravity {g:?} at {at}");
-    assert!(g.length() <= limits.max_gravity * 1.0001, "gravity {g:?}");
+    assert!(
+        g.length() as f64 <= limits.max_gravity as f64 * 1.0001,
+        "gravity {g:?}"
+    );
     for b in w.bodies() {
         let v = [
             b.position().x,
@@ -267,6 +313,127 @@ fn the_command_path_never_panics_never_holds_nan_and_stays_bounded() {
     assert_eq!(sim.rejected, rejected);
     // a rejection echoes the key and a reason, never the payload: events stay small
     assert!(max_event < 400_000, "largest event {max_event} bytes");
+}
+
+/// Every field of every shape kind set to every edge value, spawned (with a body origin
+/// and angle that are edge values too) through parse -> apply -> step: each is refused or
+/// accepted, nothing panics, an accepted body is where its shape says and stays finite.
+#[test]
+fn every_shape_kind_with_edge_values_in_every_field_is_refused_or_simulated() {
+    let mut config = ServerConfig::default();
+    config.limits.max_bodies = 5000;
+    config.limits.max_spawns_per_second = 1_000_000;
+    let limits = config.limits.clone();
+    let mut sim = Simulation::new(&config, SceneSource::Embedded).unwrap();
+    let base: [ShapeSpec; 4] = [
+        ShapeSpec::Rect {
+            width: 0.5,
+            height: 0.25,
+        },
+        ShapeSpec::Circle { radius: 0.2 },
+        ShapeSpec::Capsule {
+            length: 0.8,
+            radius: 0.15,
+        },
+        ShapeSpec::Polygon {
+            vertices: ring(5, 0.3, 0.4, -0.2, 0.1),
+        },
+    ];
+    // (shape, which f32 of it to replace): rect 2, circle 1, capsule 2, polygon 10
+    let fields = |s: &ShapeSpec| match s {
+        ShapeSpec::Rect { .. } | ShapeSpec::Capsule { .. } => 2,
+        ShapeSpec::Circle { .. } => 1,
+        ShapeSpec::Polygon { vertices } => 2 * vertices.len(),
+    };
+    let set = |s: &mut ShapeSpec, i: usize, v: f32| match s {
+        ShapeSpec::Rect { width, height } => *[width, height][i] = v,
+        ShapeSpec::Circle { radius } => *radius = v,
+        ShapeSpec::Capsule { length, radius } => *[length, radius][i] = v,
+        ShapeSpec::Polygon { vertices } => {
+            let p = &mut vertices[i / 2];
+            *[&mut p.x, &mut p.y][i % 2] = v;
+        }
+    };
+    let (mut accepted, mut refused, mut spawns) = (0, 0, 0);
+    for shape in &base {
+        for i in 0..fields(shape) {
+            for &v in &EDGE {
+                let mut s = shape.clone();
+                set(&mut s, i, v);
+                let b = SpawnBody {
+                    name: None,
+                    shape: s,
+                    // mostly plain places and angles, now and then an edge one
+                    position: Vector::new(
+                        [0.0, 2.5, -2.5, 1.0, 999.9][spawns % 5],
+                        [3.0, 1.0, 5.0][spawns % 3],
+                    ),
+                    angle: [0.0, 0.7, -2.0, 1.3, 2.9, 1e4, f32::NAN][spawns % 7],
+                    velocity: Vector::default(),
+                    angular_velocity: 0.0,
+                    density: 1.0,
+                    friction: 0.5,
+                    restitution: 0.2,
+                    colour: Colour::default(),
+                };
+                let p = encode(&Spawn {
+                    bodies: vec![b.clone()],
+                })
+                .unwrap();
+                let command = parse(CommandKey::Spawn, &p, &limits);
+                let count = sim.world().body_count();
+                let ev = sim.apply(Incoming {
+                    key: CommandKey::Spawn,
+                    command,
+                });
+                spawns += 1;
+                match ev.map(|e| e.kind) {
+                    Some(EventKind::Added { bodies }) => {
+                        accepted += 1;
+                        assert_eq!(sim.world().body_count(), count + 1);
+                        let info = &bodies[0];
+                        assert!(info.position.x.is_finite() && info.position.y.is_finite());
+                        assert!(info.position.x.abs() <= limits.max_coordinate);
+                        let ev = Event {
+                            frame: 0,
+                            kind: EventKind::Added { bodies },
+                        };
+                        assert_eq!(decode::<Event>(&encode(&ev).unwrap()).unwrap(), ev);
+                    }
+                    Some(EventKind::Rejected { reason, .. }) => {
+                        refused += 1;
+                        if std::env::var_os("TILTBOX_SHOW_REFUSALS").is_some() {
+                            eprintln!("{reason}");
+                        }
+                        assert_eq!(sim.world().body_count(), count, "half-applied: {reason}");
+                        assert!(reason.starts_with("bodies[0]: "), "{reason}");
+                        // a refusal quotes a value or a count, whichever field it names
+                        assert!(
+                            reason.chars().any(|c| c.is_ascii_digit())
+                                || reason.contains("NaN")
+                                || reason.contains("inf"),
+                            "{reason}"
+                        );
+                    }
+                    other => panic!("{b:?}: {other:?}"),
+                }
+                sim.step().unwrap();
+                let _ = encode(sim.snapshot()).unwrap();
+                assert_sane(&sim, &limits, spawns);
+            }
+        }
+    }
+    for _ in 0..120 {
+        sim.step().unwrap();
+    }
+    assert_sane(&sim, &limits, usize::MAX);
+    let state = sim.view().to_state();
+    assert_eq!(
+        decode::<SceneState>(&encode(&state).unwrap()).unwrap(),
+        state
+    );
+    eprintln!("{spawns} edge spawns: {accepted} accepted, {refused} refused");
+    assert!(accepted > 20 && refused > 100, "{accepted} {refused}");
 }
 
 #[test]

@@ -182,7 +182,9 @@ pub struct SpawnBody {
     pub name: Option<String>,
     /// Shape.
     pub shape: ShapeSpec,
-    /// Centre of mass (m).
+    /// Where the body goes (m): its centre of mass, except for a polygon, whose vertices are
+    /// relative to this point and whose centre of mass the daemon puts at their centroid
+    /// (`position + R(angle) centroid`).
     pub position: Vector,
     /// Orientation (rad).
     pub angle: f32,

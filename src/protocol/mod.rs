@@ -193,6 +193,28 @@ mod tests {
         }
     }
 
+    /// One of each shape kind, as a spawn or the daemon would carry it.
+    fn shapes() -> [ShapeSpec; 4] {
+        [
+            ShapeSpec::Rect {
+                width: 1.0,
+                height: 0.5,
+            },
+            ShapeSpec::Circle { radius: 0.25 },
+            ShapeSpec::Capsule {
+                length: 2.0,
+                radius: 0.5,
+            },
+            ShapeSpec::Polygon {
+                vertices: vec![
+                    Vector::new(0.0, 0.0),
+                    Vector::new(1.5, 0.0),
+                    Vector::new(0.0, 0.75),
+                ],
+            },
+        ]
+    }
+
     fn round_trip<M: Message + PartialEq + std::fmt::Debug>(m: M) {
         let bytes = encode(&m).unwrap();
         assert_eq!(bytes[0], VERSION);
@@ -232,6 +254,12 @@ mod tests {
                 },
             ],
         });
+        round_trip(Spawn {
+            bodies: shapes()
+                .into_iter()
+                .map(|shape| SpawnBody { shape, ..body() })
+                .collect(),
+        });
         round_trip(Remove {
             ids: vec![BodyRef {
                 index: 1,
@@ -250,6 +278,12 @@ mod tests {
                 scene: "Falling Bricks".into(),
                 gravity: Vector::new(0.0, -9.81),
                 bodies: vec![info(), info()],
+            },
+            EventKind::Added {
+                bodies: shapes()
+                    .into_iter()
+                    .map(|shape| BodyInfo { shape, ..info() })
+                    .collect(),
             },
             EventKind::Rejected {
                 key: "tiltbox/bricks/spawn".into(),
@@ -309,6 +343,57 @@ mod tests {
             })
             .unwrap(),
             [1, 1, 0xac, 0x02, 0x02]
+        );
+    }
+
+    #[test]
+    fn every_shape_kind_has_the_documented_bytes() {
+        // variant index as a varint, then the fields: f32 little-endian, a Vec's length as a
+        // varint. 1.0 = 0x3f800000, 0.5 = 0x3f000000, 0.25 = 0x3e800000, 2.0 = 0x40000000,
+        // 1.5 = 0x3fc00000, 0.75 = 0x3f400000.
+        let expected: [&[u8]; 4] = [
+            &[0, 0, 0, 0x80, 0x3f, 0, 0, 0, 0x3f],
+            &[1, 0, 0, 0x80, 0x3e],
+            &[2, 0, 0, 0, 0x40, 0, 0, 0, 0x3f],
+            &[
+                3, 3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xc0, 0x3f, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x40,
+                0x3f,
+            ],
+        ];
+        for (shape, want) in shapes().iter().zip(expected) {
+            assert_eq!(postcard::to_allocvec(shape).unwrap(), want, "{shape:?}");
+        }
+        // BodyInfo sizes per kind, for a body with an index < 128 and an empty name:
+        // id 2 + name 1 + shape + static 1 + colour 3 + position 8 + angle 4 + velocity 8
+        // + spin 4 + mass, friction, restitution 12 = 43 + shape.
+        for (shape, size) in shapes().into_iter().zip([52, 48, 52, 69]) {
+            let b = BodyInfo {
+                id: BodyRef {
+                    index: 3,
+                    generation: 0,
+                },
+                name: String::new(),
+                shape,
+                ..info()
+            };
+            assert_eq!(postcard::to_allocvec(&b).unwrap().len(), size, "{b:?}");
+        }
+        // a shape index this version does not define
+        let mut spawn = encode(&Spawn {
+            bodies: vec![SpawnBody {
+                name: None,
+                ..body()
+            }],
+        })
+        .unwrap();
+        assert_eq!(
+            spawn[3], 0,
+            "version, count, None, then the shape's variant"
+        );
+        spawn[3] = 4;
+        assert_eq!(
+            decode::<Spawn>(&spawn),
+            Err(DecodeError::UnknownVariant { message: "Spawn" })
         );
     }
 

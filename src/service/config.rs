@@ -61,9 +61,13 @@ pub struct Limits {
     pub max_payload_bytes: u32,
     /// Largest gravity (or accelerometer reading) magnitude accepted (m/s^2). Default 100.
     pub max_gravity: f32,
-    /// Spawned bodies must lie within +-max_coordinate on both axes and be smaller (m). Default 1000.
+    /// Spawned bodies must lie within +-max_coordinate on both axes (the position given, the
+    /// centre of mass and every polygon vertex) and be no larger (rect sides, circle and
+    /// capsule diameters, capsule length, a polygon's extent along x and y), in metres.
+    /// Default 1000.
     pub max_coordinate: f32,
-    /// Spawned bodies' sides must be at least this long (m). Default 0.01.
+    /// Spawned bodies must be at least this big (m): rect sides, circle and capsule diameters,
+    /// capsule length, a polygon's thickness (its smallest width). Default 0.01.
     pub min_size: f32,
     /// Spawned bodies' density must lie within [min_density, max_density] (kg/m^2): extreme
     /// mass ratios make any iterative solver blow up. Defaults 0.01 and 1000.

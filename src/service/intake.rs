@@ -4,7 +4,8 @@
 #![allow(clippy::unnecessary_cast)] // Real <-> f32 casts matter with the `f64` feature.
 
 use super::config::Limits;
-use crate::physics::{BodyDef, BodyId, MassSpec, PhysicsError, Polygon, Real, Shape, Vec2};
+use crate::physics::convex::MAX_VERTICES;
+use crate::physics::{BodyDef, BodyId, MassSpec, PhysicsError, Polygon, Real, Rot, Shape, Vec2};
 use crate::protocol::{
     decode, Colour, CommandKey, Remove, Reset, SetGravity, ShapeSpec, Spawn, SpawnBody, Tilt,
     Vector,
@@ -185,38 +186,113 @@ const MAX_ANGLE: f32 = 1.0e4;
 /// The engine shape for a wire shape, and where its centre of mass sits relative to the
 /// body origin the sender gave (non-zero only for a polygon whose vertices are not centred).
 /// Refuses what the engine refuses, naming the field.
+///
+/// A polygon is also refused when its vertices lie so far from the origin for their size
+/// that their centroid cannot be found to within 1e-4 of the size even after a second
+/// centring pass: such a polygon could not be read back from a journal or a checkpoint
+/// (`Polygon::centred`), so the daemon would record what it cannot restore.
 pub fn shape_from_spec(spec: &ShapeSpec) -> Result<(Shape, Vec2), PhysicsError> {
     let shape = match *spec {
         ShapeSpec::Rect { width, height } => Shape::rect(width as Real, height as Real),
         ShapeSpec::Circle { radius } => Shape::circle(radius as Real),
         ShapeSpec::Capsule { length, radius } => Shape::capsule(length as Real, radius as Real),
         ShapeSpec::Polygon { ref vertices } => {
+            if vertices.len() > MAX_VERTICES {
+                // Refused before anything is copied (the payload limit bounds the list).
+                return Err(PhysicsError::InvalidShape {
+                    field: "shape.vertices".into(),
+                    reason: format!(
+                        "must hold 3 to {MAX_VERTICES} points, got {}",
+                        vertices.len()
+                    ),
+                });
+            }
             let points: Vec<Vec2> = vertices
                 .iter()
                 .map(|v| Vec2::new(v.x as Real, v.y as Real))
                 .collect();
             let (p, centroid) = Polygon::new(&points)?;
-            return Ok((Shape::Polygon(p), centroid));
+            if Polygon::centred(p.vertices()).is_ok() {
+                return Ok((Shape::Polygon(p), centroid));
+            }
+            // Far from the origin the centroid is only known to the precision of the
+            // coordinates there, and the centred vertices keep that residue. The centred
+            // vertices are exact differences (close numbers subtract exactly), so a second
+            // pass near the origin finds the residue precisely.
+            return match Polygon::new(p.vertices()) {
+                Ok((q, residue)) if Polygon::centred(q.vertices()).is_ok() => {
+                    Ok((Shape::Polygon(q), centroid + residue))
+                }
+                _ => Err(PhysicsError::InvalidShape {
+                    field: "shape.vertices".into(),
+                    reason: format!(
+                        "lie around [{}, {}], too far from position for their size: their \
+                         centroid cannot be found precisely; give them relative to position",
+                        centroid.x, centroid.y
+                    ),
+                }),
+            };
         }
     };
     shape.validate()?;
     Ok((shape, Vec2::ZERO))
 }
 
-/// The sizes of a wire shape that the daemon's limits bound: (field, metres) pairs checked
-/// against `limits.max_coordinate` and `limits.min_size`.
-fn shape_sizes(spec: &ShapeSpec) -> Vec<(String, f32)> {
-    match spec {
+/// One size of a wire shape that the daemon's limits bound.
+struct Size {
+    /// The field, e.g. `shape.radius`.
+    field: &'static str,
+    /// The value the sender gave.
+    given: f32,
+    /// What is bounded, when it is not the value itself (e.g. `the diameter`).
+    what: Option<&'static str>,
+    /// The size in metres checked against `limits.min_size` and `limits.max_coordinate`.
+    metres: f32,
+}
+
+/// Check a shape the engine accepted (so every number is finite) against the daemon's
+/// limits: every size within [`limits.min_size`, `limits.max_coordinate`]; for a polygon
+/// (whose coordinates [`check_shape_as_sent`] bounded), its extent along x and y at
+/// most `limits.max_coordinate`, and its thickness (its smallest width, measured across
+/// each edge) at least `limits.min_size`. The refusal names the field and the value given.
+fn check_shape_limits(spec: &ShapeSpec, shape: &Shape, limits: &Limits) -> Result<(), String> {
+    let (min, max) = (limits.min_size, limits.max_coordinate);
+    let sizes = match *spec {
         ShapeSpec::Rect { width, height } => vec![
-            ("shape.width".into(), *width),
-            ("shape.height".into(), *height),
+            Size {
+                field: "shape.width",
+                given: width,
+                what: None,
+                metres: width,
+            },
+            Size {
+                field: "shape.height",
+                given: height,
+                what: None,
+                metres: height,
+            },
         ],
-        ShapeSpec::Circle { radius } => vec![("shape.radius".into(), 2.0 * radius)],
+        ShapeSpec::Circle { radius } => vec![Size {
+            field: "shape.radius",
+            given: radius,
+            what: Some("the diameter"),
+            metres: 2.0 * radius,
+        }],
         ShapeSpec::Capsule { length, radius } => vec![
-            ("shape.length".into(), *length),
-            ("shape.radius".into(), 2.0 * radius),
+            Size {
+                field: "shape.length",
+                given: length,
+                what: None,
+                metres: length,
+            },
+            Size {
+                field: "shape.radius",
+                given: radius,
+                what: Some("the thickness (2 x radius)"),
+                metres: 2.0 * radius,
+            },
         ],
-        ShapeSpec::Polygon { vertices } => {
+        ShapeSpec::Polygon { ref vertices } => {
             let (mut lo, mut hi) = (
                 Vector::new(f32::MAX, f32::MAX),
                 Vector::new(f32::MIN, f32::MIN),
@@ -225,21 +301,137 @@ fn shape_sizes(spec: &ShapeSpec) -> Vec<(String, f32)> {
                 lo = Vector::new(lo.x.min(v.x), lo.y.min(v.y));
                 hi = Vector::new(hi.x.max(v.x), hi.y.max(v.y));
             }
-            vec![
-                ("shape.vertices (width)".into(), hi.x - lo.x),
-                ("shape.vertices (height)".into(), hi.y - lo.y),
-            ]
+            for (axis, span) in [("x", hi.x - lo.x), ("y", hi.y - lo.y)] {
+                if span > max {
+                    return Err(format!(
+                        "shape.vertices span {span} m along {axis}: must be <= {max} \
+                         (limits.max_coordinate)"
+                    ));
+                }
+            }
+            if let Shape::Polygon(ref p) = *shape {
+                if let Some((edge, thickness)) = polygon_thickness(p) {
+                    if thickness < min as Real {
+                        return Err(format!(
+                            "shape.vertices make a polygon {thickness} m thick (across the edge \
+                             from vertices[{edge}]): must be >= {min} (limits.min_size)"
+                        ));
+                    }
+                }
+            }
+            Vec::new()
+        }
+    };
+    for s in sizes {
+        let what = s
+            .what
+            .map(|w| format!("{w} {} ", s.metres))
+            .unwrap_or_default();
+        if s.metres > max {
+            return Err(format!(
+                "{} = {} is out of range: {what}must be <= {max} (limits.max_coordinate)",
+                s.field, s.given
+            ));
+        }
+        if s.metres < min {
+            return Err(format!(
+                "{} = {} is too small: {what}must be >= {min} (limits.min_size)",
+                s.field, s.given
+            ));
         }
     }
+    Ok(())
+}
+
+/// The smallest width of a convex polygon (m) and the edge it is measured across: for each
+/// edge, how far the farthest vertex lies behind it. The minimum over the edges is the
+/// polygon's smallest width in any direction.
+fn polygon_thickness(p: &Polygon) -> Option<(usize, Real)> {
+    let (v, n) = (p.vertices(), p.normals());
+    (0..v.len())
+        .map(|i| {
+            let depth = v
+                .iter()
+                .map(|&w| n[i].dot(v[i] - w))
+                .fold(0.0 as Real, Real::max);
+            (i, depth)
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// Checks on the shape's numbers as sent, before the engine sees them (so that the refusal
+/// quotes the `f32` that was sent, whatever the engine's float width): a capsule no longer
+/// than its two ends, and a polygon vertex coordinate beyond +-`max` (which the engine would
+/// otherwise report as some other vertex "repeating" it). Non-finite and non-positive
+/// numbers are left to the engine, which names them.
+fn check_shape_as_sent(spec: &ShapeSpec, max: f32) -> Result<(), String> {
+    match spec {
+        ShapeSpec::Capsule { length, radius }
+            if length.is_finite()
+                && radius.is_finite()
+                && *radius > 0.0
+                && *length <= 2.0 * radius =>
+        {
+            return Err(format!(
+                "shape.length = {length} must be more than twice shape.radius = {radius} \
+                 (the length is end to end, rounded ends included; use a circle for a capsule \
+                 with no straight part)"
+            ));
+        }
+        // More than MAX_VERTICES is refused first, by shape_from_spec.
+        ShapeSpec::Polygon { vertices } if vertices.len() <= MAX_VERTICES => {
+            for (i, v) in vertices.iter().enumerate() {
+                for (axis, c) in [("x", v.x), ("y", v.y)] {
+                    if c.is_finite() && c.abs() > max {
+                        return Err(format!(
+                            "shape.vertices[{i}].{axis} = {c} is out of range: must be within \
+                             +-{max} (limits.max_coordinate)"
+                        ));
+                    }
+                }
+            }
+        }
+        _ => {}
+    }
+    Ok(())
 }
 
 fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, String> {
+    // The shape first (what the engine refuses, then the daemon's limits), then where it
+    // goes: the position and angle as given are checked before the centre of mass is
+    // computed from them, so a bad one is named as it was sent.
+    check_shape_as_sent(&b.shape, limits.max_coordinate)?;
     let (shape, centroid) = shape_from_spec(&b.shape).map_err(|e| e.to_string())?;
+    check_shape_limits(&b.shape, &shape, limits)?;
+    let max = limits.max_coordinate;
+    for (field, v) in [("position.x", b.position.x), ("position.y", b.position.y)] {
+        finite(field, v)?;
+        if v.abs() > max {
+            return Err(format!(
+                "{field} = {v} is out of range: must be within +-{max} (limits.max_coordinate)"
+            ));
+        }
+    }
+    finite("angle", b.angle)?;
+    if b.angle.abs() > MAX_ANGLE {
+        return Err(format!(
+            "angle = {} is out of range: must be within +-{MAX_ANGLE} rad",
+            b.angle
+        ));
+    }
     let origin = Vec2::new(b.position.x as Real, b.position.y as Real);
+    // A polygon's centre of mass: its centroid, turned with the body.
+    let position = origin + Rot::from_angle(b.angle as Real).rotate(centroid);
+    if position.x.abs() > max as Real || position.y.abs() > max as Real {
+        return Err(format!(
+            "position = [{}, {}] puts the centre of mass at [{}, {}] (position + the centroid \
+             of shape.vertices, turned by angle): must be within +-{max} (limits.max_coordinate)",
+            b.position.x, b.position.y, position.x, position.y
+        ));
+    }
     let def = BodyDef {
         shape,
-        // A polygon's centre of mass: its centroid, turned with the body.
-        position: origin + crate::physics::Rot::from_angle(b.angle as Real).rotate(centroid),
+        position,
         angle: b.angle as Real,
         linear_velocity: Vec2::new(b.velocity.x as Real, b.velocity.y as Real),
         angular_velocity: b.angular_velocity as Real,
@@ -248,26 +440,6 @@ fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, String> {
         restitution: b.restitution as Real,
     };
     def.validate().map_err(|e| e.to_string())?;
-    let max = limits.max_coordinate;
-    for (field, v) in [("position.x", b.position.x), ("position.y", b.position.y)]
-        .into_iter()
-        .map(|(f, v)| (f.to_string(), v))
-        .chain(shape_sizes(&b.shape))
-    {
-        if v.abs() > max {
-            return Err(format!(
-                "{field} = {v} is out of range: must be within +-{max} (limits.max_coordinate)"
-            ));
-        }
-    }
-    for (field, v) in shape_sizes(&b.shape) {
-        if v < limits.min_size {
-            return Err(format!(
-                "{field} = {v} is too small: must be >= {} (limits.min_size)",
-                limits.min_size
-            ));
-        }
-    }
     if !(limits.min_density..=limits.max_density).contains(&b.density) {
         return Err(format!(
             "density = {} is out of range: must be within {}..={} (limits.min_density, limits.max_density)",
@@ -291,12 +463,6 @@ fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, String> {
         return Err(format!(
             "friction = {} is out of range: must be <= {} (limits.max_friction)",
             b.friction, limits.max_friction
-        ));
-    }
-    if b.angle.abs() > MAX_ANGLE {
-        return Err(format!(
-            "angle = {} is out of range: must be within +-{MAX_ANGLE} rad",
-            b.angle
         ));
     }
     let name = b.name.unwrap_or_default();
@@ -366,6 +532,267 @@ mod tests {
             friction: 0.5,
             restitution: 0.0,
             colour: Colour::default(),
+        }
+    }
+
+    fn spawn_err(b: SpawnBody, l: &Limits) -> String {
+        let p = encode(&Spawn { bodies: vec![b] }).unwrap();
+        parse(CommandKey::Spawn, &p, l).unwrap_err()
+    }
+
+    fn spawn_ok(b: SpawnBody) -> SpawnDef {
+        let p = encode(&Spawn { bodies: vec![b] }).unwrap();
+        match parse(CommandKey::Spawn, &p, &Limits::default()) {
+            Ok(Command::Spawn(mut v)) => v.remove(0),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    fn with_shape(shape: ShapeSpec) -> SpawnBody {
+        SpawnBody { shape, ..body() }
+    }
+
+    fn polygon(points: &[(f32, f32)]) -> ShapeSpec {
+        ShapeSpec::Polygon {
+            vertices: points.iter().map(|&(x, y)| Vector::new(x, y)).collect(),
+        }
+    }
+
+    #[test]
+    fn a_bad_angle_is_named_as_the_angle_not_as_the_position_it_would_give() {
+        let l = Limits::default();
+        for shape in [body().shape, polygon(&[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)])] {
+            let mut b = with_shape(shape);
+            b.angle = f32::NAN;
+            let e = spawn_err(b.clone(), &l);
+            assert_eq!(e, "bodies[0]: angle must be a finite number, got NaN");
+            b.angle = f32::INFINITY;
+            let e = spawn_err(b, &l);
+            assert_eq!(e, "bodies[0]: angle must be a finite number, got inf");
+        }
+        // a huge but finite position is named as given, not as an overflowed centre of mass
+        let mut b = with_shape(polygon(&[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]));
+        b.position.x = 3.4e38;
+        let e = spawn_err(b, &l);
+        assert!(
+            e.starts_with(
+                "bodies[0]: position.x = 340000000000000000000000000000000000000 is out of range"
+            ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn circle_and_capsule_sizes_are_refused_naming_the_field_and_the_value_given() {
+        let l = Limits::default();
+        let circle = |radius| with_shape(ShapeSpec::Circle { radius });
+        let capsule = |length, radius| with_shape(ShapeSpec::Capsule { length, radius });
+        for (b, want) in [
+            (circle(f32::NAN), "shape.radius must be a finite number, got NaN"),
+            (circle(f32::INFINITY), "shape.radius must be a finite number, got inf"),
+            (circle(0.0), "shape.radius = 0 is out of range: must be > 0"),
+            (circle(-0.0), "shape.radius = -0 is out of range: must be > 0"),
+            (circle(-1.0), "shape.radius = -1 is out of range: must be > 0"),
+            (
+                circle(0.004),
+                "shape.radius = 0.004 is too small: the diameter 0.008 must be >= 0.01 (limits.min_size)",
+            ),
+            (
+                circle(600.0),
+                "shape.radius = 600 is out of range: the diameter 1200 must be <= 1000 (limits.max_coordinate)",
+            ),
+            (
+                circle(3.0e38),
+                "shape.radius = 300000000000000000000000000000000000000 is out of range: the diameter inf must be <= 1000",
+            ),
+            (capsule(1.0, f32::NAN), "shape.radius must be a finite number, got NaN"),
+            (capsule(f32::NAN, 0.1), "shape.length must be a finite number, got NaN"),
+            (capsule(1.0, 0.0), "shape.radius = 0 is out of range: must be > 0"),
+            (
+                capsule(0.8, 0.5),
+                "shape.length = 0.8 must be more than twice shape.radius = 0.5",
+            ),
+            // exactly twice the radius: no straight part, refused
+            (
+                capsule(1.0, 0.5),
+                "shape.length = 1 must be more than twice shape.radius = 0.5",
+            ),
+            (
+                capsule(2000.0, 0.5),
+                "shape.length = 2000 is out of range: must be <= 1000 (limits.max_coordinate)",
+            ),
+            (
+                capsule(0.5, 0.004),
+                "shape.radius = 0.004 is too small: the thickness (2 x radius) 0.008 must be >= 0.01",
+            ),
+            (
+                with_shape(ShapeSpec::Rect { width: 0.005, height: 1.0 }),
+                "shape.width = 0.005 is too small: must be >= 0.01 (limits.min_size)",
+            ),
+            (
+                with_shape(ShapeSpec::Rect { width: 1.0, height: 1500.0 }),
+                "shape.height = 1500 is out of range: must be <= 1000 (limits.max_coordinate)",
+            ),
+        ] {
+            let shape = b.shape.clone();
+            let e = spawn_err(b, &l);
+            assert!(e.starts_with("bodies[0]: ") && e.contains(want), "{shape:?}: {e}");
+        }
+        // the smallest and largest accepted
+        spawn_ok(circle(0.005));
+        spawn_ok(circle(500.0));
+        spawn_ok(capsule(0.0101, 0.005));
+    }
+
+    #[test]
+    fn bad_polygons_are_refused_naming_the_vertex_and_the_value() {
+        let l = Limits::default();
+        let tri = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)];
+        let octagon = |n: usize| -> Vec<(f32, f32)> {
+            (0..n)
+                .map(|k| {
+                    let a = k as f32 * std::f32::consts::TAU / n as f32;
+                    (a.cos(), a.sin())
+                })
+                .collect()
+        };
+        let mut nan = tri;
+        nan[1].0 = f32::NAN;
+        let mut inf = tri;
+        inf[2].1 = f32::NEG_INFINITY;
+        let mut cw = tri;
+        cw.swap(1, 2);
+        for (shape, want) in [
+            (polygon(&octagon(9)), "shape.vertices must hold 3 to 8 points, got 9"),
+            (polygon(&tri[..2]), "shape.vertices must hold 3 to 8 points, got 2"),
+            (polygon(&[]), "shape.vertices must hold 3 to 8 points, got 0"),
+            (polygon(&nan), "shape.vertices[1] must be finite, got [NaN, 0]"),
+            (polygon(&inf), "shape.vertices[2] must be finite, got [0, -inf]"),
+            (polygon(&cw), "shape.vertices[1] = [0, 1] turns clockwise there"),
+            (
+                polygon(&[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (0.0, 1.0)]),
+                "shape.vertices[1] = [1, 0] is collinear",
+            ),
+            (
+                polygon(&[(5000.0, 0.0), (5001.0, 0.0), (5000.0, 1.0)]),
+                "shape.vertices[0].x = 5000 is out of range: must be within +-1000 (limits.max_coordinate)",
+            ),
+            // near the float range: named as itself, not as a vertex "repeating" it
+            (
+                polygon(&[(0.0, 0.0), (3.4e38, 0.0), (0.0, 1.0)]),
+                "shape.vertices[1].x = 340000000000000000000000000000000000000 is out of range",
+            ),
+            (
+                polygon(&[(-900.0, 0.0), (900.0, 0.0), (0.0, 1.0)]),
+                "shape.vertices span 1800 m along x: must be <= 1000 (limits.max_coordinate)",
+            ),
+            // a sliver 1 m long and about 7 mm thick, drawn diagonally: its bounding box is
+            // 1 x 1 m, yet it is thinner than limits.min_size
+            (
+                polygon(&[(0.0, 0.0), (1.0, 1.0), (0.99, 1.0)]),
+                "shape.vertices make a polygon 0.0070",
+            ),
+        ] {
+            let e = spawn_err(with_shape(shape.clone()), &l);
+            assert!(e.starts_with("bodies[0]: ") && e.contains(want), "{shape:?}: {e}");
+        }
+        // vertices within the limits, but drawn so far from position that the centre of
+        // mass would be at x = 1500
+        let mut b = with_shape(polygon(&[(900.0, 0.0), (901.0, 0.0), (900.0, 1.0)]));
+        b.position = Vector::new(600.0, 0.0);
+        let e = spawn_err(b, &l);
+        assert!(
+            e.starts_with("bodies[0]: position = [600, 0] puts the centre of mass at [1500.33")
+                && e.contains("limits.max_coordinate"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn ten_thousand_vertices_are_refused_by_size_or_count_without_panicking() {
+        let many: Vec<(f32, f32)> = (0..10_000)
+            .map(|k| {
+                let a = k as f32 * std::f32::consts::TAU / 10_000.0;
+                (a.cos(), a.sin())
+            })
+            .collect();
+        let p = encode(&Spawn {
+            bodies: vec![with_shape(polygon(&many))],
+        })
+        .unwrap();
+        // version, count, None, variant, varint(10000) = 2 bytes, 80000 bytes of vertices,
+        // then position 8, angle 4, velocity 8, spin 4, density/friction/restitution 12, colour 3
+        assert_eq!(p.len(), 4 + 2 + 80_000 + 39);
+        let mut l = Limits::default();
+        let e = parse(CommandKey::Spawn, &p, &l).unwrap_err();
+        assert_eq!(
+            e,
+            "payload of 80045 bytes is larger than limits.max_payload_bytes = 65536"
+        );
+        l.max_payload_bytes = 1 << 20;
+        let e = parse(CommandKey::Spawn, &p, &l).unwrap_err();
+        assert_eq!(
+            e,
+            "bodies[0]: shape.vertices must hold 3 to 8 points, got 10000"
+        );
+    }
+
+    #[test]
+    fn an_off_centre_polygon_goes_to_position_plus_its_turned_centroid() {
+        // Right triangle with legs 3 (x) and 1.5 (y) drawn from (1, 0): centroid (2, 0.5).
+        let mut b = with_shape(polygon(&[(1.0, 0.0), (4.0, 0.0), (1.0, 1.5)]));
+        b.position = Vector::new(-2.0, 5.0);
+        b.angle = 0.5;
+        let d = spawn_ok(b).def;
+        let (s, c) = (0.5f64.sin(), 0.5f64.cos());
+        let want = (-2.0 + c * 2.0 - s * 0.5, 5.0 + s * 2.0 + c * 0.5);
+        assert!(
+            (d.position.x as f64 - want.0).abs() < 1e-5
+                && (d.position.y as f64 - want.1).abs() < 1e-5,
+            "{:?} vs {want:?}",
+            d.position
+        );
+        let Shape::Polygon(p) = d.shape else {
+            panic!("{:?}", d.shape)
+        };
+        let v: Vec<(f64, f64)> = p
+            .vertices()
+            .iter()
+            .map(|v| (v.x as f64, v.y as f64))
+            .collect();
+        for (got, want) in v.iter().zip([(-1.0, -0.5), (2.0, -0.5), (-1.0, 1.0)]) {
+            assert!(
+                (got.0 - want.0).abs() < 1e-6 && (got.1 - want.1).abs() < 1e-6,
+                "{v:?}"
+            );
+        }
+        assert!((d.shape.area() as f64 - 2.25).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_polygon_drawn_far_from_position_is_centred_well_enough_to_be_recorded() {
+        // A 5 cm pentagon drawn around (999, 999) with the body origin at (0, 0): one
+        // centring pass leaves a residue of about 1e-5 m (the float spacing near 1000 is
+        // 6e-5), which Polygon::centred (journal, checkpoint) would refuse.
+        for k in 0..50 {
+            let a0 = k as f32 * 0.1;
+            let pts: Vec<(f32, f32)> = (0..5)
+                .map(|i| {
+                    let a = a0 + i as f32 * 1.2566;
+                    (999.0 + 0.05 * a.cos(), 999.0 + 0.05 * a.sin())
+                })
+                .collect();
+            let mut b = with_shape(polygon(&pts));
+            b.position = Vector::new(0.0, 0.0);
+            let d = spawn_ok(b);
+            let Shape::Polygon(p) = d.def.shape else {
+                unreachable!()
+            };
+            Polygon::centred(p.vertices()).unwrap();
+            assert!((d.def.position - Vec2::new(999.0, 999.0)).length() < 1e-3);
+            // and the journal's form reads back exactly
+            let bytes = postcard::to_allocvec(&d).unwrap();
+            assert_eq!(postcard::from_bytes::<SpawnDef>(&bytes).unwrap(), d);
         }
     }
 

@@ -4,6 +4,7 @@
 //! ```text
 //! cargo bench --no-default-features --bench step          # engine only: quickest build
 //! cargo bench --no-default-features --bench step -- pyramid_20
+//! cargo bench --no-default-features --bench step -- mixed_shapes
 //! ```
 //!
 //! Each benchmark steps one World over and over (the scene keeps evolving, as in a game), after
@@ -55,6 +56,7 @@ fn small_scenes(c: &mut Criterion) {
     bench_scene(c, "falling_bricks", 50, 1.0, 4.0);
     bench_scene(c, "many_boxes", 30, 1.0, 4.0);
     bench_scene(c, "resting_pyramid", 50, 1.0, 4.0);
+    bench_scene(c, "mixed_shapes", 30, 1.0, 4.0);
 }
 
 fn large_pyramid(c: &mut Criterion) {

@@ -1,7 +1,7 @@
 //! Standard set-ups shared by the tests, the accuracy report and the benchmarks: grounds,
 //! stacks, pyramids and closed boxes, built the way Box2D's samples and benchmark build them.
 
-use crate::physics::{BodyDef, BodyId, PhysicsError, Real, Shape, Vec2, World};
+use crate::physics::{BodyDef, BodyId, PhysicsError, Polygon, Real, Shape, Vec2, World};
 
 /// A static ground box `width` x `thickness` metres whose top surface is at y = 0, centred on x = `x`.
 pub fn ground(
@@ -127,7 +127,10 @@ fn boxes_pyramid(base: usize, x: Real, y0: Real, out: &mut Vec<BodyDef>) {
 /// - `pyramid_20`: the same with base 20 (210 boxes), 500 steps, sleep off;
 /// - `falling_bricks`: the original app: a closed 8 m x 6 m box and six bricks, 600 steps, sleep off;
 /// - `many_boxes`: 2,000 boxes of 0.5 m rained from a 40 x 50 grid into a 40 m wide container, 500 steps, sleep off;
-/// - `resting_pyramid`: `pyramid_20` with sleep on, timed after 300 steps of settling.
+/// - `resting_pyramid`: `pyramid_20` with sleep on, timed after 300 steps of settling;
+/// - `mixed_shapes`: 1,200 bodies cycling through circle, capsule, box, triangle and hexagon
+///   (see [`mixed_shapes`]) dropped from a 40 x 30 grid into a 50 m wide container, 500 steps,
+///   sleep off.
 pub fn benchmark_setups() -> Vec<Setup> {
     let g = Vec2::new(0.0, -10.0);
     let ground = |width: Real| BodyDef::fixed(Shape::rect(width, 2.0), Vec2::new(0.0, -1.0));
@@ -207,7 +210,71 @@ pub fn benchmark_setups() -> Vec<Setup> {
             sleep: true,
             warm_up: 300,
         },
+        Setup {
+            name: "mixed_shapes",
+            gravity: g,
+            bodies: mixed_shapes(),
+            steps: 500,
+            sleep: false,
+            warm_up: 0,
+        },
     ]
+}
+
+/// The five shapes of `mixed_shapes`, all between 0.7 m and 1 m across (areas 0.35 to 0.49
+/// m^2): a circle of radius 0.35, a capsule 1 m long and 0.5 m thick, a 0.7 m box, an
+/// equilateral triangle of side 0.9 and a regular hexagon of circumradius 0.4. The polygons
+/// are centred on their centroids, so a body's position is its centre of mass.
+pub fn mixed_shape_kinds() -> [Shape; 5] {
+    let triangle = [
+        Vec2::new(0.0, 0.0),
+        Vec2::new(0.9, 0.0),
+        Vec2::new(0.45, 0.45 * (3.0 as Real).sqrt()),
+    ];
+    let hexagon: Vec<Vec2> = (0..6)
+        .map(|k| {
+            let a = k as Real * (std::f64::consts::FRAC_PI_3 as Real);
+            Vec2::new(0.4 * a.cos(), 0.4 * a.sin())
+        })
+        .collect();
+    let polygon = |points: &[Vec2]| match Polygon::new(points) {
+        Ok((p, _centroid)) => Shape::Polygon(p),
+        Err(e) => panic!("mixed_shapes: a built-in polygon was refused: {e}"),
+    };
+    [
+        Shape::circle(0.35),
+        Shape::capsule(1.0, 0.25),
+        Shape::rect(0.7, 0.7),
+        polygon(&triangle),
+        polygon(&hexagon),
+    ]
+}
+
+/// The `mixed_shapes` scene: a closed container 50 m x 80 m inside (walls 1 m thick, floor top at
+/// y = 0) and 1,200 dynamic bodies (density 1, friction 0.6, restitution 0) on a 40 x 30 grid
+/// 1.2 m apart, rows from y = 20 m up, cycling through [`mixed_shape_kinds`] (kind (column + 2
+/// row) mod 5, so no column holds a single kind), each turned by 0.15 ((7 column + 3 row) mod
+/// 9 - 4) rad and the rows shifted sideways by -0.1, 0 and 0.1 m in turn so that they do not
+/// land in columns. Computed from the indices alone: the same scene on every run.
+pub fn mixed_shapes() -> Vec<BodyDef> {
+    let kinds = mixed_shape_kinds();
+    let (columns, rows, spacing) = (40usize, 30usize, 1.2 as Real);
+    let mut bodies = closed_box_defs(50.0, 80.0, 1.0);
+    for row in 0..rows {
+        for col in 0..columns {
+            let shape = kinds[(col + 2 * row) % kinds.len()];
+            let x = spacing * (col as Real - 0.5 * (columns as Real - 1.0))
+                + 0.1 * ((row % 3) as Real - 1.0);
+            let y = 20.0 + spacing * row as Real;
+            let angle = 0.15 * (((col * 7 + row * 3) % 9) as Real - 4.0);
+            bodies.push(
+                BodyDef::dynamic(shape, Vec2::new(x, y))
+                    .with_angle(angle)
+                    .with_friction(0.6),
+            );
+        }
+    }
+    bodies
 }
 
 /// The four walls of `closed_box` as definitions (floor, ceiling, left, right).

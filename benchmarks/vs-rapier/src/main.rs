@@ -2,7 +2,7 @@
 //! the same body definitions, stepped in the same process, timed step by step.
 //!
 //! ```text
-//! cargo run --release -- [--quick] [--no-extras] [--chunks] [SCENE|memory|largest_pyramid ...]
+//! cargo run --release -- [--quick] [--no-extras] [--chunks] [--settle[=SECONDS]] [SCENE|memory|largest_pyramid ...]
 //! ```
 //!
 //! - every scene runs its warm-up steps untimed in both engines, then its timed steps in chunks
@@ -14,14 +14,22 @@
 //! - `memory`: live heap bytes per body after building `large_pyramid` and 10 steps (counting
 //!   global allocator);
 //! - `largest_pyramid`: the largest pyramid base each engine steps in under 16.7 ms (median,
-//!   sleep off), by bisection.
+//!   sleep off), by bisection;
+//! - `--settle[=SECONDS]`: no timing; whether each selected scene comes to rest (awake and moving
+//!   bodies, top speeds, positions, per kind of shape) in both engines, sleep on and off;
+//! - before timing, both engines' bodies are checked to match (centre of mass, angle, mass,
+//!   moment of inertia), so that both step the same scene whatever the shapes.
 //!
 //! Positional arguments select scenes by name (substring match); with any selection given, the
 //! extras run only when named (`memory`, `largest_pyramid`).
 
+// tiltbox's `Real` is f32 by default and f64 with its `f64` feature: the `as f32` casts are
+// needed for the latter and redundant for the former.
+#![allow(clippy::unnecessary_cast)]
+
 use rapier2d::prelude::{
-    CoefficientCombineRule, ColliderBuilder, IntegrationParameters, PhysicsWorld, RigidBodyBuilder,
-    RigidBodyHandle, Vector,
+    CoefficientCombineRule, ColliderBuilder, IntegrationParameters, MassProperties, PhysicsWorld,
+    RigidBodyBuilder, RigidBodyHandle, SharedShape, Vector,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
@@ -97,11 +105,25 @@ struct Sanity {
     lost: usize,
 }
 
+/// One dynamic body's state, for the settle report and the set-up check.
+#[derive(Clone, Copy, Debug)]
+struct BodyState {
+    position: [f32; 2],
+    angle: f32,
+    velocity: [f32; 2],
+    angular_velocity: f32,
+    awake: bool,
+    mass: f32,
+    inertia: f32,
+}
+
 trait Engine {
     fn step(&mut self);
     fn sanity(&self) -> Sanity;
     /// Body pairs with at least one contact point (touching or speculative).
     fn contact_pairs(&self) -> usize;
+    /// Every dynamic body, in the order of the set-up's `BodyDef`s.
+    fn dynamic_bodies(&self) -> Vec<BodyState>;
 }
 
 struct Tiltbox {
@@ -154,6 +176,21 @@ impl Engine for Tiltbox {
     fn contact_pairs(&self) -> usize {
         self.world.contact_count()
     }
+    fn dynamic_bodies(&self) -> Vec<BodyState> {
+        self.world
+            .bodies()
+            .filter(|b| !b.is_static())
+            .map(|b| BodyState {
+                position: [b.position().x as f32, b.position().y as f32],
+                angle: b.angle() as f32,
+                velocity: [b.linear_velocity().x as f32, b.linear_velocity().y as f32],
+                angular_velocity: b.angular_velocity() as f32,
+                awake: b.is_awake(),
+                mass: b.mass() as f32,
+                inertia: b.inertia() as f32,
+            })
+            .collect()
+    }
     fn sanity(&self) -> Sanity {
         let floor = self
             .world
@@ -188,6 +225,35 @@ fn combine_rule(m: Mixing) -> CoefficientCombineRule {
     }
 }
 
+/// The rapier2d collider of a tiltbox shape, in the body's frame. Both engines put a body's
+/// origin at its centre of mass: tiltbox's shapes are centred on it (a polygon on its centroid),
+/// and so are these colliders, so `BodyDef::position` is the body translation in both and the
+/// collider needs no offset.
+fn rapier_collider(shape: &Shape) -> ColliderBuilder {
+    match *shape {
+        Shape::Rect { half_extents: h } => ColliderBuilder::cuboid(h.x as f32, h.y as f32),
+        Shape::Circle { radius } => ColliderBuilder::ball(radius as f32),
+        // Both: the segment (-half_length, 0)..(half_length, 0) grown by the radius.
+        Shape::Capsule {
+            half_length,
+            radius,
+        } => ColliderBuilder::capsule_x(half_length as f32, radius as f32),
+        // The same vertices, counter-clockwise in both; `_unmodified` keeps every vertex
+        // (`convex_polyline` would merge edges within about 1.5 degrees of each other, which
+        // tiltbox accepts down to 0.06 degrees).
+        Shape::Polygon(ref p) => {
+            let points: Vec<Vector> = p
+                .vertices()
+                .iter()
+                .map(|v| Vector::new(v.x as f32, v.y as f32))
+                .collect();
+            let shape = SharedShape::convex_polyline_unmodified(points)
+                .expect("rapier2d refused a polygon tiltbox accepted");
+            ColliderBuilder::new(shape)
+        }
+    }
+}
+
 impl Rapier {
     fn new(setup: &Setup) -> Rapier {
         // `Setup::build` uses the default settings plus the sleep flag; mirror their mixing rules.
@@ -217,16 +283,32 @@ impl Rapier {
             }
             .translation(Vector::new(def.position.x as f32, def.position.y as f32))
             .rotation(def.angle as f32);
-            let Shape::Rect { half_extents: h } = def.shape;
-            let collider = ColliderBuilder::cuboid(h.x as f32, h.y as f32)
+            let collider = rapier_collider(&def.shape)
                 .friction(def.friction as f32)
                 .friction_combine_rule(friction_rule)
                 .restitution(def.restitution as f32)
                 .restitution_combine_rule(restitution_rule);
-            let collider = match def.mass {
-                MassSpec::Static => collider,
-                MassSpec::Density(d) => collider.density(d as f32),
-                MassSpec::Mass(m) => collider.mass(m as f32),
+            let collider = match (def.mass, def.shape) {
+                (MassSpec::Static, _) => collider,
+                // parry2d 0.31 moves a capsule's two half discs out by 3r/8 (a 3D hemisphere's
+                // centroid) where a half disc's is 4r/(3 pi), so its 2D capsule inertia is low
+                // (3 % for mixed_shapes' capsule); tiltbox's closed form is checked against a
+                // numerical integral. Give rapier tiltbox's mass and inertia so that both step
+                // the same bodies; every other shape's mass properties agree to 1e-6.
+                (MassSpec::Density(_) | MassSpec::Mass(_), Shape::Capsule { .. }) => {
+                    let mass = match def.mass {
+                        MassSpec::Density(d) => d * def.shape.area(),
+                        MassSpec::Mass(m) => m,
+                        MassSpec::Static => unreachable!(),
+                    };
+                    collider.mass_properties(MassProperties::new(
+                        Vector::ZERO,
+                        mass as f32,
+                        def.shape.inertia(mass) as f32,
+                    ))
+                }
+                (MassSpec::Density(d), _) => collider.density(d as f32),
+                (MassSpec::Mass(m), _) => collider.mass(m as f32),
             };
             let (handle, _) = world.insert(builder, collider);
             if def.mass != MassSpec::Static {
@@ -251,6 +333,25 @@ impl Engine for Rapier {
             .contact_pairs()
             .filter(|p| p.manifolds().iter().any(|m| !m.points.is_empty()))
             .count()
+    }
+    fn dynamic_bodies(&self) -> Vec<BodyState> {
+        self.dynamic
+            .iter()
+            .map(|&h| {
+                let b = &self.world.bodies[h];
+                let m = &b.mass_properties().local_mprops;
+                BodyState {
+                    // The centre of mass (equal to the translation when the collider is centred).
+                    position: [b.center_of_mass().x, b.center_of_mass().y],
+                    angle: b.rotation().angle(),
+                    velocity: [b.linvel().x, b.linvel().y],
+                    angular_velocity: b.angvel(),
+                    awake: !b.is_sleeping(),
+                    mass: m.mass(),
+                    inertia: m.principal_inertia(),
+                }
+            })
+            .collect()
     }
     fn sanity(&self) -> Sanity {
         summarise(
@@ -316,10 +417,44 @@ struct Row {
     ra_sanity: Sanity,
 }
 
+/// Before the first step, both engines must hold the same bodies: same centre of mass, angle,
+/// mass and moment of inertia (to 1e-4 relative), or the comparison would be of two scenes.
+/// Prints the largest differences to stderr; a mismatch is reported loudly, not hidden.
+fn check_same_bodies(name: &str, tb: &dyn Engine, ra: &dyn Engine) {
+    let (a, b) = (tb.dynamic_bodies(), ra.dynamic_bodies());
+    if a.len() != b.len() {
+        eprintln!(
+            "  WARNING {name}: tiltbox has {} dynamic bodies, rapier {}",
+            a.len(),
+            b.len()
+        );
+        return;
+    }
+    let rel = |x: f32, y: f32| (x - y).abs() / x.abs().max(y.abs()).max(1e-12);
+    let (mut dp, mut da, mut dm, mut di) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    for (p, q) in a.iter().zip(&b) {
+        dp = dp.max(
+            ((p.position[0] - q.position[0]).powi(2) + (p.position[1] - q.position[1]).powi(2))
+                .sqrt(),
+        );
+        let d = (p.angle - q.angle).rem_euclid(std::f32::consts::TAU);
+        da = da.max(d.min(std::f32::consts::TAU - d));
+        dm = dm.max(rel(p.mass, q.mass));
+        di = di.max(rel(p.inertia, q.inertia));
+    }
+    let bad = dp > 1e-4 || da > 1e-4 || dm > 1e-4 || di > 1e-4;
+    eprintln!(
+        "  {}{name}: largest difference tiltbox / rapier before the first step: centre of mass \
+         {dp:.1e} m, angle {da:.1e} rad, mass {dm:.1e} (relative), inertia {di:.1e} (relative)",
+        if bad { "WARNING " } else { "" }
+    );
+}
+
 /// Warm both engines up (untimed), then time `steps` steps of each, alternating in chunks.
 fn compare(setup: &Setup, steps: usize, chunks: bool) -> Row {
     let mut tb = Tiltbox::new(setup);
     let mut ra = Rapier::new(setup);
+    check_same_bodies(setup.name, &tb, &ra);
     for _ in 0..setup.warm_up {
         tb.step();
     }
@@ -418,11 +553,161 @@ fn print_table(rows: &[Row]) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Settling: does a pile come to rest?
+
+/// A shape's kind as the settle report names it (polygons by vertex count).
+fn kind_name(shape: &Shape) -> String {
+    match shape {
+        Shape::Polygon(p) => match p.vertices().len() {
+            3 => "triangle".to_string(),
+            4 => "quad".to_string(),
+            6 => "hexagon".to_string(),
+            n => format!("{n}-gon"),
+        },
+        s => s.kind().to_string(),
+    }
+}
+
+/// tiltbox's resting speed of a body: |v| + |w| x bounding radius (`Settings::sleep_threshold`
+/// compares it with 0.05 m/s).
+fn rest_speed(b: &BodyState, radius: f32) -> f32 {
+    (b.velocity[0].powi(2) + b.velocity[1].powi(2)).sqrt() + b.angular_velocity.abs() * radius
+}
+
+/// Per kind of shape: bodies, awake, above the resting speed, max |v|, max |w|.
+#[derive(Default)]
+struct KindStats {
+    count: usize,
+    awake: usize,
+    moving: usize,
+    max_v: f32,
+    max_w: f32,
+    max_rest_speed: f32,
+}
+
+fn kind_stats(defs: &[&BodyDef], bodies: &[BodyState]) -> Vec<(String, KindStats)> {
+    let threshold = Settings::default().sleep_threshold as f32;
+    let mut out: Vec<(String, KindStats)> = Vec::new();
+    for (def, b) in defs.iter().zip(bodies) {
+        let name = kind_name(&def.shape);
+        let i = match out.iter().position(|(n, _)| *n == name) {
+            Some(i) => i,
+            None => {
+                out.push((name, KindStats::default()));
+                out.len() - 1
+            }
+        };
+        let k = &mut out[i].1;
+        let speed = rest_speed(b, def.shape.bounding_radius() as f32);
+        k.count += 1;
+        k.awake += b.awake as usize;
+        k.moving += (speed >= threshold || speed.is_nan()) as usize;
+        k.max_v = k
+            .max_v
+            .max((b.velocity[0].powi(2) + b.velocity[1].powi(2)).sqrt());
+        k.max_w = k.max_w.max(b.angular_velocity.abs());
+        k.max_rest_speed = k.max_rest_speed.max(speed);
+    }
+    out
+}
+
+/// Step each selected scene for `seconds` of simulated time in both engines, with sleep on and
+/// with sleep off, and report every 2 s: bodies awake, bodies faster than tiltbox's resting
+/// speed, the fastest body, where the bodies are (escapes through walls show in x, falls through
+/// the floor in y), and at the end the same per kind of shape.
+fn settle(setups: &[&Setup], seconds: f32) {
+    let steps = (seconds * 60.0).round() as usize;
+    let every = 120;
+    let threshold = Settings::default().sleep_threshold;
+    println!(
+        "\n## Settling: {seconds} s simulated (dt 1/60), sleep on and off\n\n\
+         moving = resting speed (speed + spin x r) >= {threshold} m/s (tiltbox's sleep threshold, r = \
+         bounding radius), the same test for both engines.\n"
+    );
+    for setup in setups {
+        let defs: Vec<&BodyDef> = setup
+            .bodies
+            .iter()
+            .filter(|d| d.mass != MassSpec::Static)
+            .collect();
+        for sleep in [true, false] {
+            let s = Setup {
+                sleep,
+                ..(*setup).clone()
+            };
+            println!(
+                "### {} ({} dynamic bodies), sleep {}\n",
+                s.name,
+                defs.len(),
+                if sleep { "on" } else { "off" }
+            );
+            println!("| t (s) | engine | awake | moving | top speed (m/s) | top spin (rad/s) | x min / max | y min / max | lost |");
+            println!("| ---: | --- | ---: | ---: | ---: | ---: | --- | --- | ---: |");
+            let mut engines: [(&str, Box<dyn Engine>); 2] = [
+                ("tiltbox", Box::new(Tiltbox::new(&s))),
+                ("rapier", Box::new(Rapier::new(&s))),
+            ];
+            for done in 1..=steps {
+                for (_, e) in engines.iter_mut() {
+                    e.step();
+                }
+                if done % every != 0 && done != steps {
+                    continue;
+                }
+                for (name, e) in &engines {
+                    let bodies = e.dynamic_bodies();
+                    let stats = kind_stats(&defs, &bodies);
+                    let (mut xmin, mut xmax, mut ymin, mut ymax) = (
+                        f32::INFINITY,
+                        f32::NEG_INFINITY,
+                        f32::INFINITY,
+                        f32::NEG_INFINITY,
+                    );
+                    for b in &bodies {
+                        xmin = xmin.min(b.position[0]);
+                        xmax = xmax.max(b.position[0]);
+                        ymin = ymin.min(b.position[1]);
+                        ymax = ymax.max(b.position[1]);
+                    }
+                    let sum = |f: &dyn Fn(&KindStats) -> usize| {
+                        stats.iter().map(|(_, k)| f(k)).sum::<usize>()
+                    };
+                    let max = |f: &dyn Fn(&KindStats) -> f32| {
+                        stats.iter().map(|(_, k)| f(k)).fold(0.0f32, f32::max)
+                    };
+                    println!(
+                        "| {:.1} | {name} | {} | {} | {:.3} | {:.3} | {xmin:.2} / {xmax:.2} | {ymin:.2} / {ymax:.2} | {} |",
+                        done as f32 / 60.0,
+                        sum(&|k| k.awake),
+                        sum(&|k| k.moving),
+                        max(&|k| k.max_v),
+                        max(&|k| k.max_w),
+                        e.sanity().lost,
+                    );
+                }
+            }
+            println!("\nper kind at {seconds} s:\n");
+            println!("| engine | kind | bodies | awake | moving | top speed (m/s) | top spin (rad/s) | top resting speed (m/s) |");
+            println!("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |");
+            for (name, e) in &engines {
+                for (kind, k) in kind_stats(&defs, &e.dynamic_bodies()) {
+                    println!(
+                        "| {name} | {kind} | {} | {} | {} | {:.4} | {:.4} | {:.4} |",
+                        k.count, k.awake, k.moving, k.max_v, k.max_w, k.max_rest_speed
+                    );
+                }
+            }
+            println!();
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
 // Memory per body.
 
 fn live_bytes_after_10_steps(setup: &Setup, which: &str) -> usize {
     let before = LIVE_BYTES.load(Relaxed);
-    let used = if which == "tiltbox" {
+    if which == "tiltbox" {
         let mut e = Tiltbox::new(setup);
         for _ in 0..10 {
             e.step();
@@ -438,8 +723,7 @@ fn live_bytes_after_10_steps(setup: &Setup, which: &str) -> usize {
         let used = LIVE_BYTES.load(Relaxed) - before;
         drop(e);
         used
-    };
-    used
+    }
 }
 
 fn memory(setups: &[Setup]) {
@@ -568,17 +852,29 @@ fn main() {
     let mut quick = false;
     let mut extras = true;
     let mut chunks = false;
+    let mut settle_seconds: Option<f32> = None;
     let mut filters: Vec<String> = Vec::new();
     for arg in std::env::args().skip(1) {
         match arg.as_str() {
             "--quick" => quick = true,
             "--no-extras" => extras = false,
             "--chunks" => chunks = true,
+            "--settle" => settle_seconds = Some(10.0),
+            a if a.starts_with("--settle=") => match a["--settle=".len()..].parse::<f32>() {
+                Ok(t) if t.is_finite() && t > 0.0 => settle_seconds = Some(t),
+                _ => {
+                    eprintln!("--settle=SECONDS wants a positive number of seconds, got {a}");
+                    std::process::exit(2);
+                }
+            },
             "-h" | "--help" => {
                 println!(
-                    "usage: vs-rapier [--quick] [--no-extras] [--chunks] [SCENE|memory|largest_pyramid ...]\n\
+                    "usage: vs-rapier [--quick] [--no-extras] [--chunks] [--settle[=SECONDS]] [SCENE|memory|largest_pyramid ...]\n\
                      --chunks prints per 25-step chunk and engine: median ms, allocation calls and\n\
                      contact pairs at the chunk's end (stderr).\n\
+                     --settle[=SECONDS] times nothing: steps the selected scenes for SECONDS (10) of\n\
+                     simulated time with sleep on and off and reports awake / moving bodies, top\n\
+                     speeds and positions every 2 s, and per kind of shape at the end.\n\
                      SCENE is a substring of a benchmark scene name; with any name given, the\n\
                      memory and largest-pyramid extras run only when named."
                 );
@@ -619,6 +915,12 @@ fn main() {
         combine_rule(s.friction_mixing),
         combine_rule(s.restitution_mixing),
     );
+
+    if let Some(seconds) = settle_seconds {
+        let selected: Vec<&Setup> = setups.iter().filter(|s| wanted(s.name)).collect();
+        settle(&selected, seconds);
+        return;
+    }
 
     println!("load average before: {}", load_average());
     let mut rows = Vec::new();

@@ -4,7 +4,9 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
+use tiltbox::accuracy::extreme;
 use tiltbox::cases::benchmark_setups;
+use tiltbox::physics::{vec2, BodyDef, Real, Settings, World};
 
 struct Counting;
 
@@ -52,6 +54,27 @@ fn a_steady_step_does_not_allocate() {
         let during = allocations() - before;
         assert_eq!(during, 0, "{name}: {during} allocations in 60 steady steps");
     }
+    // A settled pile of every shape kind (polygons included) steps without allocating too.
+    let mut world = World::new(Settings::soft_step(), vec2(0.0, -9.81)).expect("valid");
+    tiltbox::cases::closed_box(&mut world, 10.0, 10.0, 0.5).expect("valid box");
+    for i in 0..60 {
+        let at = vec2(-4.5 + (i % 10) as Real, 0.6 + 1.1 * (i / 10) as Real);
+        world
+            .add_body(&BodyDef::dynamic(extreme::mixed_shape(i), at))
+            .expect("valid body");
+    }
+    for _ in 0..600 {
+        world.step(1.0 / 60.0).expect("valid dt");
+    }
+    let before = allocations();
+    for _ in 0..60 {
+        world.step(1.0 / 60.0).expect("valid dt");
+    }
+    assert_eq!(
+        allocations() - before,
+        0,
+        "mixed pile allocated in 60 steady steps"
+    );
     // The counter does count: building a world allocates.
     let before = allocations();
     let _ = benchmark_setups()[1].build();

@@ -233,7 +233,7 @@ fn a_damaged_journal_header_is_refused() {
     let e = Journal::parse(&b).unwrap_err();
     assert!(e.contains("version 99"), "{e}");
     b.truncate(8);
-    b.extend_from_slice(&1u32.to_le_bytes());
+    b.extend_from_slice(&tiltbox::service::journal::FORMAT_VERSION.to_le_bytes());
     b.extend_from_slice(&1_000_000u32.to_le_bytes());
     assert!(Journal::parse(&b).unwrap_err().contains("truncated header"));
 }

@@ -59,7 +59,7 @@ pub struct ServeArgs {
     /// Spawn positions and sizes within +-this, metres [config: limits.max_coordinate; default 1000]
     #[arg(long, value_name = "M")]
     pub max_coordinate: Option<f32>,
-    /// Shortest spawned side, m [config: limits.min_size; default 0.01]
+    /// Smallest spawned size (box side, circle or capsule diameter, polygon width), m [config: limits.min_size; default 0.01]
     #[arg(long, value_name = "M")]
     pub min_size: Option<f32>,
     /// [config: limits.min_density; default 0.01 kg/m^2]

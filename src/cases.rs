@@ -238,7 +238,7 @@ pub fn mixed_shape_kinds() -> [Shape; 5] {
         })
         .collect();
     let polygon = |points: &[Vec2]| match Polygon::new(points) {
-        Ok((p, _centroid)) => Shape::Polygon(p),
+        Ok((p, _centroid)) => Shape::from(p),
         Err(e) => panic!("mixed_shapes: a built-in polygon was refused: {e}"),
     };
     [
@@ -262,7 +262,7 @@ pub fn mixed_shapes() -> Vec<BodyDef> {
     let mut bodies = closed_box_defs(50.0, 80.0, 1.0);
     for row in 0..rows {
         for col in 0..columns {
-            let shape = kinds[(col + 2 * row) % kinds.len()];
+            let shape = kinds[(col + 2 * row) % kinds.len()].clone();
             let x = spacing * (col as Real - 0.5 * (columns as Real - 1.0))
                 + 0.1 * ((row % 3) as Real - 1.0);
             let y = 20.0 + spacing * row as Real;

@@ -32,7 +32,7 @@ fn points(m: &Manifold) -> Vec<(Vec2, Real)> {
 }
 
 fn polygon(points: &[Vec2]) -> Shape {
-    Shape::Polygon(Polygon::new(points).unwrap().0)
+    Shape::from(Polygon::new(points).unwrap().0)
 }
 
 /// The regular hexagon of circumradius `r` with a flat bottom edge (vertices at 0, 60, ...

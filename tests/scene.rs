@@ -693,7 +693,7 @@ fn polygon_is_recentred_on_its_centroid_and_the_body_moved_there() {
         "{:?}",
         b.def.position
     );
-    let Shape::Polygon(p) = b.def.shape else {
+    let Shape::Polygon(p) = &b.def.shape else {
         panic!("expected a polygon, got {:?}", b.def.shape)
     };
     let expected = [
@@ -708,7 +708,7 @@ fn polygon_is_recentred_on_its_centroid_and_the_body_moved_there() {
     // The same polygon as the engine builds from those points.
     let (reference, _) =
         tiltbox::physics::Polygon::new(&[vec2(0.0, 0.0), vec2(3.0, 0.0), vec2(0.0, 2.0)]).unwrap();
-    assert_eq!(b.def.shape, Shape::Polygon(reference));
+    assert_eq!(b.def.shape, Shape::from(reference));
     // mass = density x area = 2 x 3.
     let mut world = World::default();
     let id = world.add_body(&b.def).unwrap();

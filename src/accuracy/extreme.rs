@@ -476,7 +476,7 @@ fn outside_box(p: Vec2, width: f64, height: f64, inset: f64) -> f64 {
 pub fn bullet(settings: &Settings) -> Verdict {
     let triangle =
         crate::physics::Polygon::new(&[vec2(-0.05, -0.05), vec2(0.05, 0.0), vec2(-0.05, 0.05)])
-            .map(|(p, _)| Shape::Polygon(p))
+            .map(|(p, _)| Shape::from(p))
             .unwrap_or(Shape::rect(0.1, 0.1));
     let kinds = [
         (Shape::rect(0.1, 0.1), 0.0),
@@ -488,7 +488,7 @@ pub fn bullet(settings: &Settings) -> Verdict {
     let mut worst_x = f64::NEG_INFINITY;
     let mut measured = Vec::new();
     for (shape, spin) in kinds {
-        let (finite, max_x) = fire_bullet(settings, shape, spin);
+        let (finite, max_x) = fire_bullet(settings, shape.clone(), spin);
         ok &= finite;
         worst_x = worst_x.max(max_x);
         let name = match shape.kind() {
@@ -858,7 +858,7 @@ pub fn mixed_shape(i: usize) -> Shape {
             })
             .collect();
         match Polygon::new(&pts) {
-            Ok((p, _)) => Shape::Polygon(p),
+            Ok((p, _)) => Shape::from(p),
             Err(_) => Shape::rect(r, r),
         }
     };

@@ -218,7 +218,7 @@ impl Body {
         let is_static = inv_mass == 0.0;
         Body {
             id,
-            shape: def.shape,
+            shape: def.shape.clone(),
             position: def.position,
             angle: def.angle,
             rot: Rot::from_angle(def.angle),
@@ -328,7 +328,7 @@ impl Body {
     /// The definition that would recreate this body in its current state.
     pub fn to_def(&self) -> BodyDef {
         BodyDef {
-            shape: self.shape,
+            shape: self.shape.clone(),
             position: self.position,
             angle: self.angle,
             linear_velocity: self.linear_velocity,

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 /// The serde form is externally tagged (`{"circle": {"radius": 0.5}}`), which both
 /// self-describing formats and postcard read back; a polygon travels as its vertex list and is
 /// re-checked on the way in.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Shape {
     /// A rectangle of the given half extents (half width, half height), in metres. A polygon
@@ -37,7 +37,9 @@ pub enum Shape {
         radius: Real,
     },
     /// A convex polygon of 3 to 8 vertices, centred on its centroid (see [`Polygon::new`]).
-    Polygon(Polygon),
+    /// Boxed: a polygon is 136 bytes, and keeping it out of line keeps `Shape` (and every body)
+    /// small in worlds of boxes and circles.
+    Polygon(Box<Polygon>),
 }
 
 impl Shape {
@@ -199,6 +201,13 @@ impl Shape {
     }
 }
 
+impl From<Polygon> for Shape {
+    /// The polygon as a shape (boxed, see [`Shape::Polygon`]).
+    fn from(p: Polygon) -> Shape {
+        Shape::Polygon(Box::new(p))
+    }
+}
+
 /// An axis-aligned bounding box in world coordinates (metres).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
@@ -306,7 +315,7 @@ mod tests {
             "{b:?}"
         );
         let (p, _) = Polygon::new(&[vec2(0.0, 0.0), vec2(2.0, 0.0), vec2(0.0, 1.0)]).unwrap();
-        let b = Shape::Polygon(p).aabb(Transform {
+        let b = Shape::from(p).aabb(Transform {
             p: vec2(10.0, 0.0),
             q: Rot::IDENTITY,
         });

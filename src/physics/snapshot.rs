@@ -355,7 +355,7 @@ impl World {
                 .map(|s| SlotState {
                     generation: s.generation,
                     body: s.body.as_ref().map(|b| BodyState {
-                        shape: b.shape,
+                        shape: b.shape.clone(),
                         position: v2(b.position),
                         angle: b.angle,
                         rot: [b.rot.c, b.rot.s],
@@ -414,7 +414,7 @@ impl World {
                     None
                 }
                 Some(b) => {
-                    let shape = b.shape;
+                    let shape = b.shape.clone();
                     shape.validate().map_err(err)?;
                     let mut all = vec![
                         b.angle,

@@ -122,7 +122,7 @@ impl ShapeEntry {
                 }
                 let (polygon, centroid) =
                     Polygon::new(&points).map_err(|e| SceneError::physics(at, e))?;
-                return Ok((Shape::Polygon(polygon), centroid));
+                return Ok((Shape::from(polygon), centroid));
             }
         };
         shape.validate().map_err(|e| SceneError::physics(at, e))?;

@@ -46,7 +46,7 @@ mod compact_def {
 
     pub fn serialize<S: Serializer>(d: &BodyDef, s: S) -> Result<S::Ok, S::Error> {
         Compact {
-            shape: d.shape,
+            shape: d.shape.clone(),
             position: [d.position.x, d.position.y],
             angle: d.angle,
             linear_velocity: [d.linear_velocity.x, d.linear_velocity.y],
@@ -213,7 +213,7 @@ pub fn shape_from_spec(spec: &ShapeSpec) -> Result<(Shape, Vec2), PhysicsError> 
                 .collect();
             let (p, centroid) = Polygon::new(&points)?;
             if Polygon::centred(p.vertices()).is_ok() {
-                return Ok((Shape::Polygon(p), centroid));
+                return Ok((Shape::from(p), centroid));
             }
             // Far from the origin the centroid is only known to the precision of the
             // coordinates there, and the centred vertices keep that residue. The centred
@@ -221,7 +221,7 @@ pub fn shape_from_spec(spec: &ShapeSpec) -> Result<(Shape, Vec2), PhysicsError> 
             // pass near the origin finds the residue precisely.
             return match Polygon::new(p.vertices()) {
                 Ok((q, residue)) if Polygon::centred(q.vertices()).is_ok() => {
-                    Ok((Shape::Polygon(q), centroid + residue))
+                    Ok((Shape::from(q), centroid + residue))
                 }
                 _ => Err(PhysicsError::InvalidShape {
                     field: "shape.vertices".into(),
@@ -752,7 +752,7 @@ mod tests {
             "{:?} vs {want:?}",
             d.position
         );
-        let Shape::Polygon(p) = d.shape else {
+        let Shape::Polygon(p) = &d.shape else {
             panic!("{:?}", d.shape)
         };
         let v: Vec<(f64, f64)> = p
@@ -785,7 +785,7 @@ mod tests {
             let mut b = with_shape(polygon(&pts));
             b.position = Vector::new(0.0, 0.0);
             let d = spawn_ok(b);
-            let Shape::Polygon(p) = d.def.shape else {
+            let Shape::Polygon(p) = &d.def.shape else {
                 unreachable!()
             };
             Polygon::centred(p.vertices()).unwrap();

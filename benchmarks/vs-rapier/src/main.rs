@@ -288,7 +288,7 @@ impl Rapier {
                 .friction_combine_rule(friction_rule)
                 .restitution(def.restitution as f32)
                 .restitution_combine_rule(restitution_rule);
-            let collider = match (def.mass, def.shape) {
+            let collider = match (def.mass, &def.shape) {
                 (MassSpec::Static, _) => collider,
                 // parry2d 0.31 moves a capsule's two half discs out by 3r/8 (a 3D hemisphere's
                 // centroid) where a half disc's is 4r/(3 pi), so its 2D capsule inertia is low

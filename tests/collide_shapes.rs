@@ -527,3 +527,75 @@ fn every_pair_of_kinds_agrees_with_brute_force_distance() {
         "{overlapping} {within} {checked_exact}"
     );
 }
+
+// ---- feature ids ---------------------------------------------------------------------------
+
+#[test]
+fn feature_ids_survive_small_motion_for_every_resting_pair() {
+    // Warm starting matches points by id from one step to the next; a resting contact that
+    // shifts by a millimetre and turns by a hundredth of a radian must keep its ids, or the
+    // solver restarts it cold every step.
+    let ground = Shape::rect(10.0, 1.0); // top at y = 0.5
+    let hex = hexagon(0.5);
+    let h = (3.0 as Real).sqrt() / 4.0;
+    let cap = Shape::capsule(2.0, 0.25);
+    let resting: [(&str, Shape, Transform, Shape, Real); 5] = [
+        (
+            "box on box",
+            ground.clone(),
+            at(0.0, 0.0, 0.0),
+            Shape::rect(1.0, 1.0),
+            1.0,
+        ),
+        (
+            "capsule on box",
+            ground.clone(),
+            at(0.0, 0.0, 0.0),
+            cap.clone(),
+            0.75,
+        ),
+        (
+            "hexagon on box",
+            ground.clone(),
+            at(0.0, 0.0, 0.0),
+            hex.clone(),
+            0.5 + h,
+        ),
+        (
+            "capsule on capsule",
+            cap.clone(),
+            at(0.0, 0.5, 0.0),
+            cap.clone(),
+            1.0,
+        ),
+        (
+            "hexagon on hexagon",
+            hex.clone(),
+            at(0.0, 0.5, 0.0),
+            hex.clone(),
+            0.5 + 2.0 * h,
+        ),
+    ];
+    for (name, a, xa, b, y) in resting {
+        let ids = |dx: Real, dy: Real, turn: Real| {
+            let m = collide(&a, xa, &b, at(0.2 + dx, y - 0.003 + dy, turn), 0.02);
+            let mut v: Vec<_> = m.points().iter().map(|p| p.id).collect();
+            v.sort_unstable();
+            (m.count, v)
+        };
+        let still = ids(0.0, 0.0, 0.0);
+        assert_eq!(still.0, 2, "{name}: a resting face contact has two points");
+        for (dx, dy, turn) in [
+            (0.001, 0.0, 0.0),
+            (-0.001, 0.0005, 0.0),
+            (0.0, 0.0, 0.01),
+            (0.0, 0.0, -0.01),
+        ] {
+            assert_eq!(
+                ids(dx, dy, turn),
+                still,
+                "{name} moved by ({dx}, {dy}, {turn})"
+            );
+        }
+    }
+}

@@ -78,14 +78,15 @@ pub struct Settings {
     pub contact_hertz: Real,
     /// Soft step: stiffen a contact beyond `contact_hertz` when the load it carried last step
     /// would sink it deeper than `linear_slop` (k >= F / slop), up to `max_contact_hertz_ratio`
-    /// times the substep rate. Keeps tall stacks from buckling on soft springs. Default on;
-    /// off gives Box2D v3's fixed-stiffness contacts.
+    /// times the substep rate; the spring then falls by at most 2 % per step. Default **off**
+    /// (Box2D v3's fixed springs): on, with the default 4 substeps, a pile of 2,000 boxes never
+    /// came to rest (1,860 still moving at 1-2 m/s after 10 s), because every contact in it
+    /// stiffens and the Gauss-Seidel passes cannot settle that many stiff springs. It is what
+    /// extreme mass ratios need: the stiff configuration (`tiltbox report`'s third column,
+    /// 8 substeps and 4 relax passes) turns it on, and holds a 1000:1 mass ratio within 2 slops.
     pub load_aware_stiffness: bool,
     /// Soft step: ceiling for load-aware stiffening, as a fraction of the substep rate.
-    /// Default 0.25 (Box2D's own cap on contact stiffness): at 0.5 a pile of 2,000 boxes never
-    /// came to rest (1,860 still moving at 1-2 m/s after 10 s); at 0.25 it sleeps within
-    /// 10 s. Extreme mass ratios want more: the stiff configuration (`tiltbox report`'s third
-    /// column) uses 0.5 with 8 substeps.
+    /// Default 0.5 (a spring at half the substep rate still resolves within a substep).
     pub max_contact_hertz_ratio: Real,
     /// Soft step: contact damping ratio (dimensionless). Default 10.
     pub contact_damping_ratio: Real,
@@ -117,8 +118,8 @@ impl Default for Settings {
 }
 
 impl Settings {
-    /// Soft-step defaults after Box2D v3: 4 substeps, damping ratio 10, push-out 3 m/s, with
-    /// 60 Hz contacts (Box2D: 30) and load-aware stiffening (see the fields for why).
+    /// Soft-step defaults after Box2D v3: 4 substeps, damping ratio 10, push-out 3 m/s, fixed
+    /// springs, with 60 Hz contacts (Box2D: 30; see the fields for why).
     pub fn soft_step() -> Settings {
         Settings {
             solver: SolverKind::SoftStep,
@@ -132,8 +133,8 @@ impl Settings {
             restitution_mixing: Mixing::GeometricMean,
             restitution_threshold: 1.0,
             contact_hertz: 60.0,
-            load_aware_stiffness: true,
-            max_contact_hertz_ratio: 0.25,
+            load_aware_stiffness: false,
+            max_contact_hertz_ratio: 0.5,
             contact_damping_ratio: 10.0,
             max_push_out_speed: 3.0,
             speculative_distance: 0.02,

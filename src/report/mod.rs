@@ -406,7 +406,7 @@ pub fn stiff_soft_step() -> Settings {
     Settings {
         substeps: 8,
         relax_iterations: 4,
-        max_contact_hertz_ratio: 0.5,
+        load_aware_stiffness: true,
         ..Settings::soft_step()
     }
 }
@@ -540,7 +540,7 @@ pub fn markdown(r: &Report) -> String {
         m,
         "Each case runs at 60 Hz (except `huge_dt`) with the solver's defaults: \
          `Settings::soft_step()` ({} substeps, {} Hz contacts, damping ratio {}, push-out {} m/s, \
-         load-aware stiffening on, slop {} m) and `Settings::sequential()` (10 iterations, \
+         fixed springs, slop {} m) and `Settings::sequential()` (10 iterations, \
          Baumgarte 0.2, slop 10 mm); the last column is the soft step with 8 substeps, 4 relax passes and \
          load-aware stiffening up to half the substep rate. Sleeping is turned off (a sleeping stack cannot drift) except \
          in `pyramid_sleeps`. The criterion column is the soft step's text; limits written in slops \
@@ -573,7 +573,7 @@ pub fn markdown(r: &Report) -> String {
     let total = r.suite.soft_step.iter().filter(|v| !v.report_only).count();
     let _ = writeln!(
         m,
-        "Passed: soft step {soft_pass} of {total}, sequential {seq_pass} of {total}, soft step with 8 substeps and 4 relax passes {stiff_pass} of {total}.\n"
+        "Passed: soft step {soft_pass} of {total}, sequential {seq_pass} of {total}, soft step with 8 substeps, 4 relax passes and load-aware stiffening {stiff_pass} of {total}.\n"
     );
     let _ = writeln!(
         m,

@@ -400,15 +400,10 @@ pub struct SuiteResults {
     pub soft_step_stiff: Vec<Verdict>,
 }
 
-/// The named stiffer soft-step configuration of the third column: 8 substeps, 4 relax passes,
-/// load-aware stiffening up to half the substep rate.
+/// The named stiffer soft-step configuration of the third column: `Settings::soft_step_stiff`
+/// (8 substeps, 4 relax passes, 120 Hz contacts, load-aware stiffening).
 pub fn stiff_soft_step() -> Settings {
-    Settings {
-        substeps: 8,
-        relax_iterations: 4,
-        load_aware_stiffness: true,
-        ..Settings::soft_step()
-    }
+    Settings::soft_step_stiff()
 }
 
 /// Run the suite for both solvers (with the report-only pyramid of base 100).
@@ -541,8 +536,8 @@ pub fn markdown(r: &Report) -> String {
         "Each case runs at 60 Hz (except `huge_dt`) with the solver's defaults: \
          `Settings::soft_step()` ({} substeps, {} Hz contacts, damping ratio {}, push-out {} m/s, \
          fixed springs, slop {} m) and `Settings::sequential()` (10 iterations, \
-         Baumgarte 0.2, slop 10 mm); the last column is the soft step with 8 substeps, 4 relax passes and \
-         load-aware stiffening up to half the substep rate. Sleeping is turned off (a sleeping stack cannot drift) except \
+         Baumgarte 0.2, slop 10 mm); the last column is `Settings::soft_step_stiff()`: 8 substeps, 4 relax passes, \
+         120 Hz contacts and load-aware stiffening. Sleeping is turned off (a sleeping stack cannot drift) except \
          in `pyramid_sleeps`. The criterion column is the soft step's text; limits written in slops \
          use each solver's own slop. The CI versions are `tests/stability.rs` (soft step; see its \
          header for the cases it asserts in another configuration).\n",
@@ -573,11 +568,11 @@ pub fn markdown(r: &Report) -> String {
     let total = r.suite.soft_step.iter().filter(|v| !v.report_only).count();
     let _ = writeln!(
         m,
-        "Passed: soft step {soft_pass} of {total}, sequential {seq_pass} of {total}, soft step with 8 substeps, 4 relax passes and load-aware stiffening {stiff_pass} of {total}.\n"
+        "Passed: soft step {soft_pass} of {total}, sequential {seq_pass} of {total}, `soft_step_stiff` {stiff_pass} of {total}.\n"
     );
     let _ = writeln!(
         m,
-        "| case | criterion | soft step | sequential | soft step, 8 sub, 4 relax |"
+        "| case | criterion | soft step | sequential | `soft_step_stiff` (8 sub, 4 relax, 120 Hz, load-aware) |"
     );
     let _ = writeln!(m, "| --- | --- | --- | --- | --- |");
     for ((a, b), c) in r

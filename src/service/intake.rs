@@ -211,27 +211,9 @@ pub fn shape_from_spec(spec: &ShapeSpec) -> Result<(Shape, Vec2), PhysicsError> 
                 .iter()
                 .map(|v| Vec2::new(v.x as Real, v.y as Real))
                 .collect();
+            // `Polygon::new` centres in two passes and refuses what would not read back.
             let (p, centroid) = Polygon::new(&points)?;
-            if Polygon::centred(p.vertices()).is_ok() {
-                return Ok((Shape::from(p), centroid));
-            }
-            // Far from the origin the centroid is only known to the precision of the
-            // coordinates there, and the centred vertices keep that residue. The centred
-            // vertices are exact differences (close numbers subtract exactly), so a second
-            // pass near the origin finds the residue precisely.
-            return match Polygon::new(p.vertices()) {
-                Ok((q, residue)) if Polygon::centred(q.vertices()).is_ok() => {
-                    Ok((Shape::from(q), centroid + residue))
-                }
-                _ => Err(PhysicsError::InvalidShape {
-                    field: "shape.vertices".into(),
-                    reason: format!(
-                        "lie around [{}, {}], too far from position for their size: their \
-                         centroid cannot be found precisely; give them relative to position",
-                        centroid.x, centroid.y
-                    ),
-                }),
-            };
+            return Ok((Shape::from(p), centroid));
         }
     };
     shape.validate()?;

@@ -419,7 +419,7 @@ fn bad_input_is_refused_with_the_field_and_value_and_nothing_changes() {
     assert!(w.remove_body(id).is_err(), "stale id refused");
     assert!(w.body(id).is_none());
     let id2 = w.add_body(&ok).unwrap();
-    assert_eq!(id2.index, id.index, "slot reused");
+    assert_eq!(id2.index(), id.index(), "slot reused");
     assert_ne!(id2, id, "but never the id");
 }
 

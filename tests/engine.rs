@@ -1,7 +1,8 @@
 //! Black-box tests of the engine against closed-form answers (issue 2's testing strategy).
 //! Each tolerance says where it comes from.
+#![cfg(feature = "measure")]
 
-use tiltbox::cases::ground;
+use tiltbox::measure::cases::ground;
 use tiltbox::physics::{vec2, BodyDef, BodyId, Real, Settings, Shape, Vec2, World};
 
 const DT: Real = 1.0 / 60.0;

@@ -1,5 +1,5 @@
 //! The stiff and extreme suite with the soft-step defaults (`Settings::soft_step()`), as in
-//! issue 5. Each test asserts the case's stated criterion (see `tiltbox::accuracy::extreme`
+//! issue 5. Each test asserts the case's stated criterion (see `tiltbox::measure::accuracy::extreme`
 //! for the set-ups and the criterion text); a failure message prints every measured number.
 //! The pyramid of base 100 is report-only (`tiltbox report`). The runners turn sleeping off
 //! (a sleeping stack cannot drift), except `pyramid_sleeps`, which checks sleeping itself.
@@ -13,8 +13,9 @@
 //!   (8 substeps, 4 relax passes, 120 Hz contacts, load-aware stiffening).
 //! - mass ratios 100:1 and 1000:1 fail with the defaults (4 substeps, 1 relax pass) and pass
 //!   with `Settings::soft_step_stiff()`, asserted here.
+#![cfg(feature = "measure")]
 
-use tiltbox::accuracy::{extreme, Verdict};
+use tiltbox::measure::accuracy::{extreme, Verdict};
 use tiltbox::physics::Settings;
 
 fn check(run: fn(&Settings) -> Verdict) {

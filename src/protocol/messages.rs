@@ -47,16 +47,9 @@ impl std::fmt::Display for BodyRef {
     }
 }
 
-/// An sRGB colour, three bytes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Colour {
-    /// Red.
-    pub r: u8,
-    /// Green.
-    pub g: u8,
-    /// Blue.
-    pub b: u8,
-}
+/// An sRGB colour: three bytes on the wire, red first. The scene files' own type, whose
+/// binary serde form this is.
+pub use crate::scene::Colour;
 
 /// A collision shape, in the body's frame (metres). New kinds are appended, so a variant's
 /// number on the wire never changes.

@@ -1,4 +1,4 @@
-//! Body colours: `"#rrggbb"` strings in scene files, three bytes in memory.
+//! Body colours: one type for scene files, the wire, journals and checkpoints.
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
@@ -6,8 +6,10 @@ use std::str::FromStr;
 
 /// An sRGB colour, 8 bits per channel, used by viewers to draw a body (no effect on physics).
 ///
-/// Written and read as `"#rrggbb"` (six hex digits, either case): [`fmt::Display`], [`FromStr`]
-/// and serde all use that form.
+/// Its serde form depends on the format. Human-readable formats (scene files in TOML, JSON)
+/// write and read `"#rrggbb"` (six hex digits, either case), as [`fmt::Display`] and
+/// [`FromStr`] do. Binary formats (postcard: the wire protocol, journals, checkpoints) write the
+/// three channels as three bytes, red first (`docs/protocol.md`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Colour {
     /// Red, 0-255.
@@ -65,16 +67,35 @@ impl FromStr for Colour {
     }
 }
 
+/// The binary form: three bytes, red, green, blue.
+#[derive(Serialize, Deserialize)]
+#[serde(rename = "Colour")]
+struct Channels {
+    r: u8,
+    g: u8,
+    b: u8,
+}
+
 impl Serialize for Colour {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.collect_str(self)
+        if serializer.is_human_readable() {
+            serializer.collect_str(self)
+        } else {
+            let Colour { r, g, b } = *self;
+            Channels { r, g, b }.serialize(serializer)
+        }
     }
 }
 
 impl<'de> Deserialize<'de> for Colour {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Colour, D::Error> {
-        let s = String::deserialize(deserializer)?;
-        s.parse().map_err(serde::de::Error::custom)
+        if deserializer.is_human_readable() {
+            let s = String::deserialize(deserializer)?;
+            s.parse().map_err(serde::de::Error::custom)
+        } else {
+            let Channels { r, g, b } = Channels::deserialize(deserializer)?;
+            Ok(Colour::new(r, g, b))
+        }
     }
 }
 
@@ -88,6 +109,22 @@ mod tests {
         assert_eq!(c, Colour::new(0xd6, 0x45, 0x41));
         assert_eq!(c.to_string(), "#d64541");
         assert_eq!(Colour::GREY.to_string(), "#808080");
+    }
+
+    #[cfg(feature = "net")] // postcard comes with the wire protocol
+    #[test]
+    fn binary_formats_carry_three_bytes_and_text_formats_the_hex_string() {
+        let c = Colour::new(0xd6, 0x45, 0x41);
+        let bytes = postcard::to_allocvec(&c).unwrap();
+        assert_eq!(bytes, [0xd6, 0x45, 0x41]);
+        assert_eq!(postcard::from_bytes::<Colour>(&bytes).unwrap(), c);
+        #[derive(Serialize, Deserialize)]
+        struct Entry {
+            colour: Colour,
+        }
+        let text = toml::to_string(&Entry { colour: c }).unwrap();
+        assert_eq!(text.trim(), "colour = \"#d64541\"");
+        assert_eq!(toml::from_str::<Entry>(&text).unwrap().colour, c);
     }
 
     #[test]

@@ -404,12 +404,7 @@ impl Simulation {
         self.meta.clear();
         self.last_sent.clear();
         for (body, id) in scene.bodies.iter().zip(ids) {
-            let colour = Colour {
-                r: body.colour.r,
-                g: body.colour.g,
-                b: body.colour.b,
-            };
-            self.set_meta(id, body.name.clone(), colour);
+            self.set_meta(id, body.name.clone(), body.colour);
         }
         self.scene_name = scene.name.clone();
         let g = scene.gravity.length() as f32;
@@ -431,10 +426,11 @@ impl Simulation {
     fn meta_of(&self, id: BodyId) -> Arc<BodyMeta> {
         match self.meta.get(id.index() as usize) {
             Some(Some((generation, m))) if *generation == id.generation() => m.clone(),
+            // Every live body has its meta; should one not, it is shown nameless and black.
             _ => Arc::new(BodyMeta::of(
                 self.world.body(id).expect("live body"),
                 String::new(),
-                Colour::default(),
+                Colour::new(0, 0, 0),
             )),
         }
     }

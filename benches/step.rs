@@ -1,11 +1,11 @@
 //! Criterion benchmarks of one `World::step` (dt 1/60, default soft-step settings) on the
-//! benchmark scenes of `tiltbox::cases::benchmark_setups()`.
+//! benchmark scenes of `tiltbox::measure::cases::benchmark_setups()`.
 //!
 //! ```text
-//! cargo bench --no-default-features --bench step          # engine only: quickest build
-//! cargo bench --no-default-features --bench step -- pyramid_20
-//! cargo bench --no-default-features --bench step -- mixed_shapes
-//! cargo bench --no-default-features --bench step -- narrow_phase   # box fast path vs polygon
+//! cargo bench --no-default-features --features measure --bench step   # engine and set-ups only: quickest build
+//! cargo bench --no-default-features --features measure --bench step -- pyramid_20
+//! cargo bench --no-default-features --features measure --bench step -- mixed_shapes
+//! cargo bench --no-default-features --features measure --bench step -- narrow_phase   # box fast path vs polygon
 //! ```
 //!
 //! Each benchmark steps one World over and over (the scene keeps evolving, as in a game), after
@@ -16,7 +16,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use std::time::Duration;
-use tiltbox::cases::{benchmark_setups, Setup};
+use tiltbox::measure::cases::{benchmark_setups, Setup};
 use tiltbox::physics::{Real, World};
 
 const DT: Real = 1.0 / 60.0;

@@ -1,12 +1,12 @@
 //! Steps one benchmark scene and prints ms/step: a target for `perf record` while optimising.
-//! Usage: cargo run --release --no-default-features --example profile_step [SCENE] [STEPS]
+//! Usage: cargo run --release --no-default-features --features measure --example profile_step [SCENE] [STEPS]
 use std::time::Instant;
 
 fn main() {
     let mut args = std::env::args().skip(1);
     let name = args.next().unwrap_or_else(|| "large_pyramid".to_string());
     let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(500);
-    let Some(setup) = tiltbox::cases::benchmark_setups()
+    let Some(setup) = tiltbox::measure::cases::benchmark_setups()
         .into_iter()
         .find(|s| s.name == name)
     else {

@@ -1,16 +1,19 @@
 //! tiltbox: a 2D rigid-body physics engine written from scratch, served as a daemon over
 //! Eclipse Zenoh.
 //!
-//! - [`physics`]: the engine (no async, no network).
-pub mod accuracy;
-pub mod cases;
+//! - [`physics`]: the engine (no async, no network); all that `--no-default-features` builds.
+//! - `scene` (feature `scene`): TOML scene files to Worlds.
+//! - `protocol` (feature `net`): the wire messages and key expressions.
+//! - `service` (feature `net`): the daemon.
+//! - `client` (features `net` and `cli`): the clients' library (tilt sources, viewer).
+//! - `measure` (feature `measure`): set-ups, accuracy runners and the report.
 #[cfg(all(feature = "net", feature = "cli"))]
 pub mod client;
+#[cfg(feature = "measure")]
+pub mod measure;
 pub mod physics;
 #[cfg(feature = "net")]
 pub mod protocol;
-#[cfg(feature = "report")]
-pub mod report;
 #[cfg(feature = "scene")]
 pub mod scene;
 #[cfg(feature = "net")]

@@ -5,8 +5,10 @@
 //!
 //! Each tolerance says where it comes from. h is the integration step: dt for the sequential
 //! solver, dt / substeps for the soft step (`accuracy::integration_step`).
+#![cfg(feature = "measure")]
 
-use tiltbox::accuracy::{closed_form, integration_step, scenes, Measurement};
+use tiltbox::measure::accuracy::reference::{self, ReferenceCase};
+use tiltbox::measure::accuracy::{closed_form, integration_step, Measurement};
 use tiltbox::physics::{Real, Settings};
 
 const DT: Real = 1.0 / 60.0;
@@ -18,7 +20,7 @@ fn solvers() -> [Settings; 2] {
 fn show(s: &Settings, m: &Measurement) -> String {
     format!(
         "{} {}: error {} {} ({}), diverged {}, details {:?}",
-        tiltbox::accuracy::config_label(s),
+        tiltbox::measure::accuracy::config_label(s),
         m.case,
         m.error,
         m.unit,
@@ -180,12 +182,12 @@ fn resting_stack_of_10_neither_sinks_nor_drifts() {
     }
 }
 
-fn scene_check(scene: scenes::Scene, s: &Settings) -> Measurement {
-    let reference = scenes::reference_run(scene, s);
-    let m = scenes::compare(&scenes::run(scene, s, DT), &reference);
+fn reference_check(case: ReferenceCase, s: &Settings) -> Measurement {
+    let baseline = reference::reference_run(case, s);
+    let m = reference::compare(&reference::run(case, s, DT), &baseline);
     println!("{}", show(s, &m));
     assert!(!m.diverged, "{}", show(s, &m));
-    assert!(!reference.diverged, "reference diverged: {reference:?}");
+    assert!(!baseline.diverged, "reference diverged: {baseline:?}");
     // Contacts are found up to the speculative distance (4 x slop) ahead; an overlap deeper
     // than that means a contact was resolved late.
     let slop = s.linear_slop as f64;
@@ -201,7 +203,7 @@ fn scene_check(scene: scenes::Scene, s: &Settings) -> Measurement {
 #[test]
 fn falling_bricks_stays_bounded_against_its_reference() {
     for s in solvers() {
-        let m = scene_check(scenes::Scene::FallingBricks, &s);
+        let m = reference_check(ReferenceCase::FallingBricks, &s);
         // Chaotic after the first collisions, so no convergence order; the bricks must still
         // end up in the same region as the reference run (1 m RMS in a 10 m box).
         assert!(m.error < 1.0, "{}", show(&s, &m));
@@ -211,7 +213,7 @@ fn falling_bricks_stays_bounded_against_its_reference() {
 #[test]
 fn pyramid_of_20_settles_like_its_reference() {
     for s in solvers() {
-        let m = scene_check(scenes::Scene::Pyramid20, &s);
+        let m = reference_check(ReferenceCase::Pyramid20, &s);
         // The pyramid only settles: positions should agree with the fine reference to within
         // the overlap two resting contacts may have (2 x slop).
         assert!(m.error < 2.0 * s.linear_slop as f64, "{}", show(&s, &m));

@@ -1,11 +1,11 @@
 //! A steady step allocates nothing: the World reuses its buffers (issue 6). Counted with a
 //! global allocator that tallies allocations made by the current thread only, so the test
 //! harness's own threads do not disturb the count.
+#![cfg(feature = "measure")]
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use tiltbox::accuracy::extreme;
-use tiltbox::cases::benchmark_setups;
+use tiltbox::measure::cases::{self, benchmark_setups};
 use tiltbox::physics::{vec2, BodyDef, Real, Settings, World};
 
 struct Counting;
@@ -56,11 +56,11 @@ fn a_steady_step_does_not_allocate() {
     }
     // A settled pile of every shape kind (polygons included) steps without allocating too.
     let mut world = World::new(Settings::soft_step(), vec2(0.0, -9.81)).expect("valid");
-    tiltbox::cases::closed_box(&mut world, 10.0, 10.0, 0.5).expect("valid box");
+    cases::closed_box(&mut world, 10.0, 10.0, 0.5).expect("valid box");
     for i in 0..60 {
         let at = vec2(-4.5 + (i % 10) as Real, 0.6 + 1.1 * (i / 10) as Real);
         world
-            .add_body(&BodyDef::dynamic(extreme::mixed_shape(i), at))
+            .add_body(&BodyDef::dynamic(cases::mixed_shape(i), at))
             .expect("valid body");
     }
     for _ in 0..600 {

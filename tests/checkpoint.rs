@@ -8,7 +8,6 @@ use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
 use tiltbox::service::checkpoint::{self, load, previous_path, write_atomic};
 use tiltbox::service::intake::parse;
-use tiltbox::service::journal::state_hash;
 use tiltbox::service::{Incoming, SceneSource, Server, ServerConfig, Simulation};
 
 const WAIT: Duration = Duration::from_secs(5);
@@ -97,8 +96,8 @@ fn a_restored_simulation_continues_bit_identically() {
         tick(&mut live, &config);
         tick(&mut restored, &config);
         assert_eq!(
-            state_hash(live.world()),
-            state_hash(restored.world()),
+            live.world().state_hash(),
+            restored.world().state_hash(),
             "frame {}",
             live.frame()
         );

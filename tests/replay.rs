@@ -10,7 +10,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
 use tiltbox::service::intake::parse;
-use tiltbox::service::journal::{replay, state_hash, Journal, JournalWriter, Record};
+use tiltbox::service::journal::{replay, Journal, JournalWriter, Record};
 use tiltbox::service::tick::{self, Outputs, Recording, TickConfig};
 use tiltbox::service::{Incoming, SceneSource, ServerConfig, Simulation};
 
@@ -24,7 +24,7 @@ impl Outputs for Hashes {
     fn stats(&mut self, _: Vec<u8>) {}
     fn stepped(&mut self, sim: &Simulation) {
         let mut v = self.0.lock().unwrap();
-        v.push((sim.frame(), state_hash(sim.world())));
+        v.push((sim.frame(), sim.world().state_hash()));
     }
 }
 
@@ -179,7 +179,7 @@ fn a_recorded_run_replays_bit_identically_at_every_frame() {
     assert!(commands > 50, "only {commands} commands recorded");
     let mut replayed = Vec::new();
     let report = replay(&journal, None, |sim| {
-        replayed.push((sim.frame(), state_hash(sim.world())))
+        replayed.push((sim.frame(), sim.world().state_hash()))
     })
     .unwrap();
     assert!(report.clean_end);

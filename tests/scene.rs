@@ -104,6 +104,7 @@ fn stack_is_ten_boxes_on_a_ground() {
     assert_eq!(ids.len(), 11);
 }
 
+#[cfg(feature = "measure")]
 #[test]
 fn pyramid_is_210_boxes_laid_out_like_cases_pyramid() {
     let scene = load("pyramid.toml");
@@ -112,7 +113,7 @@ fn pyramid_is_210_boxes_laid_out_like_cases_pyramid() {
     assert_eq!(scene.bodies.iter().filter(|b| !b.is_static).count(), 210);
     // Same layout as the shared test case (row i has 20 - i boxes, centred on x = 0).
     let mut reference = World::default();
-    let ref_ids = tiltbox::cases::pyramid(&mut reference, 20, 1.0, 0.0, 0.6).unwrap();
+    let ref_ids = tiltbox::measure::cases::pyramid(&mut reference, 20, 1.0, 0.0, 0.6).unwrap();
     for (b, id) in scene.bodies[1..].iter().zip(&ref_ids) {
         let r = reference.body(*id).unwrap();
         assert!(close(b.def.position, r.position()), "{}", b.name);

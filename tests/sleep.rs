@@ -1,6 +1,7 @@
 //! Islands and sleep: resting islands sleep; touching, pushing, removing and tilting wake them.
+#![cfg(feature = "measure")]
 
-use tiltbox::cases::{ground, stack};
+use tiltbox::measure::cases::{ground, stack};
 use tiltbox::physics::{vec2, BodyDef, BodyId, Real, Settings, Shape, World};
 
 const DT: Real = 1.0 / 60.0;

@@ -1,7 +1,7 @@
 //! The stiff and extreme suite with the **default** settings (`Settings::default()`, what
 //! scenes, the daemon and `simulate` use), as issue 12 asks: every case must pass without the
 //! user picking a configuration. Each test asserts the case's stated criterion (see
-//! `tiltbox::accuracy::extreme` for the set-ups and the criterion text); a failure message
+//! `tiltbox::measure::accuracy::extreme` for the set-ups and the criterion text); a failure message
 //! prints every measured number. The runners turn sleeping off (a sleeping stack cannot
 //! drift), except where a case says otherwise (`stack_20` runs both ways, `pyramid_sleeps`
 //! checks sleeping itself). The pyramids of base 100 and 134 are report-only (`tiltbox report`):
@@ -11,8 +11,9 @@
 //! that carry heavy loads or join very different masses get 2 or 4 times the substeps, relax
 //! passes and contact stiffness; `fixed_settings_fail_where_adaptive_stiffness_is_needed`
 //! checks that this, and not luck, is what makes them pass.
+#![cfg(feature = "measure")]
 
-use tiltbox::accuracy::{extreme, Verdict};
+use tiltbox::measure::accuracy::{extreme, Verdict};
 use tiltbox::physics::Settings;
 
 fn check(run: fn(&Settings) -> Verdict) {

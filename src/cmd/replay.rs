@@ -46,11 +46,7 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<ExitCode> {
     let hashes = args.hashes;
     let report = match replay(&journal, scene, |sim| {
         if hashes {
-            println!(
-                "{} {:016x}",
-                sim.frame(),
-                tiltbox::service::journal::state_hash(sim.world())
-            );
+            println!("{} {:016x}", sim.frame(), sim.world().state_hash());
         }
     }) {
         Ok(r) => r,

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use tiltbox::report::{generate, ReportOptions};
+use tiltbox::measure::report::{generate, ReportOptions};
 
 /// Arguments of `tiltbox report`.
 #[derive(clap::Args, Default, Debug)]

@@ -9,6 +9,7 @@ pub mod collide;
 pub mod contact;
 pub mod convex;
 pub mod error;
+pub mod hash;
 pub mod math;
 pub mod settings;
 pub mod shape;

@@ -13,6 +13,7 @@
 
 use super::super::body::{Body, BodyId};
 use super::super::contact::{Arms, Contact, ContactPoint};
+use super::super::hash::Fnv1a;
 use super::super::math::{Real, Rot, Vec2};
 use super::super::settings::Settings;
 use super::super::shape::Shape;
@@ -354,14 +355,11 @@ impl World {
 
     /// FNV-1a hash of [`World::state_bits`]: one number per frame for replay checks.
     pub fn state_hash(&self) -> u64 {
-        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut h = Fnv1a::new();
         for word in self.state_bits() {
-            for byte in word.to_le_bytes() {
-                h ^= u64::from(byte);
-                h = h.wrapping_mul(0x0000_0100_0000_01b3);
-            }
+            h.write(&word.to_le_bytes());
         }
-        h
+        h.finish()
     }
 
     /// The full state: what [`World::import_state`] needs to continue bit-identically.

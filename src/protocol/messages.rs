@@ -22,7 +22,8 @@ impl Vector {
     }
 }
 
-/// A body id on the wire: the engine's [`BodyId`], two varints.
+/// A body id on the wire: the engine's [`BodyId`], two varints. Only the daemon turns one
+/// back into an engine id, by finding the live body it names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct BodyRef {
     /// Slot index.
@@ -34,17 +35,8 @@ pub struct BodyRef {
 impl From<BodyId> for BodyRef {
     fn from(id: BodyId) -> BodyRef {
         BodyRef {
-            index: id.index,
-            generation: id.generation,
-        }
-    }
-}
-
-impl From<BodyRef> for BodyId {
-    fn from(id: BodyRef) -> BodyId {
-        BodyId {
-            index: id.index,
-            generation: id.generation,
+            index: id.index(),
+            generation: id.generation(),
         }
     }
 }

@@ -14,6 +14,7 @@
 
 use super::config::ServerConfig;
 use super::sim::{SceneSource, SimState, Simulation, StartError};
+use crate::physics::hash::fnv1a;
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -24,16 +25,6 @@ use std::thread::JoinHandle;
 pub const FORMAT_VERSION: u32 = 2;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
-
-/// FNV-1a, 64 bit: small, dependency-free and good enough to detect damage (not tampering).
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
 
 /// Why a checkpoint file cannot be used.
 #[derive(Debug, thiserror::Error)]

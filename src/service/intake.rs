@@ -5,10 +5,10 @@
 
 use super::config::Limits;
 use crate::physics::convex::MAX_VERTICES;
-use crate::physics::{BodyDef, BodyId, MassSpec, PhysicsError, Polygon, Real, Rot, Shape, Vec2};
+use crate::physics::{BodyDef, MassSpec, PhysicsError, Polygon, Real, Rot, Shape, Vec2};
 use crate::protocol::{
-    decode, Colour, CommandKey, Remove, Reset, SetGravity, ShapeSpec, Spawn, SpawnBody, Tilt,
-    Vector,
+    decode, BodyRef, Colour, CommandKey, Remove, Reset, SetGravity, ShapeSpec, Spawn, SpawnBody,
+    Tilt, Vector,
 };
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{SyncSender, TrySendError};
@@ -82,8 +82,8 @@ pub enum Command {
     Tilt(Tilt),
     /// Add bodies, all or nothing.
     Spawn(Vec<SpawnDef>),
-    /// Remove bodies, all or nothing.
-    Remove(Vec<BodyId>),
+    /// Remove bodies, all or nothing: ids as sent, resolved to live bodies when applied.
+    Remove(Vec<BodyRef>),
     /// Reload the scene.
     Reset,
 }
@@ -169,9 +169,7 @@ pub fn parse(key: CommandKey, payload: &[u8], limits: &Limits) -> Result<Command
             if r.ids.is_empty() {
                 return Err("ids is empty: nothing to remove".into());
             }
-            Ok(Command::Remove(
-                r.ids.into_iter().map(BodyId::from).collect(),
-            ))
+            Ok(Command::Remove(r.ids))
         }
         CommandKey::Reset => {
             let Reset = decode(payload).map_err(bad)?;

@@ -15,7 +15,6 @@ use super::checkpoint;
 use super::config::ServerConfig;
 use super::intake::{Command, Incoming};
 use super::sim::{SceneSource, Simulation, StartError};
-use crate::physics::World;
 use crate::protocol::CommandKey;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -28,13 +27,6 @@ pub const FORMAT_VERSION: u32 = 2;
 const MAGIC: &[u8; 8] = b"TILTJRNL";
 /// Largest record accepted when reading (a corrupt length must not allocate gigabytes).
 const MAX_RECORD: u32 = 256 << 20;
-
-/// A hash of every body's state (id, position, angle, velocities, awake) and gravity, over the
-/// exact bits of each number, in slot order: equal hashes mean (with overwhelming odds)
-/// bit-identical worlds.
-pub fn state_hash(world: &World) -> u64 {
-    world.state_hash()
-}
 
 /// Where the recorded run's scene came from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -84,7 +76,7 @@ pub enum Record {
     Frame {
         /// The frame.
         frame: u64,
-        /// [`state_hash`] of the World.
+        /// [`crate::physics::World::state_hash`] of the World: every body's state bits and gravity.
         hash: u64,
     },
     /// The daemon stopped cleanly after `frame`.
@@ -228,7 +220,7 @@ impl JournalWriter {
         self.write(
             &Record::Frame {
                 frame: sim.frame(),
-                hash: state_hash(sim.world()),
+                hash: sim.world().state_hash(),
             },
             true,
         );
@@ -424,7 +416,7 @@ pub fn replay(
                         sim.frame()
                     )));
                 }
-                let h = state_hash(sim.world());
+                let h = sim.world().state_hash();
                 report.frames_checked += 1;
                 if h != *hash {
                     report.mismatches += 1;
@@ -442,6 +434,6 @@ pub fn replay(
         }
     }
     report.last_frame = sim.frame();
-    report.final_hash = state_hash(sim.world());
+    report.final_hash = sim.world().state_hash();
     Ok(report)
 }

@@ -12,7 +12,7 @@ use crate::protocol::{
     Snapshot, Vector,
 };
 use crate::scene::{Scene, SceneError};
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -421,16 +421,16 @@ impl Simulation {
     fn set_meta(&mut self, id: BodyId, name: String, colour: Colour) {
         let body = self.world.body(id).expect("body just added");
         let meta = Arc::new(BodyMeta::of(body, name, colour));
-        let i = id.index as usize;
+        let i = id.index() as usize;
         if self.meta.len() <= i {
             self.meta.resize(i + 1, None);
         }
-        self.meta[i] = Some((id.generation, meta));
+        self.meta[i] = Some((id.generation(), meta));
     }
 
     fn meta_of(&self, id: BodyId) -> Arc<BodyMeta> {
-        match self.meta.get(id.index as usize) {
-            Some(Some((generation, m))) if *generation == id.generation => m.clone(),
+        match self.meta.get(id.index() as usize) {
+            Some(Some((generation, m))) if *generation == id.generation() => m.clone(),
             _ => Arc::new(BodyMeta::of(
                 self.world.body(id).expect("live body"),
                 String::new(),
@@ -575,27 +575,33 @@ impl Simulation {
         Ok(EventKind::Added { bodies })
     }
 
-    fn remove(&mut self, ids: Vec<BodyId>) -> Result<EventKind, String> {
-        for (i, id) in ids.iter().enumerate() {
-            if self.world.body(*id).is_none() {
-                return Err(format!("ids[{i}]: {}", PhysicsError::UnknownBody(*id)));
+    fn remove(&mut self, refs: Vec<BodyRef>) -> Result<EventKind, String> {
+        // The live bodies by their wire id: a wire id names a body only if one has it now.
+        let live: HashMap<BodyRef, BodyId> = self
+            .world
+            .bodies()
+            .map(|b| (BodyRef::from(b.id()), b.id()))
+            .collect();
+        let mut ids = Vec::with_capacity(refs.len());
+        for (i, r) in refs.iter().enumerate() {
+            let Some(&id) = live.get(r) else {
+                return Err(format!("ids[{i}]: no body with id {r}"));
+            };
+            if refs[..i].contains(r) {
+                return Err(format!("ids[{i}]: body {r} is listed twice"));
             }
-            if ids[..i].contains(id) {
-                return Err(format!("ids[{i}]: body {id} is listed twice"));
-            }
+            ids.push(id);
         }
         for id in &ids {
             self.world.remove_body(*id).map_err(|e| e.to_string())?;
-            if let Some(m) = self.meta.get_mut(id.index as usize) {
+            if let Some(m) = self.meta.get_mut(id.index() as usize) {
                 *m = None;
             }
-            if let Some(s) = self.last_sent.get_mut(id.index as usize) {
+            if let Some(s) = self.last_sent.get_mut(id.index() as usize) {
                 *s = None;
             }
         }
-        Ok(EventKind::Removed {
-            ids: ids.into_iter().map(BodyRef::from).collect(),
-        })
+        Ok(EventKind::Removed { ids: refs })
     }
 
     fn reset(&mut self) -> Result<EventKind, String> {
@@ -676,18 +682,18 @@ impl Simulation {
                 body.position().y as f32,
                 body.angle() as f32,
             ];
-            let i = id.index as usize;
+            let i = id.index() as usize;
             if self.last_sent.len() <= i {
                 self.last_sent.resize(i + 1, None);
             }
             let moved = match self.last_sent[i] {
-                Some((generation, was)) if generation == id.generation => {
+                Some((generation, was)) if generation == id.generation() => {
                     (0..3).any(|k| (now[k] - was[k]).abs() > POSE_EPSILON)
                 }
                 _ => true,
             };
             if keyframe || moved {
-                self.last_sent[i] = Some((id.generation, now));
+                self.last_sent[i] = Some((id.generation(), now));
                 s.poses.push(Pose {
                     id: id.into(),
                     x: now[0],

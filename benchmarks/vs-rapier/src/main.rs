@@ -1,4 +1,4 @@
-//! tiltbox vs rapier2d on the benchmark scenes of `tiltbox::cases::benchmark_setups()`, built from
+//! tiltbox vs rapier2d on the benchmark scenes of `tiltbox::measure::cases::benchmark_setups()`, built from
 //! the same body definitions, stepped in the same process, timed step by step.
 //!
 //! ```text
@@ -34,7 +34,7 @@ use rapier2d::prelude::{
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::time::Instant;
-use tiltbox::cases::{benchmark_setups, Setup};
+use tiltbox::measure::cases::{benchmark_setups, Setup};
 use tiltbox::physics::{BodyDef, MassSpec, Mixing, Settings, Shape, Vec2, World};
 
 // ---------------------------------------------------------------------------------------------

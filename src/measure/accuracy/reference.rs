@@ -1,4 +1,5 @@
-//! Scenes without a closed form, measured against a reference run of the same solver.
+//! Cases without a closed form (Falling Bricks, a pyramid), measured against a reference run
+//! of the same solver.
 //!
 //! A run records every dynamic body's position at fixed sample times, the deepest overlap seen
 //! at any step, and the energy drift. [`compare`] turns a run and a reference run into a
@@ -9,45 +10,46 @@
 //! iterations (sequential: 100) or substeps (soft step: 16).
 
 use super::{blown_up, energy, max_penetration, new_world, steps_for, Measurement, G};
-use crate::physics::{vec2, BodyDef, BodyId, Real, Settings, Shape, SolverKind, Vec2, World};
+use crate::measure::cases;
+use crate::physics::{vec2, BodyId, Real, Settings, SolverKind, Vec2, World};
 
-/// A scene with no closed form.
+/// A case with no closed form, measured against a reference run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Scene {
+pub enum ReferenceCase {
     /// A closed box of 4 walls (10 m x 10 m inside) with 6 differently sized bricks dropped in.
     FallingBricks,
     /// A pyramid of base 20 (210 boxes of 1 m) on the ground.
     Pyramid20,
 }
 
-impl Scene {
-    /// Both scenes, in report order.
-    pub const ALL: [Scene; 2] = [Scene::FallingBricks, Scene::Pyramid20];
+impl ReferenceCase {
+    /// Both cases, in report order.
+    pub const ALL: [ReferenceCase; 2] = [ReferenceCase::FallingBricks, ReferenceCase::Pyramid20];
 
     /// Machine name.
     pub fn name(self) -> &'static str {
         match self {
-            Scene::FallingBricks => "falling_bricks",
-            Scene::Pyramid20 => "pyramid_20",
+            ReferenceCase::FallingBricks => "falling_bricks",
+            ReferenceCase::Pyramid20 => "pyramid_20",
         }
     }
 
     /// Human title.
     pub fn title(self) -> &'static str {
         match self {
-            Scene::FallingBricks => "Falling Bricks",
-            Scene::Pyramid20 => "Pyramid, base 20",
+            ReferenceCase::FallingBricks => "Falling Bricks",
+            ReferenceCase::Pyramid20 => "Pyramid, base 20",
         }
     }
 
     /// The set-up, in words.
     pub fn setup(self) -> &'static str {
         match self {
-            Scene::FallingBricks => {
+            ReferenceCase::FallingBricks => {
                 "closed box of 4 static walls (10 m x 10 m inside, 0.5 m thick) with 6 bricks \
                  (0.3-2 m, restitution 0-0.3) dropped from 3-8.5 m at different angles, 3 s"
             }
-            Scene::Pyramid20 => {
+            ReferenceCase::Pyramid20 => {
                 "pyramid of base 20 (210 boxes of 1 m, friction 0.6) on the ground, 2 s"
             }
         }
@@ -56,67 +58,39 @@ impl Scene {
     /// Times at which positions are sampled (s); the last one is the run's length.
     pub fn sample_times(self) -> &'static [f64] {
         match self {
-            Scene::FallingBricks => &[0.5, 1.0, 2.0, 3.0],
-            Scene::Pyramid20 => &[0.5, 1.0, 2.0],
+            ReferenceCase::FallingBricks => &[0.5, 1.0, 2.0, 3.0],
+            ReferenceCase::Pyramid20 => &[0.5, 1.0, 2.0],
         }
     }
 
-    /// Build the scene; returns the world and the dynamic bodies to track.
+    /// Build the set-up (from [`cases`]); returns the world and the dynamic bodies to track.
     pub fn build(self, settings: &Settings) -> (World, Vec<BodyId>) {
         let mut w = new_world(settings, vec2(0.0, -G));
         let ids = match self {
-            Scene::FallingBricks => falling_bricks(&mut w),
-            Scene::Pyramid20 => {
-                crate::cases::ground(&mut w, 0.0, 100.0, 2.0).unwrap();
-                crate::cases::pyramid(&mut w, 20, 1.0, 0.0, 0.6).unwrap()
+            ReferenceCase::FallingBricks => cases::falling_bricks(&mut w).unwrap(),
+            ReferenceCase::Pyramid20 => {
+                cases::ground(&mut w, 0.0, 100.0, 2.0).unwrap();
+                cases::pyramid(&mut w, 20, 1.0, 0.0, 0.6).unwrap()
             }
         };
         (w, ids)
     }
 
-    /// Size of the region the scene lives in (m): beyond it the run has blown up.
+    /// Size of the region the case lives in (m): beyond it the run has blown up.
     fn arena(self) -> f64 {
         match self {
-            Scene::FallingBricks => 20.0,
-            Scene::Pyramid20 => 100.0,
+            ReferenceCase::FallingBricks => 20.0,
+            ReferenceCase::Pyramid20 => 100.0,
         }
     }
 }
 
-/// The six bricks (width, height, x, y, angle, restitution), inside a 10 m x 10 m box.
-const BRICKS: [(Real, Real, Real, Real, Real, Real); 6] = [
-    (1.0, 0.5, -3.0, 3.0, 0.3, 0.1),
-    (0.6, 0.6, -1.0, 5.0, 0.0, 0.2),
-    (2.0, 0.4, 1.0, 6.5, -0.4, 0.0),
-    (0.3, 1.2, 3.0, 4.0, 0.8, 0.3),
-    (1.5, 1.0, 0.5, 8.5, 0.1, 0.1),
-    (0.8, 0.2, -2.5, 8.0, 1.2, 0.0),
-];
-
-/// Falling Bricks: a closed box of four walls (`cases::closed_box`, 10 m x 10 m inside, walls
-/// 0.5 m) with six differently sized bricks placed at different heights and angles.
-pub fn falling_bricks(world: &mut World) -> Vec<BodyId> {
-    crate::cases::closed_box(world, 10.0, 10.0, 0.5).unwrap();
-    BRICKS
-        .iter()
-        .map(|&(wd, ht, x, y, angle, e)| {
-            world
-                .add_body(
-                    &BodyDef::dynamic(Shape::rect(wd, ht), vec2(x, y))
-                        .with_angle(angle)
-                        .with_restitution(e),
-                )
-                .unwrap()
-        })
-        .collect()
-}
-
-/// What one run of a scene recorded.
+/// What one run of a reference case recorded.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SceneRun {
-    /// Which scene.
-    pub scene: Scene,
-    /// Positions of the tracked bodies at each of `scene.sample_times()` (fewer if diverged).
+pub struct ReferenceRun {
+    /// Which case.
+    pub case: ReferenceCase,
+    /// Positions of the tracked bodies at each of `case.sample_times()` (fewer if diverged).
     pub samples: Vec<Vec<Vec2>>,
     /// Deepest overlap seen at any step (m).
     pub max_penetration: f64,
@@ -128,18 +102,18 @@ pub struct SceneRun {
     pub steps: u64,
 }
 
-/// Run `scene` with `settings` at `dt` and record it.
-pub fn run(scene: Scene, settings: &Settings, dt: Real) -> SceneRun {
-    let (mut w, ids) = scene.build(settings);
+/// Run `case` with `settings` at `dt` and record it.
+pub fn run(case: ReferenceCase, settings: &Settings, dt: Real) -> ReferenceRun {
+    let (mut w, ids) = case.build(settings);
     let e0 = energy(&w);
     let mut samples = Vec::new();
     let mut max_pen: f64 = 0.0;
     let mut diverged = false;
     let mut done = 0u64;
-    'outer: for &t in scene.sample_times() {
+    'outer: for &t in case.sample_times() {
         let target = steps_for(t, dt);
         while done < target {
-            if w.step(dt).is_err() || blown_up(&w, scene.arena()) {
+            if w.step(dt).is_err() || blown_up(&w, case.arena()) {
                 diverged = true;
                 break 'outer;
             }
@@ -153,8 +127,8 @@ pub fn run(scene: Scene, settings: &Settings, dt: Real) -> SceneRun {
         );
     }
     let e1 = energy(&w);
-    SceneRun {
-        scene,
+    ReferenceRun {
+        case,
         samples,
         max_penetration: max_pen,
         energy_drift: if e0 != 0.0 { (e1 - e0) / e0.abs() } else { 0.0 },
@@ -174,15 +148,15 @@ pub fn reference(settings: &Settings) -> (Settings, Real) {
     (s, 1.0 / 960.0)
 }
 
-/// The reference run of `scene` for `settings`' solver.
-pub fn reference_run(scene: Scene, settings: &Settings) -> SceneRun {
+/// The reference run of `case` for `settings`' solver.
+pub fn reference_run(case: ReferenceCase, settings: &Settings) -> ReferenceRun {
     let (s, dt) = reference(settings);
-    run(scene, &s, dt)
+    run(case, &s, dt)
 }
 
 /// Compare a run with its reference. Error: RMS position difference (m) over all tracked
 /// bodies and sample times.
-pub fn compare(run: &SceneRun, reference: &SceneRun) -> Measurement {
+pub fn compare(run: &ReferenceRun, reference: &ReferenceRun) -> Measurement {
     let mut sum = 0.0f64;
     let mut count = 0usize;
     let mut worst: f64 = 0.0;
@@ -194,7 +168,7 @@ pub fn compare(run: &SceneRun, reference: &SceneRun) -> Measurement {
             worst = worst.max(d);
         }
     }
-    let complete = run.samples.len() == run.scene.sample_times().len();
+    let complete = run.samples.len() == run.case.sample_times().len();
     let diverged = run.diverged || !complete || !sum.is_finite();
     let rms = if count > 0 && !diverged {
         (sum / count as f64).sqrt()
@@ -202,7 +176,7 @@ pub fn compare(run: &SceneRun, reference: &SceneRun) -> Measurement {
         f64::NAN
     };
     Measurement {
-        case: run.scene.name(),
+        case: run.case.name(),
         error: rms,
         unit: "m",
         error_meaning: "RMS position difference from the reference run at the sample times",

@@ -480,8 +480,8 @@ pub fn spin(settings: &Settings, dt: Real) -> Measurement {
 /// 10 boxes of 1 m stacked on the ground, 10 s. Error: displacement of the top box (m).
 pub fn resting_stack(settings: &Settings, dt: Real) -> Measurement {
     let mut w = new_world(settings, vec2(0.0, -G));
-    crate::cases::ground(&mut w, 0.0, 40.0, 2.0).unwrap();
-    let ids = crate::cases::stack(&mut w, 10, 1.0, 0.0, 0.0).unwrap();
+    crate::measure::cases::ground(&mut w, 0.0, 40.0, 2.0).unwrap();
+    let ids = crate::measure::cases::stack(&mut w, 10, 1.0, 0.0, 0.0).unwrap();
     let top = *ids.last().unwrap();
     let p0 = pos(&w, top);
     let n = steps_for(10.0, dt);

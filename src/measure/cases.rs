@@ -1,6 +1,9 @@
-//! Standard set-ups shared by the tests, the accuracy report and the benchmarks: grounds,
-//! stacks, pyramids and closed boxes, built the way Box2D's samples and benchmark build them.
+//! Standard set-ups shared by the tests, the accuracy runners, the report and the benchmarks:
+//! grounds, stacks (aligned and jittered), pyramids, closed boxes, Falling Bricks and mixed
+//! shapes, built the way Box2D's samples and benchmark build them. Every set-up of the
+//! measurement code comes from here. Units: metres, kilograms, radians.
 
+use crate::physics::math::PI;
 use crate::physics::{BodyDef, BodyId, PhysicsError, Polygon, Real, Shape, Vec2, World};
 
 /// A static ground box `width` x `thickness` metres whose top surface is at y = 0, centred on x = `x`.
@@ -29,6 +32,27 @@ pub fn stack(
         .map(|i| {
             let y = 0.5 * size + i as Real * (size + gap);
             world.add_body(&BodyDef::dynamic(Shape::rect(size, size), Vec2::new(x, y)))
+        })
+        .collect()
+}
+
+/// `n` boxes of side `size` stacked on y = 0 around x = `x`, each shifted sideways by a fixed
+/// pseudo-random amount within +-1 % of its size (box2d-lite jitters its stack by +-10 %), so a
+/// perfectly symmetric stack cannot hide drift. Returns the ids bottom to top.
+pub fn jittered_stack(
+    world: &mut World,
+    n: usize,
+    size: Real,
+    x: Real,
+) -> Result<Vec<BodyId>, PhysicsError> {
+    (0..n)
+        .map(|i| {
+            let jitter = 0.01 * size * (((i * 7919) % 11) as Real / 5.0 - 1.0);
+            let y = (0.5 + i as Real) * size;
+            world.add_body(&BodyDef::dynamic(
+                Shape::rect(size, size),
+                Vec2::new(x + jitter, y),
+            ))
         })
         .collect()
 }
@@ -72,6 +96,64 @@ pub fn closed_box(
         world.add_body(&defs[2])?,
         world.add_body(&defs[3])?,
     ])
+}
+
+/// The six bricks of [`falling_bricks`]: (width, height, x, y, angle, restitution), in a
+/// 10 m x 10 m box.
+const BRICKS: [(Real, Real, Real, Real, Real, Real); 6] = [
+    (1.0, 0.5, -3.0, 3.0, 0.3, 0.1),
+    (0.6, 0.6, -1.0, 5.0, 0.0, 0.2),
+    (2.0, 0.4, 1.0, 6.5, -0.4, 0.0),
+    (0.3, 1.2, 3.0, 4.0, 0.8, 0.3),
+    (1.5, 1.0, 0.5, 8.5, 0.1, 0.1),
+    (0.8, 0.2, -2.5, 8.0, 1.2, 0.0),
+];
+
+/// Falling Bricks as the accuracy runners build it: a [`closed_box`] 10 m x 10 m inside with
+/// 0.5 m walls, and six differently sized bricks (0.3-2 m, restitution 0-0.3) placed at
+/// 3-8.5 m and different angles. Returns the bricks' ids. (The benchmark's `falling_bricks`
+/// is the original app's 8 m x 6 m box, see [`benchmark_setups`].)
+pub fn falling_bricks(world: &mut World) -> Result<Vec<BodyId>, PhysicsError> {
+    closed_box(world, 10.0, 10.0, 0.5)?;
+    BRICKS
+        .iter()
+        .map(|&(width, height, x, y, angle, restitution)| {
+            world.add_body(
+                &BodyDef::dynamic(Shape::rect(width, height), Vec2::new(x, y))
+                    .with_angle(angle)
+                    .with_restitution(restitution),
+            )
+        })
+        .collect()
+}
+
+/// A regular polygon of `n` vertices on a circle of radius `r` (m), centred on its centroid;
+/// a square of side `r` if the engine refuses it (it does not for 3 <= n <= 8 and r > 0).
+fn regular_polygon(n: usize, r: Real) -> Shape {
+    let points: Vec<Vec2> = (0..n)
+        .map(|k| {
+            let a = k as Real * 2.0 * PI / n as Real;
+            Vec2::new(r * a.cos(), r * a.sin())
+        })
+        .collect();
+    match Polygon::new(&points) {
+        Ok((p, _)) => Shape::from(p),
+        Err(_) => Shape::rect(r, r),
+    }
+}
+
+/// The `i`-th body of the accuracy runners' mixed pile: the five shape kinds in turn, about
+/// 0.6-0.9 m across (circle, capsule, triangle, hexagon, box), each scaled by a fixed
+/// pseudo-random factor between 0.8 and 1.2 picked by `i`.
+pub fn mixed_shape(i: usize) -> Shape {
+    let scale = 0.8 + 0.4 * ((i * 37) % 11) as Real / 10.0;
+    match i % 5 {
+        0 => Shape::circle(0.35 * scale),
+        1 => Shape::capsule(0.9 * scale, 0.2 * scale),
+        2 => regular_polygon(3, 0.45 * scale),
+        3 => regular_polygon(6, 0.4 * scale),
+        _ => Shape::rect(0.6 * scale, 0.6 * scale),
+    }
 }
 
 /// A benchmark scene as plain body definitions, so that any engine can build it (the rapier2d

@@ -1,22 +1,27 @@
-//! Accuracy and stability measurements: case runners that return numbers, not opinions.
+//! Accuracy and stability runners: they run cases and return numbers, not documents.
 //!
-//! Three families, all built from [`crate::physics`] and [`crate::cases`] only:
+//! Three families, all built from [`crate::physics`] and the set-ups of [`super::cases`]:
 //!
 //! - [`closed_form`]: cases with an analytic answer (free fall, slide to a stop, slopes, bounce,
 //!   head-on collision, spin under torque, resting stack). Each is a function
 //!   `fn(&Settings, dt) -> Measurement` giving the error against the closed form.
-//! - [`scenes`]: scenes without a closed form (Falling Bricks, pyramid of base 20), measured
-//!   against a reference run of the same solver at a much finer step ([`scenes::reference`]).
+//! - [`reference`]: cases without a closed form (Falling Bricks, pyramid of base 20), measured
+//!   against a reference run of the same solver at a much finer step ([`reference::reference`]).
 //! - [`extreme`]: the stiff and extreme suite; each case returns a [`Verdict`] with its
 //!   criterion in words, the measured numbers and pass/fail.
 //!
+//! [`sweep`] runs the first two families over step sizes and solver configurations, timing
+//! each run, and the suite over the three named configurations: what the report
+//! (`super::report`) then charts and writes.
+//!
 //! Solver and iteration/substep counts come from the [`Settings`] passed in (with sleeping
 //! turned off, see `new_world`; only [`extreme::pyramid_sleeps`] lets bodies sleep); see
-//! [`sequential`] and [`soft_step`] for the configurations the report sweeps.
+//! [`sequential`] and [`soft_step`] for the configurations the sweep uses.
 
 pub mod closed_form;
 pub mod extreme;
-pub mod scenes;
+pub mod reference;
+pub mod sweep;
 
 use crate::physics::{Real, Settings, SolverKind, World};
 
@@ -105,7 +110,8 @@ impl Verdict {
     }
 }
 
-/// `x` with 3-4 significant digits, in plain or scientific notation as fits.
+/// `x` with 3-4 significant digits, in plain or scientific notation as fits: the one number
+/// format of verdicts, criteria and the report.
 pub fn fmt_num(x: f64) -> String {
     if !x.is_finite() {
         return format!("{x}");

@@ -3,7 +3,7 @@
 //! criterion in words, pass/fail and the measured numbers.
 
 use super::{blown_up, max_penetration, new_world, steps_for, Verdict, DT_60, G};
-use crate::cases;
+use crate::measure::cases;
 use crate::physics::{
     vec2, BodyDef, BodyId, PhysicsError, Real, Settings, Shape, SolverKind, Vec2, World,
 };
@@ -118,24 +118,6 @@ fn max_speed(w: &World) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// `n` boxes of side `size` stacked on y = 0 around x = `x`, each shifted sideways by a fixed
-/// pseudo-random amount within +-1 % of its size (box2d-lite jitters its stack by +-10 %), so a
-/// perfectly symmetric stack cannot hide drift. Returns the ids bottom to top.
-pub fn jittered_stack(world: &mut World, n: usize, size: Real, x: Real) -> Vec<BodyId> {
-    (0..n)
-        .map(|i| {
-            let jitter = 0.01 * size * (((i * 7919) % 11) as Real / 5.0 - 1.0);
-            let y = (0.5 + i as Real) * size;
-            world
-                .add_body(&BodyDef::dynamic(
-                    Shape::rect(size, size),
-                    vec2(x + jitter, y),
-                ))
-                .unwrap()
-        })
-        .collect()
-}
-
 /// What a stack run measured.
 struct StackRun {
     /// Largest |x - x0| of the top box at any step (m).
@@ -173,7 +155,7 @@ fn run_stack_with(
     }
     cases::ground(&mut w, x, 40.0, 2.0).unwrap();
     let ids = if jitter {
-        jittered_stack(&mut w, n, 1.0, x)
+        cases::jittered_stack(&mut w, n, 1.0, x).unwrap()
     } else {
         cases::stack(&mut w, n, 1.0, x, 0.0).unwrap()
     };
@@ -725,7 +707,7 @@ pub fn tiny_bodies(settings: &Settings) -> Verdict {
     let size: Real = 0.01;
     let mut w = new_world(settings, gravity());
     cases::ground(&mut w, 0.0, 10.0, 1.0).unwrap();
-    let ids = jittered_stack(&mut w, 3, size, 0.0);
+    let ids = cases::jittered_stack(&mut w, 3, size, 0.0).unwrap();
     let top = ids[2];
     let p0 = pos(&w, top);
     let mut drift: f64 = 0.0;
@@ -864,16 +846,8 @@ pub fn gravity_flip(settings: &Settings) -> Verdict {
 /// Falling Bricks plus a 5-box stack stepped at dt = 0.1 s for 100 steps (10 s).
 pub fn huge_dt(settings: &Settings) -> Verdict {
     let mut w = new_world(settings, gravity());
-    let mut ids = super::scenes::falling_bricks(&mut w);
-    for i in 0..5 {
-        ids.push(
-            w.add_body(&BodyDef::dynamic(
-                Shape::rect(0.8, 0.8),
-                vec2(-3.8, 0.4 + 0.8 * i as Real),
-            ))
-            .unwrap(),
-        );
-    }
+    let mut ids = cases::falling_bricks(&mut w).unwrap();
+    ids.extend(cases::stack(&mut w, 5, 0.8, -3.8, 0.0).unwrap());
     let dt: Real = 0.1;
     let mut ok = true;
     let mut outside: f64 = 0.0;
@@ -995,33 +969,7 @@ pub fn non_finite_refused(settings: &Settings) -> Verdict {
     )
 }
 
-/// The five shape kinds in turn, about 0.6-0.9 m across: circle, capsule, triangle, hexagon,
-/// box. Index `i` picks the kind and a size between 0.8x and 1.2x.
-pub fn mixed_shape(i: usize) -> Shape {
-    use crate::physics::Polygon;
-    let scale = 0.8 + 0.4 * ((i * 37) % 11) as Real / 10.0;
-    let ngon = |n: usize, r: Real| {
-        let pts: Vec<Vec2> = (0..n)
-            .map(|k| {
-                let a = k as Real * 2.0 * crate::physics::math::PI / n as Real;
-                vec2(r * a.cos(), r * a.sin())
-            })
-            .collect();
-        match Polygon::new(&pts) {
-            Ok((p, _)) => Shape::from(p),
-            Err(_) => Shape::rect(r, r),
-        }
-    };
-    match i % 5 {
-        0 => Shape::circle(0.35 * scale),
-        1 => Shape::capsule(0.9 * scale, 0.2 * scale),
-        2 => ngon(3, 0.45 * scale),
-        3 => ngon(6, 0.4 * scale),
-        _ => Shape::rect(0.6 * scale, 0.6 * scale),
-    }
-}
-
-/// 60 bodies of five kinds (circles, capsules, triangles, hexagons, boxes; [`mixed_shape`])
+/// 60 bodies of five kinds (circles, capsules, triangles, hexagons, boxes; [`cases::mixed_shape`])
 /// dropped in a 10 m x 10 m box with random spins, 10 s at 60 Hz, sleeping off.
 pub fn mixed_pile(settings: &Settings) -> Verdict {
     let mut w = new_world(settings, gravity());
@@ -1032,7 +980,7 @@ pub fn mixed_pile(settings: &Settings) -> Verdict {
         let x = -4.5 + col + 0.05 * row;
         let y = 0.6 + 1.1 * row;
         let spin = 3.0 * (((i * 13) % 7) as Real / 3.0 - 1.0);
-        let def = BodyDef::dynamic(mixed_shape(i), vec2(x, y))
+        let def = BodyDef::dynamic(cases::mixed_shape(i), vec2(x, y))
             .with_angle(0.3 * i as Real)
             .with_angular_velocity(spin);
         ids.push(w.add_body(&def).unwrap());

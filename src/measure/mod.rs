@@ -1,0 +1,16 @@
+//! Measurement: tools about the engine, not the engine (feature `measure`, in the default set;
+//! the engine-only build, `--no-default-features`, leaves all of it out).
+//!
+//! - [`cases`]: every set-up the tests, runners, report and benchmarks build (grounds, stacks,
+//!   pyramids, closed boxes, Falling Bricks, mixed shapes, the benchmark scenes).
+//! - [`accuracy`]: runners that run a case and return numbers (closed forms, reference runs,
+//!   the stiff and extreme suite) and the sweeps over step sizes and configurations.
+//! - `report` (feature `report`): charts and `docs/accuracy.md` from what the sweeps return.
+//!
+//! The side-by-side comparison with rapier2d is its own crate, `benchmarks/vs-rapier`, built
+//! on [`cases::benchmark_setups`].
+
+pub mod accuracy;
+pub mod cases;
+#[cfg(feature = "report")]
+pub mod report;

@@ -92,7 +92,8 @@ pub struct Settings {
     /// not need"). An island in which a contact has carried at least `stiff_load_ratio` times
     /// the weight of the lighter body it touches for two steps running (or joins bodies whose
     /// masses differ that much) is solved with twice the substeps, relax passes and contact
-    /// stiffness; one that joins masses `extreme_mass_ratio` apart, with four times. Every other island keeps the base settings and pays
+    /// stiffness; one that joins masses `extreme_mass_ratio` apart, with four times the
+    /// substeps and stiffness and eight times the relax passes. Every other island keeps the base settings and pays
     /// nothing. Default **on**: with it the defaults pass every case of the stiff suite (jittered
     /// 20- and 50-box stacks, 100:1 and 1000:1 mass ratios both ways, the symmetric pyramid of
     /// base 30), which fixed settings pass only at 2.2-2.5 times the cost of every step.

@@ -103,6 +103,13 @@ pub(crate) struct Contact {
     /// Soft step: the spring's frequency last step (Hz), carried over so that load-aware
     /// stiffening can let it fall only slowly (0 for a new contact).
     pub hertz: Real,
+    /// The normal force this contact carried (N), held from step to step: it rises at once and
+    /// falls by at most 2 % per step. Adaptive stiffness reads it (`Settings::adaptive_stiffness`).
+    pub load: Real,
+    /// The normal force of the last step alone (N).
+    pub force: Real,
+    /// Steps this pair has been in contact, saturating at 255.
+    pub age: u8,
     /// Two-point contacts: the normal block and its inverse for this step (None: solve the
     /// points one at a time).
     pub block: Option<BlockMass>,

@@ -107,6 +107,12 @@ pub struct ContactState {
     pub softness: [Real; 3],
     /// Soft step spring frequency last step (Hz).
     pub hertz: Real,
+    /// Normal force carried, held from step to step (N): adaptive stiffness reads it.
+    pub load: Real,
+    /// Normal force of the last step alone (N).
+    pub force: Real,
+    /// Steps in contact (saturating at 255).
+    pub age: u8,
     /// Block solver matrices k and inv, row major.
     pub block: Option<[Real; 8]>,
 }
@@ -192,6 +198,9 @@ fn contact_state(c: &Contact) -> ContactState {
             c.softness.impulse_scale,
         ],
         hertz: c.hertz,
+        load: c.load,
+        force: c.force,
+        age: c.age,
         block: c.block.map(|b| {
             [
                 b.k[0][0],
@@ -241,7 +250,15 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
     }
     finite_all(
         "contact",
-        &[s.normal[0], s.normal[1], s.friction, s.restitution],
+        &[
+            s.normal[0],
+            s.normal[1],
+            s.friction,
+            s.restitution,
+            s.hertz,
+            s.load,
+            s.force,
+        ],
     )?;
     finite_all("contact softness", &s.softness)?;
     let mut points = [ContactPoint::default(); 2];
@@ -304,6 +321,9 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             impulse_scale: s.softness[2],
         },
         hertz: s.hertz,
+        load: s.load,
+        force: s.force,
+        age: s.age,
         block,
     })
 }

@@ -56,27 +56,59 @@ pub(crate) struct Limits {
     pub max_rotation: Real,
 }
 
-/// Semi-implicit Euler, velocity half: v += h a, w += h alpha (appendix eqs. 1-2).
-pub(crate) fn integrate_velocities(bodies: &mut [SolverBody], h: Real, limits: Limits) {
-    let max_v = limits.max_linear_speed;
-    for b in bodies.iter_mut() {
-        if b.inv_mass == 0.0 {
-            continue;
+/// Which solver bodies a solve moves: all of them, or only those listed (the islands of one
+/// stiffness tier, see `Settings::adaptive_stiffness`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Moving<'a> {
+    /// Every body of the solver array.
+    All,
+    /// Only these indices.
+    Only(&'a [u32]),
+}
+
+impl Moving<'_> {
+    /// Run `f` on every moving, dynamic body.
+    #[inline]
+    fn for_each(self, bodies: &mut [SolverBody], mut f: impl FnMut(&mut SolverBody)) {
+        match self {
+            Moving::All => bodies.iter_mut().filter(|b| b.inv_mass != 0.0).for_each(f),
+            Moving::Only(list) => {
+                for &i in list {
+                    let b = &mut bodies[i as usize];
+                    if b.inv_mass != 0.0 {
+                        f(b);
+                    }
+                }
+            }
         }
+    }
+}
+
+/// Semi-implicit Euler, velocity half: v += h a, w += h alpha (appendix eqs. 1-2).
+pub(crate) fn integrate_velocities(
+    bodies: &mut [SolverBody],
+    moving: Moving,
+    h: Real,
+    limits: Limits,
+) {
+    let max_v = limits.max_linear_speed;
+    moving.for_each(bodies, |b| {
         b.v += h * b.accel;
         b.w += h * b.alpha;
         b.v = clamp_speed(b.v, max_v);
-    }
+    });
 }
 
 /// Semi-implicit Euler, position half: x += h v, theta += h w (appendix eqs. 65-68),
 /// recording the motion as deltas from the start of the step.
-pub(crate) fn integrate_positions(bodies: &mut [SolverBody], h: Real, limits: Limits) {
+pub(crate) fn integrate_positions(
+    bodies: &mut [SolverBody],
+    moving: Moving,
+    h: Real,
+    limits: Limits,
+) {
     let max_w = limits.max_rotation / h;
-    for b in bodies.iter_mut() {
-        if b.inv_mass == 0.0 {
-            continue;
-        }
+    moving.for_each(bodies, |b| {
         b.v = clamp_speed(b.v, limits.max_linear_speed);
         if b.w.is_nan() {
             b.w = 0.0;
@@ -94,7 +126,7 @@ pub(crate) fn integrate_positions(bodies: &mut [SolverBody], h: Real, limits: Li
             c: c / len,
             s: s / len,
         };
-    }
+    });
 }
 
 /// `v` with its length capped at `max`; non-finite components are clamped first so the

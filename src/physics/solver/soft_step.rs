@@ -12,7 +12,7 @@ use super::sequential::effective_mass;
 use super::wide::WideSolver;
 use super::{
     apply_along, integrate_positions, integrate_velocities, pair_mut, relative_velocity,
-    solve_block_lcp, BlockMass, Limits, SolverBody,
+    solve_block_lcp, BlockMass, Limits, Moving, SolverBody,
 };
 use crate::physics::contact::{Arms, Contact, ContactPoint};
 use crate::physics::math::{Real, Vec2, PI};
@@ -60,9 +60,11 @@ impl Softness {
     }
 }
 
-/// Run one full step of `dt` seconds on `bodies` and `contacts`.
+/// Run one full step of `dt` seconds on `contacts` and the `moving` bodies (the bodies the
+/// contacts join must be among them).
 pub(crate) fn solve(
     bodies: &mut [SolverBody],
+    moving: Moving,
     contacts: &mut [Contact],
     wide: &mut WideSolver,
     settings: &Settings,
@@ -87,13 +89,23 @@ pub(crate) fn solve(
     };
     let push_out = settings.max_push_out_speed;
 
+    // Between steps a contact keeps its impulses per step, not per substep, so that an island
+    // whose substep count changes (adaptive stiffness) warm starts with the same force.
+    // Substep counts are powers of two in practice, which makes the scaling exact.
+    let per_substep = 1.0 / substeps as Real;
+    for c in contacts.iter_mut() {
+        for p in &mut c.points[..c.count] {
+            p.normal_impulse *= per_substep;
+            p.tangent_impulse *= per_substep;
+        }
+    }
     prepare(bodies, contacts, settings.warm_starting, &stiffness);
     // Most contacts are solved four at a time (see `wide`); the few the colouring could not
     // place are solved here one by one, after the bundles.
     wide.build(bodies, contacts);
 
     for _ in 0..substeps {
-        integrate_velocities(bodies, h, limits);
+        integrate_velocities(bodies, moving, h, limits);
         if settings.warm_starting {
             wide.warm_start(bodies);
             for &i in &wide.overflow {
@@ -112,7 +124,7 @@ pub(crate) fn solve(
         for &i in &wide.overflow {
             solve_contact(bodies, &mut contacts[i as usize], inv_h, true, push_out);
         }
-        integrate_positions(bodies, h, limits);
+        integrate_positions(bodies, moving, h, limits);
         for _ in 0..settings.relax_iterations {
             wide.solve(bodies, inv_h, false, push_out);
             for &i in &wide.overflow {
@@ -122,6 +134,26 @@ pub(crate) fn solve(
     }
     wide.store(contacts);
     restitution(bodies, contacts, settings.restitution_threshold);
+    for c in contacts.iter_mut() {
+        for p in &mut c.points[..c.count] {
+            p.normal_impulse *= substeps as Real;
+            p.tangent_impulse *= substeps as Real;
+        }
+    }
+    // The force each contact carried, held so that a load that comes and goes does not switch
+    // an island's work on and off every step (`Settings::adaptive_stiffness`), and counted
+    // only when it lasted: the impact of a falling body is not a load to stiffen for.
+    let inv_dt = 1.0 / dt;
+    for c in contacts.iter_mut() {
+        let force: Real = c.points[..c.count]
+            .iter()
+            .map(|p| p.total_normal_impulse)
+            .sum::<Real>()
+            * inv_dt;
+        // A load must last two steps to count (an impact is one step's spike), then is held.
+        c.load = force.min(c.force).max(HERTZ_DECAY * c.load);
+        c.force = force;
+    }
 }
 
 /// How stiff contacts are made this step.

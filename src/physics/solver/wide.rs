@@ -64,6 +64,11 @@ struct Bundle {
     i00: Lanes,
     i01: Lanes,
     i11: Lanes,
+    /// Inverse masses and inertias of A and B per lane (zero for static bodies and empty lanes).
+    inv_mass_a: Lanes,
+    inv_i_a: Lanes,
+    inv_mass_b: Lanes,
+    inv_i_b: Lanes,
     p: [PointLanes; 2],
 }
 
@@ -77,6 +82,9 @@ pub(crate) struct WideSolver {
     by_colour: Vec<Vec<u32>>,
     /// Contacts that found no colour: solved by the scalar code.
     pub overflow: Vec<u32>,
+    /// Colours to try before a contact overflows ([`COLOURS`]; tests lower it to force the
+    /// scalar path).
+    pub colours: Option<usize>,
 }
 
 /// The body state a kernel reads for four lanes.
@@ -93,20 +101,38 @@ struct BodyLanes {
 }
 
 impl BodyLanes {
+    /// Load four bodies' velocities (and, with `motion`, how far they moved this step). The
+    /// inverse masses do not change within a step: they come packed in the bundle.
     #[inline]
-    fn gather(bodies: &[SolverBody], idx: &[u32; 4]) -> BodyLanes {
+    fn gather(
+        bodies: &[SolverBody],
+        idx: &[u32; 4],
+        inv_mass: Lanes,
+        inv_inertia: Lanes,
+        motion: bool,
+    ) -> BodyLanes {
         let b = idx.map(|i| &bodies[i as usize]);
         let lanes = |f: fn(&SolverBody) -> Real| Lanes::new(f(b[0]), f(b[1]), f(b[2]), f(b[3]));
+        let (dpx, dpy, qc, qs) = if motion {
+            (
+                lanes(|s| s.dp.x),
+                lanes(|s| s.dp.y),
+                lanes(|s| s.dq.c),
+                lanes(|s| s.dq.s),
+            )
+        } else {
+            (Lanes::ZERO, Lanes::ZERO, Lanes::ONE, Lanes::ZERO)
+        };
         BodyLanes {
             vx: lanes(|s| s.v.x),
             vy: lanes(|s| s.v.y),
             w: lanes(|s| s.w),
-            dpx: lanes(|s| s.dp.x),
-            dpy: lanes(|s| s.dp.y),
-            qc: lanes(|s| s.dq.c),
-            qs: lanes(|s| s.dq.s),
-            inv_mass: lanes(|s| s.inv_mass),
-            inv_inertia: lanes(|s| s.inv_inertia),
+            dpx,
+            dpy,
+            qc,
+            qs,
+            inv_mass,
+            inv_inertia,
         }
     }
 
@@ -187,7 +213,7 @@ impl WideSolver {
                 0
             });
             let colour = (!used).trailing_zeros() as usize;
-            if colour >= COLOURS {
+            if colour >= self.colours.unwrap_or(COLOURS) {
                 self.overflow.push(i as u32);
                 continue;
             }
@@ -214,7 +240,8 @@ impl WideSolver {
                 Kind::Points
             };
             for chunk in list.chunks(4) {
-                self.bundles.push(pack(kind, chunk, contacts, dummy));
+                self.bundles
+                    .push(pack(kind, chunk, contacts, bodies, dummy));
             }
         }
     }
@@ -222,8 +249,10 @@ impl WideSolver {
     /// Apply each contact's accumulated impulses (the warm start of a substep).
     pub fn warm_start(&mut self, bodies: &mut [SolverBody]) {
         for bundle in &mut self.bundles {
-            let mut a = BodyLanes::gather(bodies, &bundle.a);
-            let mut b = BodyLanes::gather(bodies, &bundle.b);
+            let mut a =
+                BodyLanes::gather(bodies, &bundle.a, bundle.inv_mass_a, bundle.inv_i_a, false);
+            let mut b =
+                BodyLanes::gather(bodies, &bundle.b, bundle.inv_mass_b, bundle.inv_i_b, false);
             let (nx, ny) = (bundle.nx, bundle.ny);
             let (tx, ty) = (ny, -nx);
             for p in &mut bundle.p {
@@ -257,13 +286,17 @@ impl WideSolver {
         let inv_h = Lanes::splat(inv_h);
         let push_out = Lanes::splat(-max_push_out);
         for bundle in &mut self.bundles {
-            let mut a = BodyLanes::gather(bodies, &bundle.a);
-            let mut b = BodyLanes::gather(bodies, &bundle.b);
+            let mut a =
+                BodyLanes::gather(bodies, &bundle.a, bundle.inv_mass_a, bundle.inv_i_a, true);
+            let mut b =
+                BodyLanes::gather(bodies, &bundle.b, bundle.inv_mass_b, bundle.inv_i_b, true);
             let (nx, ny) = (bundle.nx, bundle.ny);
             let dp_n = (b.dpx - a.dpx) * nx + (b.dpy - a.dpy) * ny;
 
             // Per point: (bias, mass scale, impulse scale), as in the scalar soft step.
-            let coeffs = bundle.p.map(|p| {
+            // By reference: mapping the array by value copied both points' lanes (416 bytes)
+            // every pass, a fifth of the whole step in a profile of pyramid_20.
+            let coeff = |p: &PointLanes| {
                 let s = dp_n + (b.qc * p.rb_n + b.qs * p.rn_b) - (a.qc * p.ra_n + a.qs * p.rn_a)
                     + p.adjusted_separation;
                 let speculative = s.cmpgt(Lanes::ZERO);
@@ -281,16 +314,18 @@ impl WideSolver {
                     Lanes::select(speculative, Lanes::ONE, soft_ms),
                     Lanes::select(speculative, Lanes::ZERO, soft_is),
                 )
-            });
+            };
+            let coeffs = [coeff(&bundle.p[0]), coeff(&bundle.p[1])];
 
             match bundle.kind {
                 Kind::Block => {
-                    let [p0, p1] = bundle.p;
+                    let [p0, p1] = &bundle.p;
                     let (l0, l1) = (p0.normal_impulse, p1.normal_impulse);
+                    let (rn_a0, rn_b0, rn_a1, rn_b1) = (p0.rn_a, p0.rn_b, p1.rn_a, p1.rn_b);
                     let kl0 = bundle.k00 * l0 + bundle.k01 * l1;
                     let kl1 = bundle.k01 * l0 + bundle.k11 * l1;
-                    let vn0 = BodyLanes::relative(&a, &b, nx, ny, p0.rn_a, p0.rn_b);
-                    let vn1 = BodyLanes::relative(&a, &b, nx, ny, p1.rn_a, p1.rn_b);
+                    let vn0 = BodyLanes::relative(&a, &b, nx, ny, rn_a0, rn_b0);
+                    let vn1 = BodyLanes::relative(&a, &b, nx, ny, rn_a1, rn_b1);
                     // rhs = vn - K lambda - target, target = impulse_scale (vn - K lambda) - bias.
                     let r0 = vn0 - kl0 - (coeffs[0].2 * (vn0 - kl0) - coeffs[0].0);
                     let r1 = vn1 - kl1 - (coeffs[1].2 * (vn1 - kl1) - coeffs[1].0);
@@ -299,10 +334,10 @@ impl WideSolver {
                     let d = d0 + d1;
                     a.vx -= a.inv_mass * d * nx;
                     a.vy -= a.inv_mass * d * ny;
-                    a.w -= a.inv_inertia * (d0 * p0.rn_a + d1 * p1.rn_a);
+                    a.w -= a.inv_inertia * (d0 * rn_a0 + d1 * rn_a1);
                     b.vx += b.inv_mass * d * nx;
                     b.vy += b.inv_mass * d * ny;
-                    b.w += b.inv_inertia * (d0 * p0.rn_b + d1 * p1.rn_b);
+                    b.w += b.inv_inertia * (d0 * rn_b0 + d1 * rn_b1);
                     for (p, (x, dx)) in bundle.p.iter_mut().zip([(x0, d0), (x1, d1)]) {
                         p.normal_impulse = x;
                         p.max_normal_impulse = p.max_normal_impulse.max(dx);
@@ -392,13 +427,20 @@ fn block_lcp(bundle: &Bundle, r0: Lanes, r1: Lanes, l0: Lanes, l1: Lanes) -> (La
 
 /// Pack up to four contacts into one bundle; missing lanes are inert (fixed dummy bodies,
 /// zero masses and impulses, an identity block).
-fn pack(kind: Kind, chunk: &[u32], contacts: &[Contact], dummy: u32) -> Bundle {
+fn pack(
+    kind: Kind,
+    chunk: &[u32],
+    contacts: &[Contact],
+    bodies: &[SolverBody],
+    dummy: u32,
+) -> Bundle {
     let mut contact = [u32::MAX; 4];
     let mut a = [dummy; 4];
     let mut b = [dummy; 4];
     // Header fields: nx, ny, friction, bias_rate, mass_scale, impulse_scale, k00, k01, k11,
-    // i00, i01, i11 (identity block for empty lanes so the LCP stays finite).
-    let mut f = [[0.0 as Real; 4]; 12];
+    // i00, i01, i11 (identity block for empty lanes so the LCP stays finite), then the inverse
+    // masses and inertias of A and B.
+    let mut f = [[0.0 as Real; 4]; 16];
     for field in [6, 8, 9, 11] {
         f[field] = [1.0; 4];
     }
@@ -426,6 +468,10 @@ fn pack(kind: Kind, chunk: &[u32], contacts: &[Contact], dummy: u32) -> Bundle {
             inv[0][0],
             inv[0][1],
             inv[1][1],
+            bodies[c.a as usize].inv_mass,
+            bodies[c.a as usize].inv_inertia,
+            bodies[c.b as usize].inv_mass,
+            bodies[c.b as usize].inv_inertia,
         ];
         for (field, value) in f.iter_mut().zip(header) {
             field[lane] = value;
@@ -484,6 +530,10 @@ fn pack(kind: Kind, chunk: &[u32], contacts: &[Contact], dummy: u32) -> Bundle {
         i00: l(f[9]),
         i01: l(f[10]),
         i11: l(f[11]),
+        inv_mass_a: l(f[12]),
+        inv_i_a: l(f[13]),
+        inv_mass_b: l(f[14]),
+        inv_i_b: l(f[15]),
         p: [point(&pts[0]), point(&pts[1])],
     }
 }

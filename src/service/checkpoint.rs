@@ -22,7 +22,7 @@ use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
 use std::thread::JoinHandle;
 
 /// Bumped whenever [`SimState`] (or anything in it, e.g. the engine's `Settings`) changes shape.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

@@ -23,7 +23,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Bumped whenever the header or the records change shape.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 const MAGIC: &[u8; 8] = b"TILTJRNL";
 /// Largest record accepted when reading (a corrupt length must not allocate gigabytes).
 const MAX_RECORD: u32 = 256 << 20;

@@ -509,6 +509,11 @@ impl World {
                 self.tier_contacts[t as usize].push(*c);
             }
         }
+        let dynamic = self
+            .solver_bodies
+            .iter()
+            .filter(|b| b.inv_mass > 0.0)
+            .count();
         for tier in 0..=top {
             self.tier_bodies.clear();
             let (bodies, body_tier) = (&self.solver_bodies, &self.body_tier);
@@ -541,7 +546,12 @@ impl World {
             };
             solver::soft_step::solve(
                 &mut self.solver_bodies,
-                Moving::Only(&self.tier_bodies),
+                // Every moving body in this tier (a pyramid, a pile): the plain loop.
+                if self.tier_bodies.len() == dynamic {
+                    Moving::All
+                } else {
+                    Moving::Only(&self.tier_bodies)
+                },
                 contacts,
                 &mut self.wide,
                 &settings,

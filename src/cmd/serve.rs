@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 use tiltbox::service::{
-    bench, shutdown_worlds, start_worlds, ServerConfig, ServerOptions, ServiceError,
+    bench_net, shutdown_worlds, start_worlds, ServerConfig, ServerOptions, ServiceError,
 };
 
 /// Arguments of `tiltbox serve`. Every config value has a flag; a flag overrides the file.
@@ -214,7 +214,7 @@ pub fn run(args: ServeArgs) -> anyhow::Result<ExitCode> {
         .build()?;
     let code = runtime.block_on(async {
         if let Some(seconds) = args.bench_net {
-            return match bench::bench_net(&config, seconds).await {
+            return match bench_net(&config, seconds).await {
                 Ok(report) => {
                     println!("{report}");
                     Ok(ExitCode::SUCCESS)

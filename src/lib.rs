@@ -5,9 +5,13 @@
 //! - `scene` (feature `scene`): TOML scene files to Worlds.
 //! - `protocol` (feature `net`): the wire messages and key expressions.
 //! - `service` (feature `net`): the daemon.
-//! - `client` (features `net` and `cli`): the clients' library (tilt sources, viewer).
+//! - `cli` (feature `cli`): what every binary shares: logging, runtime, signals, exit codes.
+//! - `client` (features `net` and `cli`): the clients, one directory each under `clients/`.
 //! - `measure` (feature `measure`): set-ups, accuracy runners and the report.
+#[cfg(feature = "cli")]
+pub mod cli;
 #[cfg(all(feature = "net", feature = "cli"))]
+#[path = "../clients/mod.rs"]
 pub mod client;
 #[cfg(feature = "measure")]
 pub mod measure;

@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+use tiltbox::cli::exit_code;
 
 mod cmd;
 
@@ -35,7 +36,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    exit_code(match cli.command {
         #[cfg(feature = "net")]
         None => cmd::serve::run(cmd::serve::ServeArgs::default()),
         #[cfg(not(feature = "net"))]
@@ -53,12 +54,5 @@ fn main() -> ExitCode {
         Some(Command::Simulate(args)) => cmd::simulate::run(args),
         #[cfg(feature = "report")]
         Some(Command::Report(args)) => cmd::report::run(args),
-    };
-    match result {
-        Ok(code) => code,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::from(1)
-        }
-    }
+    })
 }

@@ -6,9 +6,10 @@ use std::io::Write;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use tiltbox::client::session;
-use tiltbox::client::tilt::{self, TiltPublisher};
-use tiltbox::client::viewer::query_scene;
-use tiltbox::client::world::{Join, Received};
+use tiltbox::client::tilt::publish::{self, TiltPublisher};
+use tiltbox::client::tilt::sweep;
+use tiltbox::client::view::query_scene;
+use tiltbox::client::view::world::{Join, Received};
 use tiltbox::protocol::*;
 use tiltbox::service::{Server, ServerConfig, ServerOptions};
 use tokio::sync::mpsc;
@@ -90,9 +91,9 @@ async fn the_sweep_turns_gravity_around_and_the_bricks_follow() {
     // sweep at 180 deg/s: down, left (t = 0.5 s), up (t = 1 s), right (t = 1.5 s)
     let mut publisher = TiltPublisher::new(&s, &keys).await.unwrap();
     let (tx, readings) = mpsc::channel(64);
-    let sweep = tokio::spawn(tilt::sweep(180.0, 30.0, tx));
+    let sweeping = tokio::spawn(sweep::sweep(180.0, 30.0, tx));
     let publish = tokio::spawn(async move {
-        tilt::publish_loop(&mut publisher, 30.0, readings)
+        publish::publish_loop(&mut publisher, 30.0, readings)
             .await
             .unwrap();
         publisher.sent()
@@ -129,8 +130,8 @@ async fn the_sweep_turns_gravity_around_and_the_bricks_follow() {
             left_phase_min_x = left_phase_min_x.min(x);
         }
     }
-    sweep.abort();
-    let _ = sweep.await;
+    sweeping.abort();
+    let _ = sweeping.await;
     let sent = publish.await.unwrap();
     assert!(
         turned > 1.2 * PI,

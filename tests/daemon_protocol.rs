@@ -62,11 +62,11 @@ fn example_sim() -> Simulation {
 fn the_documented_snapshots_are_real_and_exact() {
     let mut sim = example_sim();
     sim.step().unwrap();
-    let key = sim.snapshot().clone();
+    let key = sim.poses().clone();
     assert!(key.keyframe && key.frame == 1 && key.poses.len() == 2);
     let key_bytes = encode(&key).unwrap();
     sim.step().unwrap();
-    let delta = sim.snapshot().clone();
+    let delta = sim.poses().clone();
     assert!(!delta.keyframe && delta.frame == 2);
     assert_eq!(delta.poses.len(), 1, "only the moving body: {delta:?}");
     let delta_bytes = encode(&delta).unwrap();
@@ -114,7 +114,7 @@ fn the_documented_command_and_event_examples_are_exact() {
     let bytes = encode(&spawn).unwrap();
     assert!(doc.contains(&hex(&bytes)), "spawn:\n{}", hex(&bytes));
     let command =
-        tiltbox::service::intake::parse(CommandKey::Spawn, &bytes, &ServerConfig::default().limits);
+        tiltbox::service::parse_command(CommandKey::Spawn, &bytes, &ServerConfig::default().limits);
     let event = sim
         .apply(Incoming {
             key: CommandKey::Spawn,
@@ -126,7 +126,7 @@ fn the_documented_command_and_event_examples_are_exact() {
     let rejected = sim
         .apply(Incoming {
             key: CommandKey::Gravity,
-            command: tiltbox::service::intake::parse(
+            command: tiltbox::service::parse_command(
                 CommandKey::Gravity,
                 &[1],
                 &ServerConfig::default().limits,
@@ -325,7 +325,7 @@ fn the_documented_circle_and_polygon_spawns_are_exact_and_land_where_the_doc_say
     let limits = ServerConfig::default().limits;
     let mut sim = example_sim();
     let mut added = |bytes: &[u8]| {
-        let command = tiltbox::service::intake::parse(CommandKey::Spawn, bytes, &limits);
+        let command = tiltbox::service::parse_command(CommandKey::Spawn, bytes, &limits);
         match sim.apply(Incoming {
             key: CommandKey::Spawn,
             command,

@@ -8,8 +8,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::sync_channel;
 use std::sync::Arc;
 use tiltbox::protocol::*;
-use tiltbox::service::intake::{parse, Intake};
-use tiltbox::service::{Incoming, Limits, SceneSource, ServerConfig, Simulation};
+use tiltbox::service::{
+    parse_command, Incoming, Intake, Limits, SceneSource, ServerConfig, Simulation,
+};
 
 struct Rng(u64);
 impl Rng {
@@ -288,7 +289,7 @@ fn the_command_path_never_panics_never_holds_nan_and_stays_bounded() {
         } else {
             hostile(&mut rng, key)
         };
-        let command = parse(key, &p, &limits);
+        let command = parse_command(key, &p, &limits);
         if command.is_ok() {
             accepted += 1;
         }
@@ -300,17 +301,17 @@ fn the_command_path_never_panics_never_holds_nan_and_stays_bounded() {
         }
         if i % 4 == 0 {
             sim.step().unwrap();
-            let _ = encode(sim.snapshot()).unwrap();
+            let _ = encode(sim.poses()).unwrap();
             assert_sane(&sim, &limits, i);
             most_bodies = most_bodies.max(sim.world().body_count());
         }
     }
     assert_sane(&sim, &limits, usize::MAX);
-    let _ = encode(&sim.view().to_state()).unwrap();
+    let _ = encode(&sim.scene_state()).unwrap();
     assert!(accepted > 3000 && rejected > 3000, "{accepted} {rejected}");
     // the storm reached the body limit, and the limit held
     assert!(most_bodies >= 240, "at most {most_bodies} bodies");
-    assert_eq!(sim.rejected, rejected);
+    assert_eq!(sim.rejected(), rejected);
     // a rejection echoes the key and a reason, never the payload: events stay small
     assert!(max_event < 400_000, "largest event {max_event} bytes");
 }
@@ -380,7 +381,7 @@ fn every_shape_kind_with_edge_values_in_every_field_is_refused_or_simulated() {
                     bodies: vec![b.clone()],
                 })
                 .unwrap();
-                let command = parse(CommandKey::Spawn, &p, &limits);
+                let command = parse_command(CommandKey::Spawn, &p, &limits);
                 let count = sim.world().body_count();
                 let ev = sim.apply(Incoming {
                     key: CommandKey::Spawn,
@@ -418,7 +419,7 @@ fn every_shape_kind_with_edge_values_in_every_field_is_refused_or_simulated() {
                     other => panic!("{b:?}: {other:?}"),
                 }
                 sim.step().unwrap();
-                let _ = encode(sim.snapshot()).unwrap();
+                let _ = encode(sim.poses()).unwrap();
                 assert_sane(&sim, &limits, spawns);
             }
         }
@@ -427,7 +428,7 @@ fn every_shape_kind_with_edge_values_in_every_field_is_refused_or_simulated() {
         sim.step().unwrap();
     }
     assert_sane(&sim, &limits, usize::MAX);
-    let state = sim.view().to_state();
+    let state = sim.scene_state();
     assert_eq!(
         decode::<SceneState>(&encode(&state).unwrap()).unwrap(),
         state
@@ -452,7 +453,7 @@ fn the_intake_channel_is_bounded_under_a_flood() {
     assert_eq!(dropped, 5_000 - 16);
     // oversized payloads are refused before decoding
     let big = vec![0u8; Limits::default().max_payload_bytes as usize + 1];
-    let e = parse(CommandKey::Spawn, &big, &Limits::default()).unwrap_err();
+    let e = parse_command(CommandKey::Spawn, &big, &Limits::default()).unwrap_err();
     assert!(e.contains("max_payload_bytes"));
 }
 
@@ -487,7 +488,7 @@ fn an_engine_failure_resets_the_world_instead_of_killing_the_daemon() {
                 bodies: vec![b.clone()],
             })
             .unwrap();
-            let command = parse(CommandKey::Spawn, &p, &config.limits);
+            let command = parse_command(CommandKey::Spawn, &p, &config.limits);
             let _ = sim.apply(Incoming {
                 key: CommandKey::Spawn,
                 command,

@@ -9,10 +9,11 @@ use std::sync::mpsc::sync_channel;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
-use tiltbox::service::intake::parse;
 use tiltbox::service::journal::{replay, Journal, JournalWriter, Record};
-use tiltbox::service::tick::{self, Outputs, Recording, TickConfig};
-use tiltbox::service::{Incoming, SceneSource, ServerConfig, Simulation};
+use tiltbox::service::{
+    parse_command, run_loop, Incoming, Outputs, Recording, SceneSource, ServerConfig, Simulation,
+    TickConfig,
+};
 
 /// Records the hash of every frame as the live loop computed it.
 #[derive(Clone, Default)]
@@ -115,12 +116,10 @@ fn record(path: &std::path::Path, frames: u64, seed: u64) -> Vec<(u64, u64)> {
     let handle = {
         let stop = stop.clone();
         std::thread::spawn(move || {
-            tick::run(
+            run_loop(
                 sim,
                 rx,
-                Arc::default(),
                 out,
-                Arc::default(),
                 stop,
                 TickConfig {
                     dt: Duration::from_millis(2),
@@ -138,7 +137,7 @@ fn record(path: &std::path::Path, frames: u64, seed: u64) -> Vec<(u64, u64)> {
     while hashes.0.lock().unwrap().len() < frames as usize {
         assert!(Instant::now() < deadline, "the loop is too slow");
         let (key, payload) = command(&mut rng, &ids);
-        let parsed = parse(key, &payload, &config.limits);
+        let parsed = parse_command(key, &payload, &config.limits);
         if let Ok(tiltbox::service::Command::Spawn(defs)) = &parsed {
             // Ids are not known here; guess plausible ones (stale ones are rejected).
             for (i, _) in defs.iter().enumerate() {
@@ -157,7 +156,7 @@ fn record(path: &std::path::Path, frames: u64, seed: u64) -> Vec<(u64, u64)> {
     stop.store(true, Ordering::Relaxed);
     let (out, summary) = handle.join().unwrap();
     assert!(summary.frames >= frames);
-    assert!(out.journal.unwrap().records > frames);
+    assert!(out.journal.unwrap().records() > frames);
     let v = hashes.0.lock().unwrap().clone();
     v
 }

@@ -10,9 +10,9 @@ use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use tiltbox::client::plain::parse_line;
-use tiltbox::client::render::{render, Status, Viewport};
-use tiltbox::client::world::WorldView;
+use tiltbox::client::view::plain::parse_line;
+use tiltbox::client::view::render::{render, Status, Viewport};
+use tiltbox::client::view::world::WorldView;
 use tiltbox::protocol::*;
 use tiltbox::service::{Server, ServerConfig, ServerOptions};
 
@@ -422,7 +422,7 @@ fn turn(view: &mut WorldView, frame: u64, index: u32, pos: (f32, f32), angle: f3
     };
     assert_eq!(
         view.apply_snapshot(&s),
-        tiltbox::client::world::Applied::Applied
+        tiltbox::client::view::world::Applied::Applied
     );
 }
 

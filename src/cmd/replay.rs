@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use tiltbox::cli::{init_logging, Failure};
 use tiltbox::scene::Scene;
 use tiltbox::service::journal::{replay, Journal};
 use tiltbox::service::SceneSource;
@@ -24,37 +25,24 @@ pub struct ReplayArgs {
 
 /// Run `tiltbox replay`: exit 0 when every frame matches, 1 on a mismatch, 2 when the log or
 /// scene cannot be used.
-pub fn run(args: ReplayArgs) -> anyhow::Result<ExitCode> {
-    super::serve::init_logging(Some("warn"));
-    let journal = match Journal::read(&args.log) {
-        Ok(j) => j,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Ok(ExitCode::from(2));
-        }
-    };
+pub fn run(args: ReplayArgs) -> Result<ExitCode, Failure> {
+    init_logging(None, "warn");
+    let journal = Journal::read(&args.log).map_err(Failure::usage)?;
     let scene = match &args.scene {
-        Some(path) => match Scene::load(path) {
-            Ok(s) => Some(SceneSource::Given(Box::new(s))),
-            Err(e) => {
-                eprintln!("error: scene {}: {e}", path.display());
-                return Ok(ExitCode::from(2));
-            }
-        },
+        Some(path) => {
+            let scene = Scene::load(path)
+                .map_err(|e| Failure::Usage(format!("scene {}: {e}", path.display())))?;
+            Some(SceneSource::Given(Box::new(scene)))
+        }
         None => None,
     };
     let hashes = args.hashes;
-    let report = match replay(&journal, scene, |sim| {
+    let report = replay(&journal, scene, |sim| {
         if hashes {
             println!("{} {:016x}", sim.frame(), sim.world().state_hash());
         }
-    }) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Ok(ExitCode::from(2));
-        }
-    };
+    })
+    .map_err(Failure::usage)?;
     println!(
         "frames {}..={}: {} commands, {} frame hashes checked, {} mismatched; final hash {:016x}{}{}",
         report.start_frame,

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use tiltbox::cli::Failure;
 use tiltbox::measure::report::{generate, ReportOptions};
 
 /// Arguments of `tiltbox report`.
@@ -17,7 +18,7 @@ pub struct ReportArgs {
 }
 
 /// Run `tiltbox report`.
-pub fn run(args: ReportArgs) -> anyhow::Result<ExitCode> {
+pub fn run(args: ReportArgs) -> Result<ExitCode, Failure> {
     if cfg!(debug_assertions) {
         eprintln!("note: this is a debug build; timings will be slow and unrepresentative (use --release)");
     }
@@ -25,7 +26,8 @@ pub fn run(args: ReportArgs) -> anyhow::Result<ExitCode> {
         out: args.out.unwrap_or_else(|| PathBuf::from("docs")),
         quick: args.quick,
     };
-    let report = generate(&options, &mut |what| eprintln!("report: {what}"))?;
+    let report =
+        generate(&options, &mut |what| eprintln!("report: {what}")).map_err(anyhow::Error::from)?;
     for (name, suite) in [
         ("soft step", &report.suite.soft_step),
         ("sequential", &report.suite.sequential),

@@ -6,8 +6,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
+use tiltbox::cli::{init_logging, runtime, wait_for_signal, Failure};
 use tiltbox::service::{
-    bench, shutdown_worlds, start_worlds, ServerConfig, ServerOptions, ServiceError,
+    bench_net, shutdown_worlds, start_worlds, ServerConfig, ServerOptions, ServiceError,
 };
 
 /// Arguments of `tiltbox serve`. Every config value has a flag; a flag overrides the file.
@@ -187,45 +188,22 @@ impl ServeArgs {
     }
 }
 
-pub(crate) fn init_logging(filter: Option<&str>) {
-    use tracing_subscriber::EnvFilter;
-    let filter = EnvFilter::try_from_default_env()
-        .or_else(|_| EnvFilter::try_new(filter.unwrap_or("info,zenoh=warn")))
-        .unwrap_or_else(|_| EnvFilter::new("info"));
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .try_init();
-}
-
 /// Run `tiltbox serve`.
-pub fn run(args: ServeArgs) -> anyhow::Result<ExitCode> {
-    init_logging(args.log.as_deref());
-    let config = match args.config() {
-        Ok(c) => c,
-        Err(e) => {
-            tracing::error!("bad config: {e}");
-            return Ok(ExitCode::from(2));
-        }
-    };
-    let runtime = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()?;
-    let code = runtime.block_on(async {
+pub fn run(args: ServeArgs) -> Result<ExitCode, Failure> {
+    init_logging(args.log.as_deref(), "info,zenoh=warn");
+    let config = args
+        .config()
+        .map_err(|e| Failure::Usage(format!("bad config: {e}")))?;
+    let runtime = runtime().map_err(anyhow::Error::from)?;
+    let result = runtime.block_on(async {
         if let Some(seconds) = args.bench_net {
-            return match bench::bench_net(&config, seconds).await {
-                Ok(report) => {
-                    println!("{report}");
-                    Ok(ExitCode::SUCCESS)
-                }
-                Err(e) => fail(e),
-            };
+            let report = bench_net(&config, seconds).await.map_err(failure)?;
+            println!("{report}");
+            return Ok(ExitCode::SUCCESS);
         }
-        let servers = match start_worlds(&config, ServerOptions::default()).await {
-            Ok(s) => s,
-            Err(e) => return fail(e),
-        };
+        let servers = start_worlds(&config, ServerOptions::default())
+            .await
+            .map_err(failure)?;
         wait_for_signal().await;
         tracing::info!("stopping");
         match tokio::time::timeout(Duration::from_millis(1900), shutdown_worlds(servers)).await {
@@ -236,36 +214,13 @@ pub fn run(args: ServeArgs) -> anyhow::Result<ExitCode> {
         Ok(ExitCode::SUCCESS)
     });
     runtime.shutdown_timeout(Duration::from_millis(100));
-    code
+    result
 }
 
-/// Config and scene problems exit with 2, anything else with 1.
-fn fail(e: ServiceError) -> anyhow::Result<ExitCode> {
-    tracing::error!("{e}");
-    Ok(match e {
-        ServiceError::Config(_) | ServiceError::Start(_) => ExitCode::from(2),
-        _ => ExitCode::from(1),
-    })
-}
-
-async fn wait_for_signal() {
-    #[cfg(unix)]
-    {
-        use tokio::signal::unix::{signal, SignalKind};
-        match signal(SignalKind::terminate()) {
-            Ok(mut term) => {
-                tokio::select! {
-                    _ = tokio::signal::ctrl_c() => {}
-                    _ = term.recv() => {}
-                }
-            }
-            Err(_) => {
-                let _ = tokio::signal::ctrl_c().await;
-            }
-        }
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = tokio::signal::ctrl_c().await;
+/// Config and scene problems are usage errors (exit 2), anything else a failure (exit 1).
+fn failure(e: ServiceError) -> Failure {
+    match e {
+        ServiceError::Config(_) | ServiceError::Start(_) => Failure::usage(e),
+        e => Failure::Failed(e.into()),
     }
 }

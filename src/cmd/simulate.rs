@@ -6,6 +6,7 @@ use serde::Serialize;
 use std::io::{self, BufWriter, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use tiltbox::cli::Failure;
 use tiltbox::physics::{BodyId, Real, SolverKind, World};
 use tiltbox::scene::{Scene, SceneError};
 
@@ -111,7 +112,7 @@ fn plan(args: &SimulateArgs) -> anyhow::Result<Plan> {
 }
 
 /// Run `tiltbox simulate`.
-pub fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
+pub fn run(args: SimulateArgs) -> Result<ExitCode, Failure> {
     let plan = plan(&args)?;
     let mut scene = Scene::load(&args.scene).map_err(|e| match e {
         // already names the file
@@ -137,7 +138,7 @@ pub fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
         Ok(()) => Ok(ExitCode::SUCCESS),
         // The reader went away (`| head`): that ends the run, it is not a failure.
         Err(e) if is_broken_pipe(&e) => Ok(ExitCode::SUCCESS),
-        Err(e) => Err(e),
+        Err(e) => Err(e.into()),
     }
 }
 

@@ -85,6 +85,26 @@ impl BodyDef {
         }
     }
 
+    /// A dynamic body (as [`BodyDef::dynamic`]) of a shape drawn around `origin` (m) in the
+    /// body's frame and turned by `angle` (rad), whose centre of mass lies `offset` (m, body
+    /// frame) from that origin: a polygon's centroid as [`super::Polygon::new`] returns it, zero
+    /// for a shape centred on its origin. The body's position, its centre of mass, is
+    /// `origin + R(angle) offset`: how scene files and spawns place polygons given around a
+    /// position. Refuses a non-finite `origin` or `angle`, naming `position.x`, `position.y`
+    /// or `angle`.
+    pub fn placed(
+        shape: Shape,
+        offset: Vec2,
+        origin: Vec2,
+        angle: Real,
+    ) -> Result<BodyDef, PhysicsError> {
+        finite("position.x", origin.x)?;
+        finite("position.y", origin.y)?;
+        finite("angle", angle)?;
+        let position = origin + Rot::from_angle(angle).rotate(offset);
+        Ok(BodyDef::dynamic(shape, position).with_angle(angle))
+    }
+
     /// A static (immovable) body at `position`, friction 0.6, restitution 0.
     pub fn fixed(shape: Shape, position: Vec2) -> BodyDef {
         BodyDef {

@@ -64,6 +64,28 @@ impl Shape {
         }
     }
 
+    /// A capsule as [`Shape::capsule`] makes it, checked against the values as given:
+    /// `radius` and `length` finite and > 0, and `length` more than twice `radius` (a capsule
+    /// needs a straight part). The refusal names the field and quotes the value; scene files
+    /// and spawns both build their capsules here.
+    pub fn try_capsule(length: Real, radius: Real) -> Result<Shape, PhysicsError> {
+        positive("shape.radius", radius)?;
+        positive("shape.length", length)?;
+        if length <= 2.0 * radius {
+            return Err(PhysicsError::InvalidShape {
+                field: "shape.length".into(),
+                reason: format!(
+                    "= {length} must be more than twice shape.radius = {radius} (the length is \
+                     end to end, rounded ends included; use a circle for a capsule with no \
+                     straight part)"
+                ),
+            });
+        }
+        let shape = Shape::capsule(length, radius);
+        shape.validate()?;
+        Ok(shape)
+    }
+
     /// Refuse shapes that cannot be simulated (non-finite or non-positive sizes, a capsule
     /// shorter than its own ends).
     pub fn validate(&self) -> Result<(), PhysicsError> {

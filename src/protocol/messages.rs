@@ -187,6 +187,25 @@ pub struct SpawnBody {
     pub colour: Colour,
 }
 
+impl SpawnBody {
+    /// A body of `shape` at rest at `position` (m), not turned: density 1 kg/m^2, friction
+    /// 0.6, restitution 0, grey, no name. Change what differs with struct update syntax.
+    pub fn at(shape: ShapeSpec, position: Vector) -> SpawnBody {
+        SpawnBody {
+            name: None,
+            shape,
+            position,
+            angle: 0.0,
+            velocity: Vector::default(),
+            angular_velocity: 0.0,
+            density: 1.0,
+            friction: 0.6,
+            restitution: 0.0,
+            colour: Colour::default(),
+        }
+    }
+}
+
 /// `…/spawn`: add bodies, all or nothing.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Spawn {

@@ -6,7 +6,7 @@
 //! in document order, with its name, index and line at hand for the message.
 
 use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
-use crate::physics::{BodyDef, MassSpec, Polygon, Real, Rot, Settings, Shape, Vec2};
+use crate::physics::{BodyDef, MassSpec, Polygon, Real, Settings, Shape, Vec2};
 use serde::Deserialize;
 use toml::{Spanned, Table};
 
@@ -68,31 +68,16 @@ enum ShapeEntry {
 impl ShapeEntry {
     /// The engine shape, and where its centre of mass sits relative to the body's `position`
     /// in the body's frame (m): the centroid of a polygon's vertices, zero for the others.
-    /// The same semantics as the daemon's spawn shapes (`service::intake::shape_from_spec`).
+    /// Built by the engine's own constructors, as the daemon builds spawned shapes.
     fn to_shape(&self, at: &str) -> Result<(Shape, Vec2), SceneError> {
         let shape = match *self {
-            // Sizes checked below by Shape::validate, which names shape.width / shape.height.
+            // Sizes checked below by Shape::validate, which names the field and the value.
             ShapeEntry::Rect { width, height } => Shape::rect(width, height),
-            ShapeEntry::Circle { radius } => {
-                check_positive(at, "shape.radius", radius)?;
-                Shape::circle(radius)
-            }
+            ShapeEntry::Circle { radius } => Shape::circle(radius),
             ShapeEntry::Capsule { length, radius } => {
-                check_positive(at, "shape.radius", radius)?;
-                check_positive(at, "shape.length", length)?;
-                if length <= 2.0 * radius {
-                    return Err(SceneError::invalid(
-                        at,
-                        "shape.length",
-                        Some(length.to_string()),
-                        format!(
-                            "must be more than twice shape.radius = {radius} (the length is \
-                             end to end, rounded ends included; use a circle for a capsule \
-                             with no straight part)"
-                        ),
-                    ));
-                }
-                Shape::capsule(length, radius)
+                let capsule =
+                    Shape::try_capsule(length, radius).map_err(|e| SceneError::physics(at, e))?;
+                return Ok((capsule, Vec2::ZERO));
             }
             ShapeEntry::Polygon { ref vertices } => {
                 let mut points = Vec::with_capacity(vertices.len());
@@ -471,25 +456,23 @@ impl BodyEntry {
         }
         let colour = parse_colour(&at, self.colour.as_deref())?;
         let (shape, centroid) = self.shape.to_shape(&at)?;
-        let mut position = Vec2::new(self.position[0], self.position[1]);
-        if centroid != Vec2::ZERO {
+        let position = Vec2::new(self.position[0], self.position[1]);
+        let placed = if centroid != Vec2::ZERO {
             // A polygon's vertices are given around `position`; its centre of mass is their
-            // centroid, turned with the body. Checked first so that a bad value is reported as
-            // written rather than as the NaN it would make of the centre.
-            check_finite(&at, "position.x", position.x)?;
-            check_finite(&at, "position.y", position.y)?;
-            check_finite(&at, "angle", self.angle)?;
-            position += Rot::from_angle(self.angle).rotate(centroid);
-        }
+            // centroid, turned with the body (the engine's rule, which also reports a bad
+            // position or angle as written rather than as the NaN it would make of the centre).
+            BodyDef::placed(shape, centroid, position, self.angle)
+                .map_err(|e| SceneError::physics(&at, e))?
+        } else {
+            BodyDef::dynamic(shape, position).with_angle(self.angle)
+        };
         let def = BodyDef {
-            shape,
-            position,
-            angle: self.angle,
             linear_velocity: Vec2::new(self.velocity[0], self.velocity[1]),
             angular_velocity: self.angular_velocity,
             mass,
             friction: self.friction,
             restitution: self.restitution,
+            ..placed
         };
         def.validate()
             .map_err(|e| SceneError::physics(at.clone(), e))?;

@@ -13,6 +13,7 @@
 //! | n | payload: postcard of [`SimState`] |
 
 use super::config::ServerConfig;
+use super::files::FileError;
 use super::sim::{SceneSource, SimState, Simulation, StartError};
 use crate::physics::hash::fnv1a;
 use std::fs::File;
@@ -25,27 +26,6 @@ use std::thread::JoinHandle;
 pub const FORMAT_VERSION: u32 = 3;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
-
-/// Why a checkpoint file cannot be used.
-#[derive(Debug, thiserror::Error)]
-pub enum CheckpointError {
-    /// It could not be read (or written).
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The OS error.
-        source: std::io::Error,
-    },
-    /// Not a checkpoint, a different version, truncated, or damaged.
-    #[error("{}: {reason}", path.display())]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong.
-        reason: String,
-    },
-}
 
 /// The file's bytes for `state`.
 pub fn encode(state: &SimState) -> Result<Vec<u8>, String> {
@@ -109,21 +89,19 @@ fn temp_path(path: &Path) -> PathBuf {
 /// Write `bytes` to `path` atomically: a reader (or a restart after a crash at any point)
 /// sees the old file, the new file, or - between the two renames - only `<path>.prev`,
 /// which [`load`] falls back to. The current file becomes `<path>.prev`.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), CheckpointError> {
-    let io = |source| CheckpointError::Io {
-        path: path.to_owned(),
-        source,
-    };
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    let io = FileError::io(path);
     let tmp = temp_path(path);
-    {
-        let mut f = File::create(&tmp).map_err(io)?;
-        f.write_all(bytes).map_err(io)?;
-        f.sync_all().map_err(io)?;
-    }
-    if path.exists() {
-        std::fs::rename(path, previous_path(path)).map_err(io)?;
-    }
-    std::fs::rename(&tmp, path).map_err(io)?;
+    let written = (|| {
+        let mut f = File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        if path.exists() {
+            std::fs::rename(path, previous_path(path))?;
+        }
+        std::fs::rename(&tmp, path)
+    })();
+    written.map_err(io)?;
     // Make the renames durable too.
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
@@ -143,23 +121,17 @@ pub struct Loaded {
     /// The file it came from (`path` or `<path>.prev`).
     pub from: PathBuf,
     /// What was wrong with the files tried before it (reported in the log).
-    pub problems: Vec<CheckpointError>,
+    pub problems: Vec<FileError>,
 }
 
-fn read_one(path: &Path) -> Result<SimState, CheckpointError> {
-    let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    decode(&bytes).map_err(|reason| CheckpointError::Invalid {
-        path: path.to_owned(),
-        reason,
-    })
+fn read_one(path: &Path) -> Result<SimState, FileError> {
+    let bytes = std::fs::read(path).map_err(FileError::io(path))?;
+    decode(&bytes).map_err(FileError::invalid(path))
 }
 
 /// Read the checkpoint at `path`, or if it is missing or damaged, `<path>.prev`. `Ok(None)`
 /// when neither exists (a first start); an error when files exist but none is usable.
-pub fn load(path: &Path) -> Result<Option<Loaded>, Vec<CheckpointError>> {
+pub fn load(path: &Path) -> Result<Option<Loaded>, Vec<FileError>> {
     let mut problems = Vec::new();
     let mut any = false;
     for p in [path.to_owned(), previous_path(path)] {
@@ -197,8 +169,7 @@ pub struct Checkpointer {
     last_frame: u64,
     tx: Option<SyncSender<Vec<u8>>>,
     writer: Option<JoinHandle<()>>,
-    /// Checkpoints written (or handed to the writer).
-    pub taken: u64,
+    taken: u64,
 }
 
 impl Checkpointer {
@@ -227,6 +198,11 @@ impl Checkpointer {
             writer: Some(writer),
             taken: 0,
         })
+    }
+
+    /// Checkpoints written (or handed to the writer) so far.
+    pub fn taken(&self) -> u64 {
+        self.taken
     }
 
     /// After a step: checkpoint if `every_frames` have passed since the last one.

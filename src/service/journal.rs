@@ -12,8 +12,9 @@
 //! cut short by a crash ends the log (reported as `truncated`), it does not poison it.
 
 use super::checkpoint;
+use super::command::{Command, Incoming};
 use super::config::ServerConfig;
-use super::intake::{Command, Incoming};
+use super::files::FileError;
 use super::sim::{SceneSource, Simulation, StartError};
 use crate::protocol::CommandKey;
 use crate::scene::Scene;
@@ -89,22 +90,9 @@ pub enum Record {
 /// Why a journal cannot be written, read or replayed.
 #[derive(Debug, thiserror::Error)]
 pub enum JournalError {
-    /// File trouble.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The OS error.
-        source: std::io::Error,
-    },
-    /// Not a journal, another version, or a damaged header.
-    #[error("{}: {reason}", path.display())]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong.
-        reason: String,
-    },
+    /// The file cannot be written or read, or is not a usable journal.
+    #[error(transparent)]
+    File(#[from] FileError),
     /// The recorded run cannot be rebuilt.
     #[error("cannot rebuild the recorded run: {0}")]
     Start(String),
@@ -123,8 +111,7 @@ pub struct JournalWriter {
     path: PathBuf,
     file: Option<BufWriter<File>>,
     buf: Vec<u8>,
-    /// Records written.
-    pub records: u64,
+    records: u64,
 }
 
 impl JournalWriter {
@@ -137,22 +124,13 @@ impl JournalWriter {
         sim: &Simulation,
         resumed: bool,
     ) -> Result<JournalWriter, JournalError> {
-        let io = |source| JournalError::Io {
-            path: path.to_owned(),
-            source,
-        };
-        let invalid = |reason: String| JournalError::Invalid {
-            path: path.to_owned(),
-            reason,
-        };
+        let io = |e| JournalError::File(FileError::io(path)(e));
+        let invalid = |reason: String| JournalError::File(FileError::invalid(path)(reason));
         let scene = match source {
             SceneSource::Embedded => JournalScene::Embedded,
             SceneSource::File(p) => JournalScene::File {
                 path: p.display().to_string(),
-                text: std::fs::read_to_string(p).map_err(|source| JournalError::Io {
-                    path: p.clone(),
-                    source,
-                })?,
+                text: std::fs::read_to_string(p).map_err(FileError::io(p))?,
             },
             SceneSource::Given(s) => JournalScene::Given {
                 name: s.name.clone(),
@@ -183,6 +161,11 @@ impl JournalWriter {
             buf,
             records: 0,
         })
+    }
+
+    /// Records written so far (the header not counted).
+    pub fn records(&self) -> u64 {
+        self.records
     }
 
     fn write(&mut self, record: &Record, flush: bool) {
@@ -249,14 +232,8 @@ pub struct Journal {
 impl Journal {
     /// Read a journal file. A damaged header is an error; a damaged tail ends the records.
     pub fn read(path: &Path) -> Result<Journal, JournalError> {
-        let bytes = std::fs::read(path).map_err(|source| JournalError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Journal::parse(&bytes).map_err(|reason| JournalError::Invalid {
-            path: path.to_owned(),
-            reason,
-        })
+        let bytes = std::fs::read(path).map_err(FileError::io(path))?;
+        Ok(Journal::parse(&bytes).map_err(FileError::invalid(path))?)
     }
 
     /// Parse a journal's bytes.

@@ -1,27 +1,40 @@
 //! The daemon: one World stepped at a fixed rate on its own thread, served over Zenoh.
 //!
-//! - [`config`]: `config/server.toml`, flags and embedded defaults.
-//! - [`intake`]: what the Zenoh callbacks do with a payload (decode, validate, queue).
-//! - [`sim`]: the World and how commands are applied; snapshot deltas; the shared scene view.
-//! - [`tick`]: the fixed-rate loop.
-//! - [`net`]: the Zenoh session, declarations and shutdown ([`Server`]).
-//! - [`mod@bench`]: the `bench-net` measurement.
-//! - [`checkpoint`]: the full state in an atomically replaced, versioned file; resume.
-//! - [`journal`]: the command journal and deterministic replay.
+//! - `config`: `config/server.toml`, flags and embedded defaults ([`ServerConfig`]).
+//! - `wire`: the one boundary between wire messages and the engine: a command payload
+//!   decoded and every field validated ([`parse_command`]), engine shapes and bodies in
+//!   their wire form ([`BodyMeta`]).
+//! - `command`: validated commands ([`Command`]) and the channel that carries them from the
+//!   Zenoh callbacks to the tick thread ([`Intake`]).
+//! - `sim`: the World and everything the daemon keeps about it ([`Simulation`]): applying
+//!   commands, snapshot deltas, the full state for late joiners, recovery from engine
+//!   failures.
+//! - `tick`: the fixed-rate loop ([`run_loop`], [`Outputs`]); `scene_query`: late joiners'
+//!   `…/scene` queries, answered by the tick thread only when one waits.
+//! - `net`: the Zenoh session, declarations and shutdown ([`Server`]).
+//! - `bench`: the `bench-net` measurement ([`bench_net`]).
+//! - [`checkpoint`] and [`journal`]: the daemon's files (checkpoints and resume; the command
+//!   journal and deterministic replay), whose errors are [`FileError`]s.
 
-pub mod bench;
+mod bench;
 pub mod checkpoint;
-pub mod config;
-pub mod intake;
+mod command;
+mod config;
+mod files;
 pub mod journal;
-pub mod net;
-pub mod sim;
-pub mod tick;
+mod net;
+mod scene_query;
+mod sim;
+mod tick;
+mod wire;
 
+pub use bench::{bench_net, BenchReport};
+pub use command::{Command, DroppedCounts, Incoming, Intake, SpawnDef};
 pub use config::{ConfigError, Limits, ServerConfig, ZenohSettings};
-pub use intake::{Command, Incoming, SpawnDef};
+pub use files::FileError;
 pub use net::{
     shutdown_worlds, start_worlds, world_configs, PublishHook, Server, ServerOptions, ServiceError,
 };
-pub use sim::{SceneSource, SceneView, SimState, Simulation, StartError, POSE_EPSILON};
-pub use tick::RunSummary;
+pub use sim::{SceneSource, SimState, Simulation, StartError, POSE_EPSILON};
+pub use tick::{run as run_loop, Outputs, Recording, RunSummary, TickConfig};
+pub use wire::{parse_command, BodyMeta};

@@ -3,13 +3,13 @@
 //! token. The tick thread is started here and stopped by [`Server::shutdown`].
 
 use super::checkpoint::{self, Checkpointer};
+use super::command::{Incoming, Intake};
 use super::config::{ConfigError, ServerConfig};
-use super::intake::{Incoming, Intake};
 use super::journal::JournalWriter;
 use super::sim::{SceneSource, StartError};
-use super::tick::{self, Outputs, Recording, RunSummary, SharedView, TickConfig};
+use super::tick::{self, Outputs, Recording, RunSummary, Shared, TickConfig};
 use crate::protocol::{encode, CommandKey, Keys};
-use std::sync::atomic::{AtomicBool, AtomicU64};
+use std::sync::atomic::AtomicBool;
 use std::sync::mpsc::sync_channel;
 use std::sync::Arc;
 use std::time::Duration;
@@ -201,27 +201,36 @@ impl Server {
         // The channels between Zenoh callbacks and the tick thread.
         let capacity = config.command_queue;
         let (tx, rx) = sync_channel::<Incoming>(capacity as usize);
-        let dropped: Arc<[AtomicU64; 5]> = Arc::new(Default::default());
-        let shared = Arc::new(SharedView::default());
-        shared.store(Arc::new(sim.view()));
+        let shared = Shared::default();
         let stop = Arc::new(AtomicBool::new(false));
-        // The queryable: the callback only hands the query to a task, which replies from the
-        // latest shared view.
+        // The queryable: the callback only hands the query to a task, which asks the tick
+        // thread for the state (built only then) and replies to every query that came in
+        // meanwhile with it.
         let (qtx, mut qrx) = tokio::sync::mpsc::channel::<Query>(64);
         let scene_key = keys.scene();
         let query_task = {
-            let shared = shared.clone();
+            let scene_queries = shared.scene_queries.clone();
             let scene_key = scene_key.clone();
             tokio::spawn(async move {
-                while let Some(query) = qrx.recv().await {
-                    let Some(view) = shared.load() else { continue };
-                    match encode(&view.to_state()) {
-                        Ok(payload) => {
-                            if let Err(e) = query.reply(&scene_key, payload).await {
-                                tracing::warn!("cannot reply to a scene query: {e}");
-                            }
+                while let Some(first) = qrx.recv().await {
+                    let mut queries = vec![first];
+                    while let Ok(q) = qrx.try_recv() {
+                        queries.push(q);
+                    }
+                    let Ok(state) = scene_queries.ask().await else {
+                        continue; // the tick loop stopped
+                    };
+                    let payload = match encode(&*state) {
+                        Ok(p) => p,
+                        Err(e) => {
+                            tracing::error!("cannot encode the scene: {e}");
+                            continue;
                         }
-                        Err(e) => tracing::error!("cannot encode the scene: {e}"),
+                    };
+                    for query in queries {
+                        if let Err(e) = query.reply(&scene_key, payload.clone()).await {
+                            tracing::warn!("cannot reply to a scene query: {e}");
+                        }
                     }
                 }
             })
@@ -237,7 +246,7 @@ impl Server {
             .map_err(zerr("scene queryable"))?;
 
         // The command subscribers.
-        let intake = Intake::new(tx, config.limits.clone(), dropped.clone());
+        let intake = Intake::new(tx, config.limits.clone(), shared.dropped.clone());
         let mut subscribers = Vec::new();
         for key in CommandKey::ALL {
             let intake = intake.clone();
@@ -272,10 +281,10 @@ impl Server {
             record: options.record,
         };
         let tick = {
-            let (dropped, shared, stop) = (dropped.clone(), shared.clone(), stop.clone());
+            let stop = stop.clone();
             std::thread::Builder::new()
                 .name("tiltbox-tick".into())
-                .spawn(move || tick::run(sim, rx, dropped, outputs, shared, stop, tick_cfg))
+                .spawn(move || tick::run_shared(sim, rx, shared, outputs, stop, tick_cfg))
                 .map_err(|e| ServiceError::Thread(e.to_string()))?
         };
 

@@ -1,14 +1,16 @@
 //! The tick thread: owns the [`Simulation`], steps it at a fixed dt against absolute deadlines,
 //! applies queued commands at each tick boundary and hands every output to an [`Outputs`].
+//! Zenoh is not here: [`run`] is the loop itself, which tests drive with their own outputs.
 
 use super::checkpoint::Checkpointer;
-use super::intake::Incoming;
+use super::command::{DroppedCounts, Incoming};
 use super::journal::JournalWriter;
-use super::sim::{SceneView, Simulation};
+use super::scene_query::SceneQueries;
+use super::sim::Simulation;
 use crate::protocol::{encode, encode_into, CommandKey, Event, Stats};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Receiver;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Where the tick thread's encoded messages go. Implementations must not block.
@@ -82,20 +84,13 @@ impl<O: Outputs> Outputs for Recording<O> {
     }
 }
 
-/// The latest [`SceneView`], replaced after every tick. Readers clone the `Arc` (the lock is
-/// held for a pointer copy, never while the World is touched).
-#[derive(Default)]
-pub struct SharedView(Mutex<Option<Arc<SceneView>>>);
-
-impl SharedView {
-    /// The latest view, if a tick has run.
-    pub fn load(&self) -> Option<Arc<SceneView>> {
-        self.0.lock().unwrap_or_else(|e| e.into_inner()).clone()
-    }
-    /// Publish a new view.
-    pub fn store(&self, view: Arc<SceneView>) {
-        *self.0.lock().unwrap_or_else(|e| e.into_inner()) = Some(view);
-    }
+/// What the Zenoh side shares with the loop besides the command channel.
+#[derive(Clone, Default)]
+pub(crate) struct Shared {
+    /// Commands a full channel refused, per key: reported as rejections.
+    pub(crate) dropped: DroppedCounts,
+    /// Late joiners waiting for the full state.
+    pub(crate) scene_queries: Arc<SceneQueries>,
 }
 
 /// How the loop runs.
@@ -134,13 +129,24 @@ fn micros(d: Duration) -> u32 {
     d.as_micros().min(u32::MAX as u128) as u32
 }
 
-/// Run until `stop` is set. Returns the outputs (so the caller can undeclare them) and a summary.
+/// Run until `stop` is set, taking commands from `rx`. Returns the outputs (so the caller can
+/// undeclare them) and a summary.
 pub fn run<O: Outputs>(
+    sim: Simulation,
+    rx: Receiver<Incoming>,
+    out: O,
+    stop: Arc<AtomicBool>,
+    cfg: TickConfig,
+) -> (O, RunSummary) {
+    run_shared(sim, rx, Shared::default(), out, stop, cfg)
+}
+
+/// [`run`], also reporting the commands a full channel dropped and answering scene queries.
+pub(crate) fn run_shared<O: Outputs>(
     mut sim: Simulation,
     rx: Receiver<Incoming>,
-    dropped: Arc<[AtomicU64; 5]>,
+    shared: Shared,
     mut out: O,
-    shared: Arc<SharedView>,
     stop: Arc<AtomicBool>,
     cfg: TickConfig,
 ) -> (O, RunSummary) {
@@ -154,10 +160,12 @@ pub fn run<O: Outputs>(
         step_us: Vec::with_capacity(128),
         worst_lateness_us: 0,
     };
-    let mut buf = Vec::with_capacity(1024);
-    shared.store(Arc::new(sim.view()));
+    let mut last_payload = 1024;
     tracing::info!(dt_ms = dt.as_secs_f64() * 1e3, "tick loop started");
     while !stop.load(Ordering::Relaxed) {
+        // 0. Late joiners: the state after the last step, built only when one is waiting.
+        //    Asked between ticks too: the wait below is sliced into 50 ms.
+        shared.scene_queries.answer(|| sim.scene_state());
         let due = deadline(k);
         let now = Instant::now();
         if now < due {
@@ -182,7 +190,7 @@ pub fn run<O: Outputs>(
 
         // 1. Commands, in arrival order, stamped with the frame about to be stepped.
         for key in CommandKey::ALL {
-            let n = dropped[key.index()].swap(0, Ordering::Relaxed);
+            let n = shared.dropped[key.index()].swap(0, Ordering::Relaxed);
             if n > 0 {
                 let ev = sim.reject_dropped(key, n, cfg.command_capacity);
                 publish_event(&mut out, &ev);
@@ -209,14 +217,16 @@ pub fn run<O: Outputs>(
             }
         };
 
-        // 3. Snapshot out, view shared.
+        // 3. Snapshot out, encoded once into a buffer of last frame's size and handed over.
         let frame = sim.frame();
-        let snapshot = sim.snapshot();
-        match encode_into(snapshot, &mut buf) {
-            Ok(()) => out.poses(frame, buf.clone()),
+        let mut payload = Vec::with_capacity(last_payload);
+        match encode_into(sim.poses(), &mut payload) {
+            Ok(()) => {
+                last_payload = payload.len();
+                out.poses(frame, payload);
+            }
             Err(e) => tracing::error!(frame, "cannot encode snapshot: {e}"),
         }
-        shared.store(Arc::new(sim.view()));
         out.stepped(&sim);
 
         // 4. Bookkeeping and stats once a second.
@@ -240,8 +250,8 @@ pub fn run<O: Outputs>(
                 step_us_median: median,
                 step_us_max: window.step_us.iter().copied().max().unwrap_or(0),
                 lateness_us_max: window.worst_lateness_us,
-                commands_applied: sim.applied,
-                commands_rejected: sim.rejected,
+                commands_applied: sim.applied(),
+                commands_rejected: sim.rejected(),
                 steps_dropped: summary.steps_dropped,
             };
             match encode(&stats) {
@@ -272,6 +282,7 @@ mod tests {
     use crate::service::config::ServerConfig;
     use crate::service::sim::SceneSource;
     use std::sync::mpsc::sync_channel;
+    use std::sync::Mutex;
 
     /// Collects snapshots; stalls the loop once, on `stall_at`.
     struct Fake {
@@ -313,9 +324,7 @@ mod tests {
                 run(
                     sim,
                     rx,
-                    Arc::default(),
                     out,
-                    Arc::default(),
                     stop,
                     TickConfig {
                         dt: Duration::from_millis(10),

@@ -14,6 +14,14 @@
 use crate::protocol::{BodyRef, Pose, Snapshot};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+#[cfg(feature = "tui")]
+use {
+    super::{Msg, ViewArgs},
+    crate::client::ClientError,
+    std::io::Write,
+    std::sync::mpsc::{Receiver, RecvTimeoutError},
+    std::time::{Duration, Instant},
+};
 
 /// Builds the lines of `--plain [--every N]`.
 #[derive(Debug)]
@@ -104,6 +112,63 @@ fn parse_pose(field: &str) -> Option<Pose> {
         y,
         angle,
     })
+}
+
+/// Print a line per `--every` snapshots to `out` until `--count` lines, a quit or a closed
+/// pipe; say on stderr when the daemon at `endpoint` is missing, up or gone.
+#[cfg(feature = "tui")]
+pub(super) fn run(
+    rx: &Receiver<Msg>,
+    args: &ViewArgs,
+    endpoint: &str,
+    out: &mut dyn Write,
+) -> Result<(), ClientError> {
+    let mut printer = PlainPrinter::new(args.every);
+    let mut printed = 0u64;
+    let mut alive = false;
+    let started = Instant::now();
+    let mut warned = false;
+    loop {
+        let msg = match rx.recv_timeout(Duration::from_millis(500)) {
+            Ok(m) => m,
+            Err(RecvTimeoutError::Timeout) => {
+                if !alive && !warned && started.elapsed() > Duration::from_secs(1) {
+                    eprintln!("waiting for server at {endpoint} ...");
+                    warned = true;
+                }
+                continue;
+            }
+            Err(RecvTimeoutError::Disconnected) => return Ok(()),
+        };
+        match msg {
+            Msg::Snapshot(s, _, _) => {
+                if let Some(line) = printer.snapshot(&s) {
+                    if writeln!(out, "{line}").and_then(|_| out.flush()).is_err() {
+                        return Ok(()); // the pipe closed
+                    }
+                    printed += 1;
+                    if args.count.is_some_and(|n| printed >= n) {
+                        return Ok(());
+                    }
+                }
+            }
+            Msg::Alive(up) => {
+                if up != alive && (warned || !up) {
+                    eprintln!(
+                        "{}",
+                        if up {
+                            "server is up"
+                        } else {
+                            "server is gone; waiting"
+                        }
+                    );
+                }
+                alive = up;
+            }
+            Msg::Quit => return Ok(()),
+            _ => {}
+        }
+    }
 }
 
 #[cfg(test)]

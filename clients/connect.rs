@@ -1,4 +1,5 @@
-//! Flags shared by `tiltbox-tilt`, `tiltbox-view` and `tiltbox demo`, and logging set-up.
+//! The flags every client takes to find its daemon and its world: `--world`, `--prefix`,
+//! `--connect` and `--log`.
 
 use super::session::DEFAULT_ENDPOINT;
 use super::ClientError;
@@ -16,7 +17,8 @@ pub struct ConnectArgs {
     /// Zenoh endpoint of the daemon (repeatable).
     #[arg(long, value_name = "ENDPOINT", default_value = DEFAULT_ENDPOINT)]
     pub connect: Vec<String>,
-    /// Log filter (tracing EnvFilter syntax; RUST_LOG wins) [default: info,zenoh=error].
+    /// Log filter (tracing EnvFilter syntax; RUST_LOG wins) [default: info,zenoh=error; the
+    /// viewer and the keyboard: error; --plain: warn].
     #[arg(long, value_name = "FILTER")]
     pub log: Option<String>,
 }
@@ -46,18 +48,4 @@ impl ConnectArgs {
         super::session::client_config(&self.connect)?;
         Ok(self.connect.clone())
     }
-}
-
-/// Log to stderr with `filter` (RUST_LOG wins), default `info,zenoh=error`.
-pub fn init_logging(filter: Option<&str>) {
-    use tracing_subscriber::EnvFilter;
-    let filter = EnvFilter::try_from_default_env()
-        .or_else(|_| EnvFilter::try_new(filter.unwrap_or("info,zenoh=error")))
-        .unwrap_or_else(|_| EnvFilter::new("info"));
-    use std::io::IsTerminal;
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_ansi(std::io::stderr().is_terminal())
-        .with_writer(std::io::stderr)
-        .try_init();
 }

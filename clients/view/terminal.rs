@@ -1,174 +1,21 @@
-//! The loop of `tiltbox-view` (and of `tiltbox demo`): subscribe, join late, draw or print.
-//!
-//! Zenoh callbacks only decode and `try_send` into one bounded channel; the loop on the
-//! caller's thread applies what arrives to a [`Join`], asks `…/scene` (on a tokio task) when a
-//! daemon is alive and the view is missing or stale, and redraws at most 30 times a second.
-//! The terminal is put back on `q`, Esc, Ctrl-C, SIGTERM and on panic (ratatui's hook).
-//!
-//! **Latency.** Snapshots carry no wall-clock time. When a sample has a Zenoh timestamp (the
-//! daemon's session timestamps data) the latency is receive time minus that timestamp.
-//! Otherwise it is estimated from the simulated clock: `arrival - time` minus its smallest
-//! value over the last seconds, i.e. how much later than the quickest recent snapshot this one
-//! came (the daemon publishes on absolute tick deadlines).
+//! The viewer's terminal: a full-screen braille drawing ([`super::render`]) redrawn at most
+//! 30 times a second, a status line with rate and latency, keys to quit. The terminal is put
+//! back on `q`, Esc, Ctrl-C, SIGTERM and on panic (ratatui's hook).
 
-use super::plain::PlainPrinter;
 use super::render::{render, Status};
-use super::session::{wait_for_signal, watch_server};
 use super::world::{Applied, Join, Received};
-use super::ClientError;
-use crate::protocol::{decode, Event, Keys, SceneState, Snapshot};
+use super::{query_scene, Msg};
+use crate::client::ClientError;
+use crate::protocol::{Keys, Snapshot};
 use std::collections::VecDeque;
-use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError, SyncSender};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender};
 use std::sync::Arc;
-use std::time::{Duration, Instant, SystemTime};
+use std::time::{Duration, Instant};
 use zenoh::Session;
 
-/// How the viewer runs.
-#[derive(Clone, Debug)]
-pub struct ViewOptions {
-    /// Where the daemon is expected, for messages.
-    pub endpoint: String,
-    /// `--plain`: print a line per snapshot instead of drawing.
-    pub plain: bool,
-    /// `--every N` (plain mode).
-    pub every: u64,
-    /// `--count N`: stop after N plain lines.
-    pub count: Option<u64>,
-}
-
-enum Msg {
-    Snapshot(Snapshot, Instant, Option<Duration>),
-    Event(Event),
-    Alive(bool),
-    Scene(Result<SceneState, String>),
-    Input(crossterm::event::Event),
-    Quit,
-}
-
-const CHANNEL: usize = 4096;
+/// The longest between two redraws while something changes: about 30 frames a second.
 const FRAME: Duration = Duration::from_millis(33);
-
-/// Run the viewer until the user quits (or `--count` lines are printed). `out` receives the
-/// plain lines; the terminal view draws on stdout through crossterm.
-pub fn run(
-    rt: &tokio::runtime::Handle,
-    session: &Session,
-    keys: &Keys,
-    opts: &ViewOptions,
-    out: &mut dyn Write,
-) -> Result<(), ClientError> {
-    let (tx, rx) = sync_channel::<Msg>(CHANNEL);
-    // Subscribe first, then watch liveliness: the scene is asked once a daemon is seen.
-    let subs = rt.block_on(async {
-        let stx = tx.clone();
-        let poses = session
-            .declare_subscriber(keys.poses())
-            .callback(move |sample| {
-                let now = Instant::now();
-                let latency = sample.timestamp().and_then(|ts| {
-                    SystemTime::now()
-                        .duration_since(ts.get_time().to_system_time())
-                        .ok()
-                });
-                match decode::<Snapshot>(&sample.payload().to_bytes()) {
-                    Ok(s) => {
-                        let _ = stx.try_send(Msg::Snapshot(s, now, latency));
-                    }
-                    Err(e) => tracing::debug!("bad snapshot: {e}"),
-                }
-            })
-            .await
-            .map_err(ClientError::zenoh("poses subscriber"))?;
-        let etx = tx.clone();
-        let events = session
-            .declare_subscriber(keys.events())
-            .callback(
-                move |sample| match decode::<Event>(&sample.payload().to_bytes()) {
-                    Ok(e) => {
-                        let _ = etx.try_send(Msg::Event(e));
-                    }
-                    Err(e) => tracing::debug!("bad event: {e}"),
-                },
-            )
-            .await
-            .map_err(ClientError::zenoh("events subscriber"))?;
-        let atx = tx.clone();
-        let watch = watch_server(session, keys, move |up| {
-            let _ = atx.try_send(Msg::Alive(up));
-        })
-        .await?;
-        Ok::<_, ClientError>((poses, events, watch))
-    })?;
-    {
-        let qtx = tx.clone();
-        rt.spawn(async move {
-            wait_for_signal().await;
-            let _ = qtx.send(Msg::Quit);
-        });
-    }
-    let result = if opts.plain {
-        plain_loop(&rx, opts, out)
-    } else {
-        tui_loop(rt, session, keys, &tx, &rx, opts)
-    };
-    drop(subs);
-    result
-}
-
-fn plain_loop(
-    rx: &Receiver<Msg>,
-    opts: &ViewOptions,
-    out: &mut dyn Write,
-) -> Result<(), ClientError> {
-    let mut printer = PlainPrinter::new(opts.every);
-    let mut printed = 0u64;
-    let mut alive = false;
-    let started = Instant::now();
-    let mut warned = false;
-    loop {
-        let msg = match rx.recv_timeout(Duration::from_millis(500)) {
-            Ok(m) => m,
-            Err(RecvTimeoutError::Timeout) => {
-                if !alive && !warned && started.elapsed() > Duration::from_secs(1) {
-                    eprintln!("waiting for server at {} ...", opts.endpoint);
-                    warned = true;
-                }
-                continue;
-            }
-            Err(RecvTimeoutError::Disconnected) => return Ok(()),
-        };
-        match msg {
-            Msg::Snapshot(s, _, _) => {
-                if let Some(line) = printer.snapshot(&s) {
-                    if writeln!(out, "{line}").and_then(|_| out.flush()).is_err() {
-                        return Ok(()); // the pipe closed
-                    }
-                    printed += 1;
-                    if opts.count.is_some_and(|n| printed >= n) {
-                        return Ok(());
-                    }
-                }
-            }
-            Msg::Alive(up) => {
-                if up != alive && (warned || !up) {
-                    eprintln!(
-                        "{}",
-                        if up {
-                            "server is up"
-                        } else {
-                            "server is gone; waiting"
-                        }
-                    );
-                }
-                alive = up;
-            }
-            Msg::Quit => return Ok(()),
-            _ => {}
-        }
-    }
-}
 
 /// Received rate and latency bookkeeping.
 #[derive(Default)]
@@ -233,13 +80,14 @@ impl Drop for TerminalGuard {
     }
 }
 
-fn tui_loop(
+/// Draw the world until q, Esc, Ctrl-C or a signal.
+pub(super) fn show(
     rt: &tokio::runtime::Handle,
     session: &Session,
     keys: &Keys,
     tx: &SyncSender<Msg>,
     rx: &Receiver<Msg>,
-    opts: &ViewOptions,
+    endpoint: &str,
 ) -> Result<(), ClientError> {
     let mut terminal = ratatui::try_init()?;
     let _guard = TerminalGuard;
@@ -269,7 +117,7 @@ fn tui_loop(
     let mut join = Join::new();
     let mut status = Status {
         world: keys.prefix().to_owned(),
-        endpoint: opts.endpoint.clone(),
+        endpoint: endpoint.to_owned(),
         ..Status::default()
     };
     let mut meter = Meter::default();
@@ -363,23 +211,4 @@ fn tui_loop(
     stop.store(true, Ordering::Relaxed);
     let _ = input.join();
     result
-}
-
-/// Ask `…/scene` once; the first good reply wins.
-pub async fn query_scene(session: &Session, key: String) -> Result<SceneState, String> {
-    let replies = session
-        .get(key)
-        .timeout(Duration::from_secs(2))
-        .await
-        .map_err(|e| e.to_string())?;
-    while let Ok(reply) = replies.recv_async().await {
-        match reply.into_result() {
-            Ok(sample) => {
-                return decode::<SceneState>(&sample.payload().to_bytes())
-                    .map_err(|e| e.to_string())
-            }
-            Err(e) => tracing::debug!("scene reply error: {e:?}"),
-        }
-    }
-    Err("no reply to the scene query".into())
 }

@@ -1,0 +1,131 @@
+//! The commands the tick thread applies, as validated from the wire ([`super::wire`]), and the
+//! channel that carries them there from the Zenoh callbacks ([`Intake`]). A command is
+//! serializable: the journal stores each one with the frame it was applied before.
+
+use super::config::Limits;
+use super::wire::parse_command;
+use crate::physics::BodyDef;
+use crate::protocol::{BodyRef, Colour, CommandKey, Tilt, Vector};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{SyncSender, TrySendError};
+use std::sync::Arc;
+
+/// A validated command for the tick thread.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Command {
+    /// Set gravity (m/s^2).
+    SetGravity(Vector),
+    /// Set gravity from a device's tilt.
+    Tilt(Tilt),
+    /// Add bodies, all or nothing.
+    Spawn(Vec<SpawnDef>),
+    /// Remove bodies, all or nothing: ids as sent, resolved to live bodies when applied.
+    Remove(Vec<BodyRef>),
+    /// Reload the scene.
+    Reset,
+}
+
+/// A body to add, validated.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SpawnDef {
+    /// The engine's definition (passed `BodyDef::validate`).
+    #[serde(with = "compact_def")]
+    pub def: BodyDef,
+    /// Name (may be empty).
+    pub name: String,
+    /// Colour.
+    pub colour: Colour,
+}
+
+/// `BodyDef` for the journal's postcard, with vectors as plain arrays so the f32 and f64
+/// builds write the same layout per precision.
+mod compact_def {
+    use crate::physics::{BodyDef, MassSpec, Real, Shape, Vec2};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    #[derive(Serialize, Deserialize)]
+    struct Compact {
+        shape: Shape,
+        position: [Real; 2],
+        angle: Real,
+        linear_velocity: [Real; 2],
+        angular_velocity: Real,
+        mass: MassSpec,
+        friction: Real,
+        restitution: Real,
+    }
+
+    pub fn serialize<S: Serializer>(d: &BodyDef, s: S) -> Result<S::Ok, S::Error> {
+        Compact {
+            shape: d.shape.clone(),
+            position: d.position.to_array(),
+            angle: d.angle,
+            linear_velocity: d.linear_velocity.to_array(),
+            angular_velocity: d.angular_velocity,
+            mass: d.mass,
+            friction: d.friction,
+            restitution: d.restitution,
+        }
+        .serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<BodyDef, D::Error> {
+        let c = Compact::deserialize(d)?;
+        Ok(BodyDef {
+            shape: c.shape,
+            position: Vec2::from_array(c.position),
+            angle: c.angle,
+            linear_velocity: Vec2::from_array(c.linear_velocity),
+            angular_velocity: c.angular_velocity,
+            mass: c.mass,
+            friction: c.friction,
+            restitution: c.restitution,
+        })
+    }
+}
+
+/// What a callback hands the tick thread: a command, or the reason it was refused.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Incoming {
+    /// The key it arrived on.
+    pub key: CommandKey,
+    /// The command, or why it was refused.
+    pub command: Result<Command, String>,
+}
+
+/// How many commands a full channel refused, per command key ([`CommandKey::index`]): the
+/// tick thread reports them as rejections.
+pub type DroppedCounts = Arc<[AtomicU64; CommandKey::ALL.len()]>;
+
+/// The callbacks' side of the command channel. Cloned into each subscriber's callback.
+#[derive(Clone)]
+pub struct Intake {
+    tx: SyncSender<Incoming>,
+    limits: Arc<Limits>,
+    dropped: DroppedCounts,
+}
+
+impl Intake {
+    /// An intake sending into `tx`; `dropped` counts, per command key, what a full channel
+    /// refused.
+    pub fn new(tx: SyncSender<Incoming>, limits: Limits, dropped: DroppedCounts) -> Intake {
+        Intake {
+            tx,
+            limits: Arc::new(limits),
+            dropped,
+        }
+    }
+
+    /// Decode, validate and queue. Never blocks: a full channel is counted and reported by the
+    /// tick thread as a rejection.
+    pub fn handle(&self, key: CommandKey, payload: &[u8]) {
+        let command = parse_command(key, payload, &self.limits);
+        match self.tx.try_send(Incoming { key, command }) {
+            Ok(()) => {}
+            Err(TrySendError::Full(_)) => {
+                self.dropped[key.index()].fetch_add(1, Ordering::Relaxed);
+            }
+            Err(TrySendError::Disconnected(_)) => {} // shutting down
+        }
+    }
+}

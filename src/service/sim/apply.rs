@@ -1,0 +1,155 @@
+//! Applying commands at a tick boundary: gravity, tilt, spawn, remove and reset, each all or
+//! nothing, each answered by the event to publish (or a rejection naming why).
+
+use super::Simulation;
+use crate::physics::{BodyId, PhysicsError};
+use crate::protocol::{BodyRef, CommandKey, Event, EventKind, Vector};
+use crate::service::command::{Command, Incoming, SpawnDef};
+use crate::service::wire::{body_info, vec2, vector};
+use std::collections::HashMap;
+
+impl Simulation {
+    fn reject(&mut self, key: CommandKey, reason: String) -> Event {
+        self.rejected += 1;
+        tracing::warn!(key = %self.keys.command(key), frame = self.next_frame(), "rejected: {reason}");
+        Event {
+            frame: self.next_frame(),
+            kind: EventKind::Rejected {
+                key: self.keys.command(key),
+                reason,
+            },
+        }
+    }
+
+    /// The rejection for `count` commands on `key` dropped because the command channel was full.
+    pub fn reject_dropped(&mut self, key: CommandKey, count: u64, capacity: u32) -> Event {
+        self.rejected += count - 1; // reject() counts one
+        self.reject(
+            key,
+            format!("command queue full (capacity {capacity}): {count} command(s) dropped"),
+        )
+    }
+
+    /// Apply one command at the tick boundary before frame [`Simulation::next_frame`]; returns
+    /// the event to publish, if any. Never half-applies: on error nothing changes.
+    pub fn apply(&mut self, incoming: Incoming) -> Option<Event> {
+        let key = incoming.key;
+        let command = match incoming.command {
+            Ok(c) => c,
+            Err(reason) => return Some(self.reject(key, reason)),
+        };
+        let frame = self.next_frame();
+        tracing::debug!(frame, key = %key, ?command, "applying");
+        let result = match command {
+            Command::SetGravity(g) => self.set_gravity(g).map(|()| None),
+            Command::Tilt(t) => self
+                .set_gravity(t.gravity(self.scene_gravity))
+                .map(|()| None),
+            Command::Spawn(defs) => self.spawn(defs).map(Some),
+            Command::Remove(ids) => self.remove(ids).map(Some),
+            Command::Reset => self.reset().map(Some),
+        };
+        match result {
+            Ok(kind) => {
+                self.applied += 1;
+                kind.map(|kind| Event { frame, kind })
+            }
+            Err(reason) => Some(self.reject(key, reason)),
+        }
+    }
+
+    fn set_gravity(&mut self, g: Vector) -> Result<(), String> {
+        self.world.set_gravity(vec2(g)).map_err(|e| e.to_string())
+    }
+
+    fn spawn(&mut self, defs: Vec<SpawnDef>) -> Result<EventKind, String> {
+        let frame = self.next_frame();
+        while self
+            .spawn_frames
+            .front()
+            .is_some_and(|&f| f + self.spawn_window <= frame)
+        {
+            self.spawn_frames.pop_front();
+        }
+        let max = self.limits.max_spawns_per_second;
+        if self.spawn_frames.len() >= max as usize {
+            return Err(format!(
+                "rate limit: limits.max_spawns_per_second = {max} spawns already applied in the last second"
+            ));
+        }
+        let after = self.world.body_count() + defs.len();
+        if after > self.limits.max_bodies as usize {
+            return Err(format!(
+                "{} bodies would make {after}, more than limits.max_bodies = {}",
+                defs.len(),
+                self.limits.max_bodies
+            ));
+        }
+        let mut ids = Vec::with_capacity(defs.len());
+        for (i, d) in defs.iter().enumerate() {
+            match self.world.add_body(&d.def) {
+                Ok(id) => ids.push(id),
+                Err(e) => {
+                    // Validated already, so this is a World limit: undo what was added.
+                    for id in ids {
+                        let _ = self.world.remove_body(id);
+                    }
+                    return Err(format!("bodies[{i}]: {e}"));
+                }
+            }
+        }
+        self.spawn_frames.push_back(frame);
+        let mut bodies = Vec::with_capacity(ids.len());
+        for (d, id) in defs.into_iter().zip(ids) {
+            self.describe(id, d.name, d.colour);
+            let body = self.world.body(id).expect("just added");
+            bodies.push(body_info(body, &self.bodies.meta_of(body)));
+        }
+        Ok(EventKind::Added { bodies })
+    }
+
+    /// Remove the bodies the wire ids name, all or nothing. A wire id names a body only if a
+    /// live body has exactly that id (slot and generation).
+    fn remove(&mut self, refs: Vec<BodyRef>) -> Result<EventKind, String> {
+        let live: HashMap<BodyRef, BodyId> = self
+            .world
+            .bodies()
+            .map(|b| (BodyRef::from(b.id()), b.id()))
+            .collect();
+        let mut ids = Vec::with_capacity(refs.len());
+        for (i, r) in refs.iter().enumerate() {
+            let Some(&id) = live.get(r) else {
+                // The engine's own words for an id it does not know.
+                return Err(format!("ids[{i}]: no body with id {r}"));
+            };
+            if refs[..i].contains(r) {
+                return Err(format!("ids[{i}]: body {r} is listed twice"));
+            }
+            ids.push(id);
+        }
+        for &id in &ids {
+            self.world
+                .remove_body(id)
+                .map_err(|e: PhysicsError| e.to_string())?;
+            self.bodies.remove(id);
+            self.poses.forget(id);
+        }
+        Ok(EventKind::Removed { ids: refs })
+    }
+
+    /// Reload the scene; the event carries every body of the new World.
+    pub(super) fn reset(&mut self) -> Result<EventKind, String> {
+        self.load_scene()
+            .map_err(|e| format!("cannot reload the scene: {e}"))?;
+        tracing::info!(frame = self.next_frame(), scene = %self.scene_name, "reset");
+        Ok(EventKind::Reset {
+            scene: self.scene_name.clone(),
+            gravity: vector(self.world.gravity()),
+            bodies: self
+                .world
+                .bodies()
+                .map(|b| body_info(b, &self.bodies.meta_of(b)))
+                .collect(),
+        })
+    }
+}

@@ -1,0 +1,293 @@
+//! The simulation as the tick thread holds it: the World, what each body looks like, the
+//! delta tracker for snapshots, and how commands are applied. No Zenoh here, no threads:
+//! the tick loop drives it, and tests can drive it directly.
+//!
+//! - [`SceneSource`] (`source.rs`): where the scene comes from;
+//! - `bodies.rs`: each live body's name, colour and wire shape;
+//! - `apply.rs`: applying commands (gravity, tilt, spawn, remove, reset), all or nothing;
+//! - `poses.rs`: the `…/poses` message of each frame, keyframes and deltas;
+//! - [`SimState`] and [`StartError`] (`state.rs`): what a checkpoint stores, and why a
+//!   simulation cannot start.
+
+#![allow(clippy::unnecessary_cast)] // Real <-> f32 casts matter with the `f64` feature.
+
+mod apply;
+mod bodies;
+mod poses;
+mod source;
+mod state;
+
+pub use poses::POSE_EPSILON;
+pub use source::SceneSource;
+pub use state::{SimState, StartError};
+
+use super::config::{Limits, ServerConfig};
+use super::wire::{body_info, vector};
+use crate::physics::{PhysicsError, Real, World};
+use crate::protocol::{Event, Keys, SceneState, Snapshot};
+use bodies::BodyRegistry;
+use poses::PoseDeltas;
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+/// The World plus everything the daemon keeps about it.
+pub struct Simulation {
+    world: World,
+    scene_name: String,
+    /// |gravity| of the scene (m/s^2): a tilt gives gravity of this magnitude.
+    scene_gravity: f32,
+    source: SceneSource,
+    world_name: String,
+    keys: Keys,
+    limits: Limits,
+    dt: Real,
+    dt_secs: f64,
+    frame: u64,
+    bodies: BodyRegistry,
+    poses: PoseDeltas,
+    /// Frames of the spawns applied within the last second (the rate limit's window).
+    spawn_frames: VecDeque<u64>,
+    /// The rate limit's window, in frames (one second).
+    spawn_window: u64,
+    applied: u64,
+    rejected: u64,
+}
+
+impl Simulation {
+    /// Load the scene and build the World. Frame 0, nothing stepped yet.
+    pub fn new(config: &ServerConfig, source: SceneSource) -> Result<Simulation, StartError> {
+        let mut sim = Simulation::new_empty(config, source);
+        sim.load_scene()?;
+        Ok(sim)
+    }
+
+    fn new_empty(config: &ServerConfig, source: SceneSource) -> Simulation {
+        let keys = config
+            .keys()
+            .expect("config validated before the simulation starts");
+        Simulation {
+            world: World::default(),
+            scene_name: String::new(),
+            scene_gravity: 9.81,
+            source,
+            world_name: config.world.clone(),
+            keys,
+            limits: config.limits.clone(),
+            dt: config.dt() as Real,
+            dt_secs: config.dt(),
+            frame: 0,
+            bodies: BodyRegistry::default(),
+            poses: PoseDeltas::new(config.keyframe_every as u64),
+            spawn_frames: VecDeque::new(),
+            spawn_window: config.tick_hz.round().max(1.0) as u64,
+            applied: 0,
+            rejected: 0,
+        }
+    }
+
+    /// A simulation continuing from `state` (a checkpoint). `source` is still what `…/reset`
+    /// loads. The world name, dt and limits in force are the config's; a different dt than
+    /// the checkpoint's is refused (the continuation would not be the same simulation).
+    pub fn restore(
+        config: &ServerConfig,
+        source: SceneSource,
+        state: SimState,
+    ) -> Result<Simulation, StartError> {
+        let bad = |m: String| StartError::Checkpoint(m);
+        if state.dt.to_bits() != config.dt().to_bits() {
+            return Err(bad(format!(
+                "it was taken with dt = {} s, the config has tick_hz = {} (dt = {} s)",
+                state.dt,
+                config.tick_hz,
+                config.dt()
+            )));
+        }
+        if !(state.scene_gravity.is_finite() && state.scene_gravity > 0.0) {
+            return Err(bad(format!("scene gravity = {}", state.scene_gravity)));
+        }
+        let world = World::import_state(&state.world).map_err(|e| bad(e.to_string()))?;
+        if world.body_count() > config.limits.max_bodies as usize {
+            return Err(StartError::TooManyBodies {
+                bodies: world.body_count(),
+                max: config.limits.max_bodies,
+            });
+        }
+        if state.world.steps != state.frame {
+            tracing::debug!(
+                steps = state.world.steps,
+                frame = state.frame,
+                "checkpoint: world steps and frame differ (resets keep the step count)"
+            );
+        }
+        let mut sim = Simulation::new_empty(config, source);
+        sim.world = world;
+        sim.scene_name = state.scene_name;
+        sim.scene_gravity = state.scene_gravity;
+        sim.frame = state.frame;
+        sim.bodies = BodyRegistry::from_slots(state.meta);
+        sim.spawn_frames = state.spawn_frames.into();
+        sim.applied = state.applied;
+        sim.rejected = state.rejected;
+        if state.world_name != sim.world_name {
+            tracing::warn!(
+                was = %state.world_name,
+                now = %sim.world_name,
+                "checkpoint taken under another world name"
+            );
+        }
+        Ok(sim)
+    }
+
+    /// The state to checkpoint (see [`Simulation::restore`]).
+    pub fn export_state(&self) -> SimState {
+        SimState {
+            world_name: self.world_name.clone(),
+            scene_name: self.scene_name.clone(),
+            scene_gravity: self.scene_gravity,
+            dt: self.dt_secs,
+            frame: self.frame,
+            meta: self.bodies.slots().to_vec(),
+            spawn_frames: self.spawn_frames.iter().copied().collect(),
+            applied: self.applied,
+            rejected: self.rejected,
+            world: self.world.export_state(),
+        }
+    }
+
+    /// (Re)load the scene from its source and replace the World; nothing changes on error.
+    fn load_scene(&mut self) -> Result<(), StartError> {
+        let scene = self.source.load()?;
+        if scene.bodies.len() > self.limits.max_bodies as usize {
+            return Err(StartError::TooManyBodies {
+                bodies: scene.bodies.len(),
+                max: self.limits.max_bodies,
+            });
+        }
+        let (world, ids) = scene.build_world()?;
+        self.world = world;
+        self.bodies.clear();
+        self.poses.restart();
+        for (body, id) in scene.bodies.iter().zip(ids) {
+            self.describe(id, body.name.clone(), body.colour);
+        }
+        self.scene_name = scene.name.clone();
+        let g = scene.gravity.length() as f32;
+        self.scene_gravity = if g > 0.0 { g } else { 9.81 };
+        Ok(())
+    }
+
+    /// Record what the body `id`, just added, is called and looks like.
+    fn describe(
+        &mut self,
+        id: crate::physics::BodyId,
+        name: String,
+        colour: crate::protocol::Colour,
+    ) {
+        let body = self.world.body(id).expect("body just added");
+        let meta = super::wire::BodyMeta::of(body, name, colour);
+        self.bodies.set(id, meta);
+    }
+
+    /// The World (read only).
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+    /// The last frame stepped (0 before the first step).
+    pub fn frame(&self) -> u64 {
+        self.frame
+    }
+    /// The frame the next step will have: commands applied now are stamped with it.
+    pub fn next_frame(&self) -> u64 {
+        self.frame + 1
+    }
+    /// Simulated time (s) at the last frame.
+    pub fn time(&self) -> f64 {
+        self.frame as f64 * self.dt_secs
+    }
+    /// The keys of this world.
+    pub fn keys(&self) -> &Keys {
+        &self.keys
+    }
+    /// Commands applied since the start (a restored simulation counts on from its checkpoint).
+    pub fn applied(&self) -> u64 {
+        self.applied
+    }
+    /// Commands rejected since the start, dropped ones included.
+    pub fn rejected(&self) -> u64 {
+        self.rejected
+    }
+    /// Dynamic bodies that are awake.
+    pub fn awake_count(&self) -> usize {
+        self.world.awake_count()
+    }
+
+    /// Step like [`Simulation::step`], but survive an engine failure: if `World::step`
+    /// panics or leaves a body with a non-finite number, the scene is reloaded (the world is
+    /// lost, the daemon is not) and the `Reset` event to publish is returned. Deterministic,
+    /// so a replay recovers at the same frame.
+    pub fn step_guarded(&mut self) -> Result<(Duration, Option<Event>), PhysicsError> {
+        let t0 = Instant::now();
+        let before = self.frame;
+        let stepped = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.step()));
+        let failure = match stepped {
+            Ok(Ok(took)) => match self.world.bodies().find(|b| !b.is_finite()) {
+                None => return Ok((took, None)),
+                Some(b) => format!("body {} holds a non-finite number", b.id()),
+            },
+            Ok(Err(e)) => return Err(e),
+            Err(_) => "the engine panicked".to_owned(),
+        };
+        // The frame that failed still counts, so frame numbers stay consecutive.
+        self.frame = before + 1;
+        tracing::error!(
+            frame = self.frame,
+            "{failure}: reloading the scene to keep serving"
+        );
+        let event = match self.reset() {
+            Ok(kind) => Some(Event {
+                frame: self.next_frame(),
+                kind,
+            }),
+            Err(e) => {
+                tracing::error!("cannot reload the scene either: {e}");
+                self.world.clear();
+                None
+            }
+        };
+        Ok((t0.elapsed(), event))
+    }
+
+    /// Step the World once (frame += 1); returns how long `World::step` took.
+    pub fn step(&mut self) -> Result<Duration, PhysicsError> {
+        let t0 = Instant::now();
+        self.world.step(self.dt)?;
+        let took = t0.elapsed();
+        self.frame += 1;
+        Ok(took)
+    }
+
+    /// The `…/poses` message of the frame just stepped: a keyframe every `keyframe_every`
+    /// frames and after a reset, otherwise the dynamic bodies that moved more than
+    /// [`POSE_EPSILON`] since they were last sent. Call once per step.
+    pub fn poses(&mut self) -> &Snapshot {
+        let time = self.time();
+        self.poses.message(&self.world, self.frame, time)
+    }
+
+    /// The full state after the last step, every body included: the `…/scene` reply. Built
+    /// on demand (late joiners ask for it), never kept.
+    pub fn scene_state(&self) -> SceneState {
+        SceneState {
+            world: self.world_name.clone(),
+            scene: self.scene_name.clone(),
+            frame: self.frame,
+            time: self.time(),
+            gravity: vector(self.world.gravity()),
+            bodies: self
+                .world
+                .bodies()
+                .map(|b| body_info(b, &self.bodies.meta_of(b)))
+                .collect(),
+        }
+    }
+}

@@ -10,6 +10,7 @@
 //! - `render` (feature `tui`): the pure drawing function, scene to ratatui buffer.
 //! - `viewer` (feature `tui`): the terminal loop of `tiltbox-view`.
 //! - [`args`]: the flags shared by both clients, and logging.
+//! - `web` (feature `web`): the `tiltbox-web` gateway, its page and its WebSocket wire.
 //!
 //! The module needs the `net` and `cli` features (Zenoh, clap, serde_json).
 
@@ -21,6 +22,8 @@ pub mod session;
 pub mod tilt;
 #[cfg(feature = "tui")]
 pub mod viewer;
+#[cfg(feature = "web")]
+pub mod web;
 pub mod world;
 
 /// What can go wrong in a client.

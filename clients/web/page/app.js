@@ -537,7 +537,7 @@ function status() {
   const conn = !metrics.connected ? 'reconnecting' : !state.alive && !state.joined ? 'waiting for server' : state.alive ? 'live' : 'no server';
   const parts = [state.world || '?', 'frame ' + state.frame, state.bodies.size + ' bodies',
     'g ' + arrow(g) + ' ' + Math.hypot(g.x, g.y).toFixed(2), state.snapTimes.length + ' Hz',
-    'latency ' + (metrics.rtt === null ? '?' : (metrics.rtt / 2).toFixed(0)) + ' ms + buffer ' + (lastDelay * 1000).toFixed(0) + ' ms',
+    'latency ' + (metrics.rtt === null ? '?' : (metrics.rtt / 2).toFixed(1)) + ' ms + buffer ' + (lastDelay * 1000).toFixed(0) + ' ms',
     metrics.fps.toFixed(0) + ' fps', conn];
   if (state.scene) parts.push(state.scene);
   document.getElementById('status').textContent = parts.join(' │ ');

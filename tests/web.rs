@@ -1102,3 +1102,52 @@ async fn pages_at_60_hz() {
     gw.stop().await;
     server.shutdown().await.unwrap();
 }
+
+/// The binary: on start it prints the HTTPS URL, the certificate's fingerprint and a QR code,
+/// and serves the page; a bad flag is named and exits with 2.
+#[test]
+fn the_binary_prints_its_url_fingerprint_and_qr_code() {
+    use std::io::{BufRead, BufReader};
+    let exe = env!("CARGO_BIN_EXE_tiltbox-web");
+    let bad = Command::new(exe)
+        .args(["--allow", "tilt,fly"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("\"fly\""));
+
+    let mut child = Command::new(exe)
+        .args([
+            "--listen",
+            "127.0.0.1:0",
+            "--connect",
+            "tcp/127.0.0.1:17493",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    while lines.len() < 20 && out.read_line(&mut line).unwrap_or(0) > 0 {
+        lines.push(std::mem::take(&mut line));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    let text = lines.concat();
+    assert!(
+        text.starts_with("tiltbox-web: open https://127.0.0.1:"),
+        "{text}"
+    );
+    let fp = text
+        .lines()
+        .find_map(|l| l.strip_prefix("certificate SHA-256 "))
+        .expect("a fingerprint line");
+    assert_eq!(fp.len(), 95, "{fp}");
+    assert!(text.contains("loopback only"), "{text}");
+    assert!(
+        text.contains('▀') || text.contains('▄'),
+        "a QR code: {text}"
+    );
+}

@@ -6,7 +6,8 @@
 //! - [`tilt`]: the tilt source: keyboard, sweep, stdin and IIO sources, and the publisher;
 //! - [`view`]: the viewer: its copy of the world, the drawing, the terminal and plain loops;
 //! - [`connect`]: the flags every client takes to find its daemon and world;
-//! - [`session`]: opening a Zenoh session towards a daemon, watching its liveliness token.
+//! - [`session`]: opening a Zenoh session towards a daemon, watching its liveliness token;
+//! - `web` (feature `web`): the `tiltbox-web` gateway, its page and its WebSocket wire.
 //!
 //! Logging, the runtime, signals and exit codes are the plumbing every binary shares,
 //! [`crate::cli`]. The module needs the `net` and `cli` features (Zenoh, clap, serde_json);
@@ -16,6 +17,8 @@ pub mod connect;
 pub mod session;
 pub mod tilt;
 pub mod view;
+#[cfg(feature = "web")]
+pub mod web;
 
 /// What can go wrong in a client.
 #[derive(Debug, thiserror::Error)]

@@ -74,8 +74,8 @@ pub fn closed_box(
     ])
 }
 
-/// A benchmark scene as plain body definitions, so that any engine can build it (the Box2D v3 and rapier2d
-/// comparison in `benchmarks/vs-peers` builds the same list).
+/// A benchmark scene as plain body definitions, so that any engine can build it (the Box2D v3
+/// and rapier2d comparison in `benchmarks/vs-peers` builds the same list).
 #[derive(Clone, Debug)]
 pub struct Setup {
     /// Scene name, e.g. `large_pyramid`.

@@ -132,10 +132,11 @@ impl Box2d {
                     b2BodyType_b2_dynamicBody
                 };
                 bd.position = v(d.position.x as f32, d.position.y as f32);
-                let cs = b2ComputeCosSin(d.angle as f32);
+                // The exact rotation (Box2D's b2ComputeCosSin approximates to about 1e-3 rad).
+                let angle = d.angle as f32;
                 bd.rotation = b2Rot {
-                    c: cs.cosine,
-                    s: cs.sine,
+                    c: angle.cos(),
+                    s: angle.sin(),
                 };
                 bd.linearVelocity = v(d.linear_velocity.x as f32, d.linear_velocity.y as f32);
                 bd.angularVelocity = d.angular_velocity as f32;

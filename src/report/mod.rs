@@ -10,6 +10,8 @@ use crate::accuracy::{
 };
 use crate::physics::{Real, Settings, SolverKind};
 use plotters::prelude::*;
+
+pub mod peers;
 use std::fmt::Write as _;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -273,11 +275,22 @@ fn plot_err<E: std::fmt::Debug>(e: E) -> io::Error {
 
 /// Draw `sweep` as error against run time per simulated second, log-log, to `path`.
 pub fn chart(sweep: &CaseSweep, path: &Path) -> io::Result<()> {
+    chart_with_peers(sweep, &[], path)
+}
+
+/// [`chart`] with other engines' points of the same case beside tiltbox's curves ([`peers`]).
+pub fn chart_with_peers(
+    sweep: &CaseSweep,
+    peer_points: &[&peers::PeerPoint],
+    path: &Path,
+) -> io::Result<()> {
     let ok = |p: &Point| !p.measurement.diverged && p.measurement.error.is_finite();
     let all: Vec<&Point> = sweep.curves.iter().flat_map(|c| &c.points).collect();
+    let peer_extent = peers::extent(peer_points);
     let xs: Vec<f64> = all
         .iter()
         .map(|p| p.ms_per_sim_second().max(1e-6))
+        .chain(peer_extent.iter().flat_map(|(x, _)| [x.0, x.1]))
         .collect();
     let (xmin, xmax) = xs
         .iter()
@@ -286,6 +299,7 @@ pub fn chart(sweep: &CaseSweep, path: &Path) -> io::Result<()> {
         .iter()
         .filter(|p| ok(p))
         .map(|p| p.measurement.error.max(ERROR_FLOOR))
+        .chain(peer_extent.iter().flat_map(|(_, e)| [e.0, e.1]))
         .collect();
     let (emin, emax) = if errs.is_empty() {
         (1e-3, 1.0)
@@ -366,6 +380,7 @@ pub fn chart(sweep: &CaseSweep, path: &Path) -> io::Result<()> {
                 .map_err(plot_err)?;
         }
     }
+    peers::draw(&mut chart, peer_points)?;
     if any_failed {
         chart
             .draw_series(std::iter::once(Cross::new(
@@ -443,9 +458,17 @@ pub fn generate(options: &ReportOptions, progress: &mut dyn FnMut(&str)) -> io::
         progress(&format!("sweep {} (with reference runs)", scene.name()));
         sweeps.push(sweep_scene(scene, options.quick));
     }
+    // Other engines' points, if `benchmarks/vs-peers --accuracy` has written them.
+    let peer_data = peers::load(&options.out.join(peers::CSV));
     for s in &sweeps {
-        chart(s, &img.join(chart_file(s.name)))?;
+        chart_with_peers(
+            s,
+            &peer_data.for_case(s.name),
+            &img.join(chart_file(s.name)),
+        )?;
     }
+    let swept: Vec<&str> = sweeps.iter().map(|s| s.name).collect();
+    let peer_charts = peers::extra_charts(&peer_data, &swept, &img)?;
     progress("stiff and extreme suite, both solvers");
     let suite = run_suite();
     let report = Report {
@@ -454,7 +477,10 @@ pub fn generate(options: &ReportOptions, progress: &mut dyn FnMut(&str)) -> io::
         seconds: start.elapsed().as_secs_f64(),
         quick: options.quick,
     };
-    std::fs::write(options.out.join("accuracy.md"), markdown(&report))?;
+    std::fs::write(
+        options.out.join("accuracy.md"),
+        markdown(&report) + &peers::section(&peer_data, &peer_charts),
+    )?;
     Ok(report)
 }
 

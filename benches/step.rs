@@ -11,7 +11,7 @@
 //! Each benchmark steps one World over and over (the scene keeps evolving, as in a game), after
 //! the scene's own warm-up steps (`resting_pyramid`: 300 steps, so it is asleep). Sample sizes
 //! and times are set so the whole file runs in under a minute; the side-by-side
-//! comparison with rapier2d lives in `benchmarks/vs-rapier`.
+//! comparison with Box2D v3 and rapier2d lives in `benchmarks/vs-peers`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;

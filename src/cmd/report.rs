@@ -31,7 +31,7 @@ pub fn run(args: ReportArgs) -> Result<ExitCode, Failure> {
     for (name, suite) in [
         ("soft step", &report.suite.soft_step),
         ("sequential", &report.suite.sequential),
-        ("soft step, 8 sub, 4 relax", &report.suite.soft_step_stiff),
+        ("soft step, adaptive off", &report.suite.soft_step_fixed),
     ] {
         for v in suite {
             eprintln!("{name}: {}", v.summary());

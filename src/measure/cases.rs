@@ -157,7 +157,7 @@ pub fn mixed_shape(i: usize) -> Shape {
 }
 
 /// A benchmark scene as plain body definitions, so that any engine can build it (the rapier2d
-/// comparison in `benchmarks/vs-rapier` builds the same list).
+/// comparison in `benchmarks/vs-peers` (Box2D v3 and rapier2d) builds the same list).
 #[derive(Clone, Debug)]
 pub struct Setup {
     /// Scene name, e.g. `large_pyramid`.

@@ -7,7 +7,7 @@
 //!   the stiff and extreme suite) and the sweeps over step sizes and configurations.
 //! - `report` (feature `report`): charts and `docs/accuracy.md` from what the sweeps return.
 //!
-//! The side-by-side comparison with rapier2d is its own crate, `benchmarks/vs-rapier`, built
+//! The side-by-side comparison with Box2D v3 and rapier2d is its own crate, `benchmarks/vs-peers`, built
 //! on [`cases::benchmark_setups`].
 
 pub mod accuracy;

@@ -3,6 +3,7 @@
 //! crosses at the top edge, never dropped.
 
 use crate::measure::accuracy::sweep::{CaseSweep, Point};
+use super::peers;
 use plotters::prelude::*;
 use std::io;
 use std::path::Path;
@@ -43,11 +44,22 @@ fn plot_err<E: std::fmt::Debug>(e: E) -> io::Error {
 
 /// Draw `sweep` as error against run time per simulated second, log-log, to `path`.
 pub fn chart(sweep: &CaseSweep, path: &Path) -> io::Result<()> {
+    chart_with_peers(sweep, &[], path)
+}
+
+/// [`chart`] with other engines' points of the same case beside tiltbox's curves ([`peers`]).
+pub fn chart_with_peers(
+    sweep: &CaseSweep,
+    peer_points: &[&peers::PeerPoint],
+    path: &Path,
+) -> io::Result<()> {
     let ok = |p: &Point| !p.measurement.diverged && p.measurement.error.is_finite();
     let all: Vec<&Point> = sweep.curves.iter().flat_map(|c| &c.points).collect();
+    let peer_extent = peers::extent(peer_points);
     let xs: Vec<f64> = all
         .iter()
         .map(|p| p.ms_per_sim_second().max(1e-6))
+        .chain(peer_extent.iter().flat_map(|(x, _)| [x.0, x.1]))
         .collect();
     let (xmin, xmax) = xs
         .iter()
@@ -56,6 +68,7 @@ pub fn chart(sweep: &CaseSweep, path: &Path) -> io::Result<()> {
         .iter()
         .filter(|p| ok(p))
         .map(|p| p.measurement.error.max(ERROR_FLOOR))
+        .chain(peer_extent.iter().flat_map(|(_, e)| [e.0, e.1]))
         .collect();
     let (emin, emax) = if errs.is_empty() {
         (1e-3, 1.0)
@@ -136,6 +149,7 @@ pub fn chart(sweep: &CaseSweep, path: &Path) -> io::Result<()> {
                 .map_err(plot_err)?;
         }
     }
+    peers::draw(&mut chart, peer_points)?;
     if any_failed {
         chart
             .draw_series(std::iter::once(Cross::new(

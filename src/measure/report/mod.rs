@@ -4,6 +4,7 @@
 
 pub mod chart;
 pub mod markdown;
+pub mod peers;
 
 use crate::measure::accuracy::sweep::{CaseSweep, SuiteResults};
 use crate::measure::accuracy::{closed_form, reference, sweep};
@@ -57,9 +58,17 @@ pub fn generate(options: &ReportOptions, progress: &mut dyn FnMut(&str)) -> io::
         progress(&format!("sweep {} (with reference runs)", case.name()));
         sweeps.push(sweep::sweep_reference(case, options.quick));
     }
+    // Other engines' points, if `benchmarks/vs-peers --accuracy` has written them.
+    let peer_data = peers::load(&options.out.join(peers::CSV));
     for s in &sweeps {
-        chart::chart(s, &img.join(chart::chart_file(s.name)))?;
+        chart::chart_with_peers(
+            s,
+            &peer_data.for_case(s.name),
+            &img.join(chart::chart_file(s.name)),
+        )?;
     }
+    let swept: Vec<&str> = sweeps.iter().map(|s| s.name).collect();
+    let peer_charts = peers::extra_charts(&peer_data, &swept, &img)?;
     progress("stiff and extreme suite, both solvers");
     let suite = sweep::run_suite();
     let report = Report {
@@ -68,7 +77,10 @@ pub fn generate(options: &ReportOptions, progress: &mut dyn FnMut(&str)) -> io::
         seconds: start.elapsed().as_secs_f64(),
         quick: options.quick,
     };
-    std::fs::write(options.out.join("accuracy.md"), markdown::markdown(&report))?;
+    std::fs::write(
+        options.out.join("accuracy.md"),
+        markdown::markdown(&report) + &peers::section(&peer_data, &peer_charts),
+    )?;
     Ok(report)
 }
 
@@ -137,7 +149,7 @@ mod tests {
             suite: SuiteResults {
                 soft_step: vec![],
                 sequential: vec![],
-                soft_step_stiff: vec![],
+                soft_step_fixed: vec![],
             },
             seconds: 1.0,
             quick: true,

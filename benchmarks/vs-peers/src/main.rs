@@ -1,24 +1,33 @@
-//! tiltbox vs rapier2d on the benchmark scenes of `tiltbox::measure::cases::benchmark_setups()`, built from
-//! the same body definitions, stepped in the same process, timed step by step.
+//! tiltbox vs Box2D v3 (SSE2 and AVX2 builds) and rapier2d on the benchmark scenes of
+//! `tiltbox::measure::cases::benchmark_setups()`, built from the same body definitions, stepped in the same
+//! run, timed step by step.
 //!
 //! ```text
-//! cargo run --release -- [--quick] [--no-extras] [--chunks] [--settle[=SECONDS]] [SCENE|memory|largest_pyramid ...]
+//! cargo run --release -- [--quick] [--no-extras] [--chunks] [--settle[=SECONDS]] [--avx2 PATH | --no-avx2]
+//!                        [--accuracy OUT.csv] [SCENE|memory|largest_pyramid ...]
 //! ```
 //!
-//! - every scene runs its warm-up steps untimed in both engines, then its timed steps in chunks
-//!   of `CHUNK` steps, alternating engines chunk by chunk (and which one goes first), so that a
-//!   noisy neighbour on the machine hits both engines alike;
-//! - the table gives median and minimum ms/step per engine, the ratio of the medians, and a
+//! - every scene runs its warm-up steps untimed in every engine, then its timed steps in chunks
+//!   of `CHUNK` steps, engine after engine, rotating which one goes first, so that a noisy
+//!   neighbour on the machine hits every engine alike;
+//! - Box2D v3 comes from `boxdd-sys` (C compiled with `cc`). Its SSE2 and AVX2 builds cannot link
+//!   into one binary, so the AVX2 build of this tool (`--features avx2`, its own target dir) runs
+//!   as a child process serving one engine over a pipe ([`remote`]): the parent asks it for a
+//!   chunk of timed steps in its turn and blocks while the child steps, so the chunks of all four
+//!   engines still alternate on the same machine in the same run;
+//! - the table gives median and minimum ms/step per engine, the ratios tiltbox / each peer, and a
 //!   sanity column per engine (top body height / mean body height / bodies awake) so that a
 //!   collapsed pyramid is never compared with a standing one;
 //! - `memory`: live heap bytes per body after building `large_pyramid` and 10 steps (counting
-//!   global allocator);
+//!   global allocator; Box2D's allocations are routed through it with `b2SetAllocator`);
 //! - `largest_pyramid`: the largest pyramid base each engine steps in under 16.7 ms (median,
 //!   sleep off), by bisection;
 //! - `--settle[=SECONDS]`: no timing; whether each selected scene comes to rest (awake and moving
-//!   bodies, top speeds, positions, per kind of shape) in both engines, sleep on and off;
-//! - before timing, both engines' bodies are checked to match (centre of mass, angle, mass,
-//!   moment of inertia), so that both step the same scene whatever the shapes.
+//!   bodies, top speeds, positions, per kind of shape) in every engine, sleep on and off;
+//! - `--accuracy OUT.csv`: the work-precision points of the peers ([`accuracy`]) for
+//!   `tiltbox report`;
+//! - before timing, the engines' bodies are checked to match tiltbox's (centre of mass, angle,
+//!   mass, moment of inertia), so that all step the same scene whatever the shapes.
 //!
 //! Positional arguments select scenes by name (substring match); with any selection given, the
 //! extras run only when named (`memory`, `largest_pyramid`).
@@ -27,11 +36,16 @@
 // needed for the latter and redundant for the former.
 #![allow(clippy::unnecessary_cast)]
 
+mod accuracy;
+mod box2d;
+mod remote;
+
 use rapier2d::prelude::{
     CoefficientCombineRule, ColliderBuilder, IntegrationParameters, MassProperties, PhysicsWorld,
     RigidBodyBuilder, RigidBodyHandle, SharedShape, Vector,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::time::Instant;
 use tiltbox::measure::cases::{benchmark_setups, Setup};
@@ -40,7 +54,7 @@ use tiltbox::physics::{BodyDef, MassSpec, Mixing, Settings, Shape, Vec2, World};
 // ---------------------------------------------------------------------------------------------
 // Counting allocator: live bytes and number of allocation calls.
 
-struct Counting;
+pub(crate) struct Counting;
 
 static LIVE_BYTES: AtomicUsize = AtomicUsize::new(0);
 static ALLOCS: AtomicUsize = AtomicUsize::new(0);
@@ -78,74 +92,110 @@ unsafe impl GlobalAlloc for Counting {
 }
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+pub(crate) static GLOBAL: Counting = Counting;
 
 // ---------------------------------------------------------------------------------------------
 // Constants.
 
-const DT: f32 = 1.0 / 60.0;
+pub(crate) const DT: f32 = 1.0 / 60.0;
 /// Steps per engine before switching to the other one.
 const CHUNK: usize = 25;
 /// The 60 Hz budget (ms).
 const BUDGET_MS: f64 = 1000.0 / 60.0;
 
 // ---------------------------------------------------------------------------------------------
-// The two engines behind one small interface.
+// The engines behind one small interface.
 
 /// What the sanity columns show.
 #[derive(Clone, Copy, Debug)]
-struct Sanity {
+pub(crate) struct Sanity {
     /// Highest centre of a dynamic body (m).
-    top_y: f32,
+    pub(crate) top_y: f32,
     /// Mean height of the dynamic bodies' centres (m).
-    mean_y: f32,
+    pub(crate) mean_y: f32,
     /// Dynamic bodies awake.
-    awake: usize,
+    pub(crate) awake: usize,
     /// Dynamic bodies with non-finite positions or more than 50 m below the lowest static body.
-    lost: usize,
+    pub(crate) lost: usize,
 }
 
 /// One dynamic body's state, for the settle report and the set-up check.
 #[derive(Clone, Copy, Debug)]
-struct BodyState {
-    position: [f32; 2],
-    angle: f32,
-    velocity: [f32; 2],
-    angular_velocity: f32,
-    awake: bool,
-    mass: f32,
-    inertia: f32,
+pub(crate) struct BodyState {
+    pub(crate) position: [f32; 2],
+    pub(crate) angle: f32,
+    pub(crate) velocity: [f32; 2],
+    pub(crate) angular_velocity: f32,
+    pub(crate) awake: bool,
+    pub(crate) mass: f32,
+    pub(crate) inertia: f32,
 }
 
-trait Engine {
+pub(crate) trait Engine {
     fn step(&mut self);
     fn sanity(&self) -> Sanity;
     /// Body pairs with at least one contact point (touching or speculative).
     fn contact_pairs(&self) -> usize;
-    /// Every dynamic body, in the order of the set-up's `BodyDef`s.
+    /// Every dynamic body, in the order of the set-up's `BodyDef`s (empty if the engine cannot
+    /// say, as the AVX2 child process).
     fn dynamic_bodies(&self) -> Vec<BodyState>;
+    /// Deepest overlap among the current contact points (m, >= 0).
+    fn max_penetration(&self) -> f64;
+    /// `n` steps untimed.
+    fn warm(&mut self, n: usize) {
+        for _ in 0..n {
+            self.step();
+        }
+    }
+    /// `n` steps, each timed (ms, appended to `ms`); returns the allocation calls they made.
+    fn run_timed(&mut self, n: usize, ms: &mut Vec<f64>) -> usize {
+        // Reserve first, so that our own bookkeeping never counts as an engine's allocation.
+        ms.reserve(n);
+        let a0 = ALLOCS.load(Relaxed);
+        for _ in 0..n {
+            let t = Instant::now();
+            self.step();
+            ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        ALLOCS.load(Relaxed) - a0
+    }
 }
 
-struct Tiltbox {
+pub(crate) struct Tiltbox {
     world: World,
+    dt: f32,
 }
 
 impl Tiltbox {
     fn new(setup: &Setup) -> Tiltbox {
         Tiltbox {
             world: setup.build().expect("tiltbox refused a benchmark set-up"),
+            dt: DT,
         }
+    }
+
+    /// The scene with `settings` (its sleep flag replaced by the scene's), stepped at `dt`.
+    pub(crate) fn with_settings(setup: &Setup, settings: Settings, dt: f32) -> Tiltbox {
+        let settings = Settings {
+            enable_sleep: setup.sleep,
+            ..settings
+        };
+        let mut world = World::new(settings, setup.gravity).expect("tiltbox refused the settings");
+        for def in &setup.bodies {
+            world.add_body(def).expect("tiltbox refused a body");
+        }
+        Tiltbox { world, dt }
     }
 }
 
-fn lowest_static(defs: &[BodyDef]) -> f32 {
+pub(crate) fn lowest_static(defs: &[BodyDef]) -> f32 {
     defs.iter()
         .filter(|d| d.mass == MassSpec::Static)
         .map(|d| d.position.y as f32)
         .fold(f32::INFINITY, f32::min)
 }
 
-fn summarise(ys: impl Iterator<Item = (f32, bool)>, floor: f32) -> Sanity {
+pub(crate) fn summarise(ys: impl Iterator<Item = (f32, bool)>, floor: f32) -> Sanity {
     let (mut top, mut sum, mut n, mut awake, mut lost) = (f32::NEG_INFINITY, 0.0f64, 0, 0, 0);
     for (y, is_awake) in ys {
         if !y.is_finite() || y < floor - 50.0 {
@@ -171,7 +221,17 @@ fn summarise(ys: impl Iterator<Item = (f32, bool)>, floor: f32) -> Sanity {
 
 impl Engine for Tiltbox {
     fn step(&mut self) {
-        self.world.step(DT as _).expect("tiltbox step failed");
+        self.world.step(self.dt as _).expect("tiltbox step failed");
+    }
+    fn max_penetration(&self) -> f64 {
+        self.world
+            .contacts()
+            .flat_map(|c| {
+                let n = c.count;
+                c.points.into_iter().take(n)
+            })
+            .map(|p| -(p.separation as f64))
+            .fold(0.0, f64::max)
     }
     fn contact_pairs(&self) -> usize {
         self.world.contact_count()
@@ -208,7 +268,7 @@ impl Engine for Tiltbox {
     }
 }
 
-struct Rapier {
+pub(crate) struct Rapier {
     world: PhysicsWorld,
     dynamic: Vec<RigidBodyHandle>,
     floor: f32,
@@ -256,6 +316,15 @@ fn rapier_collider(shape: &Shape) -> ColliderBuilder {
 
 impl Rapier {
     fn new(setup: &Setup) -> Rapier {
+        Rapier::with_step(
+            setup,
+            DT,
+            IntegrationParameters::default().num_solver_iterations,
+        )
+    }
+
+    /// The scene stepped at `dt` with `substeps` solver iterations (rapier's substeps).
+    pub(crate) fn with_step(setup: &Setup, dt: f32, substeps: usize) -> Rapier {
         // `Setup::build` uses the default settings plus the sleep flag; mirror their mixing rules.
         let settings = Settings::default();
         let friction_rule = combine_rule(settings.friction_mixing);
@@ -264,9 +333,11 @@ impl Rapier {
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::new(setup.gravity.x as f32, setup.gravity.y as f32);
         // Rapier's defaults (4 solver iterations = 4 substeps, 1 PGS + 1 stabilisation
-        // iteration each, soft contacts); only dt is pinned.
+        // iteration each, soft contacts); only dt (and, for the accuracy runs, the number of
+        // substeps) is pinned.
         world.integration_parameters = IntegrationParameters {
-            dt: DT,
+            dt,
+            num_solver_iterations: substeps,
             ..IntegrationParameters::default()
         };
         let mut dynamic = Vec::new();
@@ -327,6 +398,15 @@ impl Engine for Rapier {
     fn step(&mut self) {
         self.world.step();
     }
+    fn max_penetration(&self) -> f64 {
+        self.world
+            .narrow_phase
+            .contact_pairs()
+            .flat_map(|p| p.manifolds())
+            .flat_map(|m| m.points.iter())
+            .map(|pt| -(pt.dist as f64))
+            .fold(0.0, f64::max)
+    }
     fn contact_pairs(&self) -> usize {
         self.world
             .narrow_phase
@@ -367,6 +447,56 @@ impl Engine for Rapier {
 // ---------------------------------------------------------------------------------------------
 // Timing.
 
+/// Which engine, as the tables name them. `Box2dLocal` is the Box2D build linked into this
+/// binary (SSE2, or AVX2 with `--features avx2`); `Box2dRemote` the other build, served by a
+/// child process (see [`remote`]).
+#[derive(Clone, Debug)]
+enum Which {
+    Tiltbox,
+    Box2dLocal,
+    Box2dRemote(PathBuf),
+    Rapier,
+}
+
+impl Which {
+    fn label(&self) -> String {
+        match self {
+            Which::Tiltbox => "tiltbox".into(),
+            Which::Box2dLocal => box2d::LABEL.into(),
+            Which::Box2dRemote(_) => remote::other_label().into(),
+            Which::Rapier => "rapier2d".into(),
+        }
+    }
+
+    /// Build `setup` (benchmark scene `name`, or `pyramid-BASE`) in this engine.
+    fn build(&self, name: &str, setup: &Setup) -> Box<dyn Engine> {
+        match self {
+            Which::Tiltbox => Box::new(Tiltbox::new(setup)),
+            Which::Box2dLocal => Box::new(box2d::Box2d::new(setup)),
+            Which::Box2dRemote(path) => Box::new(
+                remote::Remote::spawn(path, name)
+                    .unwrap_or_else(|e| panic!("cannot start {}: {e}", path.display())),
+            ),
+            Which::Rapier => Box::new(Rapier::new(setup)),
+        }
+    }
+}
+
+/// The engines of a run in table order: tiltbox, Box2D SSE2, Box2D AVX2, rapier2d (the two
+/// Box2D builds in that order whichever of them is linked into this binary).
+fn engines(other_box2d: Option<PathBuf>) -> Vec<Which> {
+    let mut v = vec![Which::Tiltbox, Which::Box2dLocal];
+    if let Some(path) = other_box2d {
+        if cfg!(feature = "avx2") {
+            v.insert(1, Which::Box2dRemote(path));
+        } else {
+            v.push(Which::Box2dRemote(path));
+        }
+    }
+    v.push(Which::Rapier);
+    v
+}
+
 /// Per-step timings (ms) and allocation calls of one engine on one scene.
 #[derive(Default)]
 struct Times {
@@ -376,15 +506,7 @@ struct Times {
 
 impl Times {
     fn run(&mut self, engine: &mut dyn Engine, n: usize) {
-        // Reserve first, so that our own bookkeeping never counts as an engine's allocation.
-        self.ms.reserve(n);
-        let a0 = ALLOCS.load(Relaxed);
-        for _ in 0..n {
-            let t = Instant::now();
-            engine.step();
-            self.ms.push(t.elapsed().as_secs_f64() * 1e3);
-        }
-        self.allocs += ALLOCS.load(Relaxed) - a0;
+        self.allocs += engine.run_timed(n, &mut self.ms);
     }
     fn median(&self) -> f64 {
         let mut v = self.ms.clone();
@@ -407,24 +529,34 @@ impl Times {
     }
 }
 
+/// One engine's figures on one scene.
+struct Result {
+    label: String,
+    times: Times,
+    sanity: Sanity,
+}
+
 struct Row {
     name: String,
     bodies: usize,
     steps: usize,
-    tb: Times,
-    ra: Times,
-    tb_sanity: Sanity,
-    ra_sanity: Sanity,
+    /// In table order; the first is tiltbox.
+    results: Vec<Result>,
 }
 
-/// Before the first step, both engines must hold the same bodies: same centre of mass, angle,
-/// mass and moment of inertia (to 1e-4 relative), or the comparison would be of two scenes.
-/// Prints the largest differences to stderr; a mismatch is reported loudly, not hidden.
-fn check_same_bodies(name: &str, tb: &dyn Engine, ra: &dyn Engine) {
-    let (a, b) = (tb.dynamic_bodies(), ra.dynamic_bodies());
+/// Before the first step, every engine must hold the same bodies as tiltbox: same centre of
+/// mass, angle, mass and moment of inertia (to 1e-4 relative), or the comparison would be of
+/// different scenes. Prints the largest differences to stderr; a mismatch is reported loudly,
+/// not hidden.
+fn check_same_bodies(name: &str, tb: &dyn Engine, other: &dyn Engine, label: &str) {
+    let (a, b) = (tb.dynamic_bodies(), other.dynamic_bodies());
+    if b.is_empty() && !a.is_empty() {
+        // The AVX2 child: the same code as the SSE2 build, checked there.
+        return;
+    }
     if a.len() != b.len() {
         eprintln!(
-            "  WARNING {name}: tiltbox has {} dynamic bodies, rapier {}",
+            "  WARNING {name}: tiltbox has {} dynamic bodies, {label} {}",
             a.len(),
             b.len()
         );
@@ -444,66 +576,70 @@ fn check_same_bodies(name: &str, tb: &dyn Engine, ra: &dyn Engine) {
     }
     let bad = dp > 1e-4 || da > 1e-4 || dm > 1e-4 || di > 1e-4;
     eprintln!(
-        "  {}{name}: largest difference tiltbox / rapier before the first step: centre of mass \
+        "  {}{name}: largest difference tiltbox / {label} before the first step: centre of mass \
          {dp:.1e} m, angle {da:.1e} rad, mass {dm:.1e} (relative), inertia {di:.1e} (relative)",
         if bad { "WARNING " } else { "" }
     );
 }
 
-/// Warm both engines up (untimed), then time `steps` steps of each, alternating in chunks.
-fn compare(setup: &Setup, steps: usize, chunks: bool) -> Row {
-    let mut tb = Tiltbox::new(setup);
-    let mut ra = Rapier::new(setup);
-    check_same_bodies(setup.name, &tb, &ra);
-    for _ in 0..setup.warm_up {
-        tb.step();
+/// Warm every engine up (untimed), then time `steps` steps of each, in chunks of `CHUNK`,
+/// engine after engine, the engine that goes first rotating chunk by chunk.
+fn compare(setup: &Setup, which: &[Which], steps: usize, chunks: bool) -> Row {
+    let mut engines: Vec<Box<dyn Engine>> =
+        which.iter().map(|w| w.build(setup.name, setup)).collect();
+    let labels: Vec<String> = which.iter().map(Which::label).collect();
+    for (e, label) in engines.iter().zip(&labels).skip(1) {
+        check_same_bodies(setup.name, engines[0].as_ref(), e.as_ref(), label);
     }
-    for _ in 0..setup.warm_up {
-        ra.step();
+    for e in engines.iter_mut() {
+        e.warm(setup.warm_up);
     }
-    let (mut tt, mut rt) = (Times::default(), Times::default());
+    let k = engines.len();
+    let mut times: Vec<Times> = (0..k).map(|_| Times::default()).collect();
+    let mut allocs_before = vec![0usize; k];
     let mut done = 0;
-    let mut tiltbox_first = true;
-    let (mut tb_allocs, mut ra_allocs) = (0, 0);
+    let mut chunk = 0;
     while done < steps {
         let n = CHUNK.min(steps - done);
-        if tiltbox_first {
-            tt.run(&mut tb, n);
-            rt.run(&mut ra, n);
-        } else {
-            rt.run(&mut ra, n);
-            tt.run(&mut tb, n);
+        for j in 0..k {
+            let i = (chunk + j) % k;
+            times[i].run(engines[i].as_mut(), n);
         }
-        tiltbox_first = !tiltbox_first;
+        chunk += 1;
         if chunks {
-            let last = |t: &Times| {
+            let mut line = format!("  steps {:4}..{:4}:", done, done + n);
+            for i in 0..k {
+                let t = &times[i];
                 let mut v = t.ms[t.ms.len() - n..].to_vec();
                 v.sort_by(f64::total_cmp);
-                v[n / 2]
-            };
-            eprintln!(
-                "  steps {:4}..{:4}: tiltbox {} ms, {} allocs, {} contacts; rapier {} ms, {} allocs, {} contacts",
-                done,
-                done + n,
-                fmt_ms(last(&tt)),
-                tt.allocs - tb_allocs,
-                tb.contact_pairs(),
-                fmt_ms(last(&rt)),
-                rt.allocs - ra_allocs,
-                ra.contact_pairs(),
-            );
-            (tb_allocs, ra_allocs) = (tt.allocs, rt.allocs);
+                line += &format!(
+                    " {} {} ms, {} allocs, {} contacts;",
+                    labels[i],
+                    fmt_ms(v[n / 2]),
+                    t.allocs - allocs_before[i],
+                    engines[i].contact_pairs()
+                );
+                allocs_before[i] = t.allocs;
+            }
+            eprintln!("{line}");
         }
         done += n;
     }
+    let results = times
+        .into_iter()
+        .zip(labels)
+        .zip(&engines)
+        .map(|((times, label), e)| Result {
+            label,
+            times,
+            sanity: e.sanity(),
+        })
+        .collect();
     Row {
         name: setup.name.to_string(),
         bodies: setup.bodies.len(),
         steps,
-        tb_sanity: tb.sanity(),
-        ra_sanity: ra.sanity(),
-        tb: tt,
-        ra: rt,
+        results,
     }
 }
 
@@ -524,31 +660,60 @@ fn fmt_sanity(s: &Sanity) -> String {
     out
 }
 
+/// One table, every engine: ms/step median and min, tiltbox / peer ratios, sanity, allocations.
 fn print_table(rows: &[Row]) {
-    println!(
-        "| scene | bodies | steps | tiltbox median | tiltbox min | rapier median | rapier min | ratio (median) | ratio (min) | tiltbox top / mean y / awake | rapier top / mean y / awake | allocs/step tiltbox / rapier |"
-    );
-    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | ---: |");
+    let Some(first) = rows.first() else { return };
+    let labels: Vec<&str> = first.results.iter().map(|r| r.label.as_str()).collect();
+    let mut head = "| scene | bodies | steps |".to_string();
+    let mut rule = "| --- | ---: | ---: |".to_string();
+    for l in &labels {
+        head += &format!(" {l} median | {l} min |");
+        rule += " ---: | ---: |";
+    }
+    for l in &labels[1..] {
+        head += &format!(" tiltbox / {l} |");
+        rule += " ---: |";
+    }
+    for l in &labels {
+        head += &format!(" {l} top / mean y / awake |");
+        rule += " --- |";
+    }
+    head += " allocs/step |";
+    rule += " --- |";
+    println!("{head}\n{rule}");
     for r in rows {
-        println!(
-            "| {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {} | {} | {:.1} / {:.1} |",
-            r.name,
-            r.bodies,
-            r.steps,
-            fmt_ms(r.tb.median()),
-            fmt_ms(r.tb.min()),
-            fmt_ms(r.ra.median()),
-            fmt_ms(r.ra.min()),
-            r.tb.median() / r.ra.median(),
-            r.tb.min() / r.ra.min(),
-            fmt_sanity(&r.tb_sanity),
-            fmt_sanity(&r.ra_sanity),
-            r.tb.allocs_per_step(),
-            r.ra.allocs_per_step(),
-        );
+        let tb = &r.results[0].times;
+        let mut line = format!("| {} | {} | {} |", r.name, r.bodies, r.steps);
+        for x in &r.results {
+            line += &format!(
+                " {} | {} |",
+                fmt_ms(x.times.median()),
+                fmt_ms(x.times.min())
+            );
+        }
+        for x in &r.results[1..] {
+            line += &format!(
+                " {:.2} ({:.2}) |",
+                tb.median() / x.times.median(),
+                tb.min() / x.times.min()
+            );
+        }
+        for x in &r.results {
+            line += &format!(" {} |", fmt_sanity(&x.sanity));
+        }
+        let allocs: Vec<String> = r
+            .results
+            .iter()
+            .map(|x| format!("{:.1}", x.times.allocs_per_step()))
+            .collect();
+        line += &format!(" {} |", allocs.join(" / "));
+        println!("{line}");
     }
     println!(
-        "(times in ms/step; ratio = tiltbox / rapier, < 1 means tiltbox is faster; sanity columns at the end of the run)"
+        "\n(times in ms/step; ratio = tiltbox / peer of the medians (of the minima in brackets), \
+         < 1 means tiltbox is faster; sanity columns at the end of the run; allocs/step in \
+         column order: {})",
+        labels.join(", ")
     );
 }
 
@@ -611,7 +776,8 @@ fn kind_stats(defs: &[&BodyDef], bodies: &[BodyState]) -> Vec<(String, KindStats
     out
 }
 
-/// Step each selected scene for `seconds` of simulated time in both engines, with sleep on and
+/// Step each selected scene for `seconds` of simulated time in every engine linked into this
+/// binary (tiltbox, this build's Box2D, rapier2d), with sleep on and
 /// with sleep off, and report every 2 s: bodies awake, bodies faster than tiltbox's resting
 /// speed, the fastest body, where the bodies are (escapes through walls show in x, falls through
 /// the floor in y), and at the end the same per kind of shape.
@@ -622,7 +788,7 @@ fn settle(setups: &[&Setup], seconds: f32) {
     println!(
         "\n## Settling: {seconds} s simulated (dt 1/60), sleep on and off\n\n\
          moving = resting speed (speed + spin x r) >= {threshold} m/s (tiltbox's sleep threshold, r = \
-         bounding radius), the same test for both engines.\n"
+         bounding radius), the same test for every engine.\n"
     );
     for setup in setups {
         let defs: Vec<&BodyDef> = setup
@@ -643,9 +809,10 @@ fn settle(setups: &[&Setup], seconds: f32) {
             );
             println!("| t (s) | engine | awake | moving | top speed (m/s) | top spin (rad/s) | x min / max | y min / max | lost |");
             println!("| ---: | --- | ---: | ---: | ---: | ---: | --- | --- | ---: |");
-            let mut engines: [(&str, Box<dyn Engine>); 2] = [
+            let mut engines: [(&str, Box<dyn Engine>); 3] = [
                 ("tiltbox", Box::new(Tiltbox::new(&s))),
-                ("rapier", Box::new(Rapier::new(&s))),
+                (box2d::LABEL, Box::new(box2d::Box2d::new(&s))),
+                ("rapier2d", Box::new(Rapier::new(&s))),
             ];
             for done in 1..=steps {
                 for (_, e) in engines.iter_mut() {
@@ -705,25 +872,13 @@ fn settle(setups: &[&Setup], seconds: f32) {
 // ---------------------------------------------------------------------------------------------
 // Memory per body.
 
-fn live_bytes_after_10_steps(setup: &Setup, which: &str) -> usize {
+fn live_bytes_after_10_steps(setup: &Setup, which: &Which) -> usize {
     let before = LIVE_BYTES.load(Relaxed);
-    if which == "tiltbox" {
-        let mut e = Tiltbox::new(setup);
-        for _ in 0..10 {
-            e.step();
-        }
-        let used = LIVE_BYTES.load(Relaxed) - before;
-        drop(e);
-        used
-    } else {
-        let mut e = Rapier::new(setup);
-        for _ in 0..10 {
-            e.step();
-        }
-        let used = LIVE_BYTES.load(Relaxed) - before;
-        drop(e);
-        used
-    }
+    let mut e = which.build(setup.name, setup);
+    e.warm(10);
+    let used = LIVE_BYTES.load(Relaxed) - before;
+    drop(e);
+    used
 }
 
 fn memory(setups: &[Setup]) {
@@ -735,9 +890,14 @@ fn memory(setups: &[Setup]) {
     println!("\n## Memory per body (large_pyramid, {n} bodies, after building + 10 steps)\n");
     println!("| engine | live heap bytes | bytes per body |");
     println!("| --- | ---: | ---: |");
-    for which in ["tiltbox", "rapier"] {
-        let bytes = live_bytes_after_10_steps(setup, which);
-        println!("| {which} | {bytes} | {:.0} |", bytes as f64 / n as f64);
+    // The AVX2 child's bytes are not in this process; its data structures are the SSE2 build's.
+    for which in [Which::Tiltbox, Which::Box2dLocal, Which::Rapier] {
+        let bytes = live_bytes_after_10_steps(setup, &which);
+        println!(
+            "| {} | {bytes} | {:.0} |",
+            which.label(),
+            bytes as f64 / n as f64
+        );
     }
 }
 
@@ -746,7 +906,7 @@ fn memory(setups: &[Setup]) {
 
 /// `large_pyramid` with another base: ground 2 m thick, at least 200 m wide, pyramid of 1 m boxes
 /// (density 1, friction 0.6), sleep off.
-fn pyramid_setup(base: usize) -> Setup {
+pub(crate) fn pyramid_setup(base: usize) -> Setup {
     let mut bodies = vec![BodyDef::fixed(
         Shape::rect((base as f32 + 20.0).max(200.0) as _, 2.0),
         Vec2::new(0.0, -1.0),
@@ -776,28 +936,23 @@ fn pyramid_setup(base: usize) -> Setup {
 }
 
 /// Median ms/step of a pyramid of `base` (after `warm` untimed steps, `timed` timed ones).
-fn pyramid_median(engine: &str, base: usize, warm: usize, timed: usize) -> (f64, Sanity) {
+fn pyramid_median(engine: &Which, base: usize, warm: usize, timed: usize) -> (f64, Sanity) {
     let setup = pyramid_setup(base);
-    let mut e: Box<dyn Engine> = if engine == "tiltbox" {
-        Box::new(Tiltbox::new(&setup))
-    } else {
-        Box::new(Rapier::new(&setup))
-    };
-    for _ in 0..warm {
-        e.step();
-    }
+    let mut e = engine.build(&format!("pyramid-{base}"), &setup);
+    e.warm(warm);
     let mut t = Times::default();
     t.run(e.as_mut(), timed);
     (t.median(), e.sanity())
 }
 
 /// Bisect the base until the median step time is just under the 60 Hz budget.
-fn largest_pyramid(engine: &str, quick: bool, guess: usize) -> (usize, f64, Sanity) {
+fn largest_pyramid(engine: &Which, quick: bool, guess: usize) -> (usize, f64, Sanity) {
     let (warm, timed, resolution) = if quick { (5, 10, 8) } else { (20, 100, 1) };
+    let label = engine.label();
     let probe = |base: usize| {
         let (ms, s) = pyramid_median(engine, base, warm, timed);
         eprintln!(
-            "  {engine}: base {base:4} ({:6} boxes): {ms:7.3} ms/step",
+            "  {label}: base {base:4} ({:6} boxes): {ms:7.3} ms/step",
             base * (base + 1) / 2
         );
         (ms, s)
@@ -853,12 +1008,39 @@ fn main() {
     let mut extras = true;
     let mut chunks = false;
     let mut settle_seconds: Option<f32> = None;
+    let mut accuracy_out: Option<PathBuf> = None;
+    let mut other_box2d: Option<PathBuf> = remote::default_other_binary();
     let mut filters: Vec<String> = Vec::new();
-    for arg in std::env::args().skip(1) {
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
         match arg.as_str() {
+            "--serve" => {
+                let Some(scene) = args.next() else {
+                    eprintln!("--serve wants a scene name");
+                    std::process::exit(2);
+                };
+                box2d::install_allocator();
+                remote::serve(&scene);
+                return;
+            }
             "--quick" => quick = true,
             "--no-extras" => extras = false,
             "--chunks" => chunks = true,
+            "--no-avx2" | "--no-other-box2d" => other_box2d = None,
+            "--avx2" | "--other-box2d" => match args.next() {
+                Some(p) => other_box2d = Some(PathBuf::from(p)),
+                None => {
+                    eprintln!("{arg} wants the path of the other Box2D build of vs-peers");
+                    std::process::exit(2);
+                }
+            },
+            "--accuracy" => match args.next() {
+                Some(p) => accuracy_out = Some(PathBuf::from(p)),
+                None => {
+                    eprintln!("--accuracy wants an output CSV path");
+                    std::process::exit(2);
+                }
+            },
             "--settle" => settle_seconds = Some(10.0),
             a if a.starts_with("--settle=") => match a["--settle=".len()..].parse::<f32>() {
                 Ok(t) if t.is_finite() && t > 0.0 => settle_seconds = Some(t),
@@ -869,14 +1051,22 @@ fn main() {
             },
             "-h" | "--help" => {
                 println!(
-                    "usage: vs-rapier [--quick] [--no-extras] [--chunks] [--settle[=SECONDS]] [SCENE|memory|largest_pyramid ...]\n\
+                    "usage: vs-peers [--quick] [--no-extras] [--chunks] [--settle[=SECONDS]] [--avx2 PATH | --no-avx2]\n\
+                     \x20               [--accuracy OUT.csv] [SCENE|memory|largest_pyramid ...]\n\
+                     --avx2 PATH: the AVX2 build of this tool (`./run.sh` builds it: cargo build --release\n\
+                     --features avx2, copied to target/avx2/), run as a child process that times Box2D AVX2 chunk by\n\
+                     chunk in turn with the other engines; default: {} if it exists.\n\
+                     --no-avx2: leave the AVX2 build out.\n\
                      --chunks prints per 25-step chunk and engine: median ms, allocation calls and\n\
                      contact pairs at the chunk's end (stderr).\n\
                      --settle[=SECONDS] times nothing: steps the selected scenes for SECONDS (10) of\n\
                      simulated time with sleep on and off and reports awake / moving bodies, top\n\
                      speeds and positions every 2 s, and per kind of shape at the end.\n\
+                     --accuracy OUT.csv: the peers' work-precision points for `tiltbox report`\n\
+                     (engine,case,dt,error,cpu_ms_per_simulated_s); --quick: fewer step sizes.\n\
                      SCENE is a substring of a benchmark scene name; with any name given, the\n\
-                     memory and largest-pyramid extras run only when named."
+                     memory and largest-pyramid extras run only when named.",
+                    remote::DEFAULT_OTHER_BINARY
                 );
                 return;
             }
@@ -890,6 +1080,15 @@ fn main() {
     if cfg!(debug_assertions) {
         eprintln!("warning: debug build; run with `cargo run --release` for meaningful figures");
     }
+    box2d::install_allocator();
+
+    if let Some(out) = accuracy_out {
+        if let Err(e) = accuracy::write_csv(&out, quick) {
+            eprintln!("--accuracy: {e}");
+            std::process::exit(1);
+        }
+        return;
+    }
 
     let setups = benchmark_setups();
     let wanted =
@@ -897,16 +1096,21 @@ fn main() {
     let extra_wanted =
         |name: &str| extras && (filters.is_empty() || filters.iter().any(|f| f == name));
 
+    let which = engines(other_box2d);
     println!(
-        "# tiltbox vs rapier2d {} (single thread, dt 1/60{})\n",
+        "# tiltbox vs Box2D v3 {} and rapier2d {} (single thread, dt 1/60{})\n",
+        box2d::version(),
         rapier2d::VERSION,
         if quick { ", --quick" } else { "" }
     );
+    println!("machine: {}\n", machine());
     let s = Settings::default();
     println!(
         "tiltbox: {:?} solver, {} substeps, friction mixing {:?}, restitution mixing {:?}; \
+         Box2D: b2World_Step(dt, 4 substeps), one worker, no task system, default continuous \
+         collision, friction and restitution mixing callbacks set to tiltbox's rules; \
          rapier: default IntegrationParameters ({} solver iterations), combine rules {:?} / {:?}; \
-         engines alternate every {CHUNK} steps.\n",
+         engines: {}; they take turns every {CHUNK} steps{}.\n",
         s.solver,
         s.substeps,
         s.friction_mixing,
@@ -914,6 +1118,26 @@ fn main() {
         IntegrationParameters::default().num_solver_iterations,
         combine_rule(s.friction_mixing),
         combine_rule(s.restitution_mixing),
+        which
+            .iter()
+            .map(Which::label)
+            .collect::<Vec<_>>()
+            .join(", "),
+        if which.iter().any(|w| matches!(w, Which::Box2dRemote(_))) {
+            format!(
+                " ({} runs in a child process, {}, served over a pipe in its turn)",
+                remote::other_label(),
+                which
+                    .iter()
+                    .find_map(|w| match w {
+                        Which::Box2dRemote(p) => Some(p.display().to_string()),
+                        _ => None,
+                    })
+                    .unwrap_or_default()
+            )
+        } else {
+            String::new()
+        }
     );
 
     if let Some(seconds) = settle_seconds {
@@ -922,7 +1146,7 @@ fn main() {
         return;
     }
 
-    println!("load average before: {}", load_average());
+    println!("load average before: {}\n", load_average());
     let mut rows = Vec::new();
     for setup in setups.iter().filter(|s| wanted(s.name)) {
         let steps = if quick {
@@ -937,7 +1161,7 @@ fn main() {
             setup.warm_up,
             steps
         );
-        rows.push(compare(setup, steps, chunks));
+        rows.push(compare(setup, &which, steps, chunks));
     }
     if !rows.is_empty() {
         print_table(&rows);
@@ -952,17 +1176,12 @@ fn main() {
         println!("\n## Largest pyramid stepped at 60 Hz on one core (median < 16.7 ms/step, sleep off)\n");
         println!("| engine | base | boxes | median ms/step | top / mean y / awake |");
         println!("| --- | ---: | ---: | ---: | --- |");
-        for engine in ["tiltbox", "rapier"] {
-            let guess = guess_base(large.map(|r| {
-                if engine == "tiltbox" {
-                    r.tb.median()
-                } else {
-                    r.ra.median()
-                }
-            }));
+        for (i, engine) in which.iter().enumerate() {
+            let guess = guess_base(large.map(|r| r.results[i].times.median()));
             let (base, ms, s) = largest_pyramid(engine, quick, guess);
             println!(
-                "| {engine} | {base} | {} | {ms:.3} | {} |",
+                "| {} | {base} | {} | {ms:.3} | {} |",
+                engine.label(),
                 base * (base + 1) / 2,
                 fmt_sanity(&s)
             );
@@ -976,4 +1195,19 @@ fn load_average() -> String {
     std::fs::read_to_string("/proc/loadavg")
         .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
         .unwrap_or_else(|_| "unknown".into())
+}
+
+/// CPU model (from /proc/cpuinfo) and the number of CPUs this process may use.
+pub(crate) fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let n = std::thread::available_parallelism().map_or(0, |n| n.get());
+    format!("{cpu}, nproc {n}")
 }

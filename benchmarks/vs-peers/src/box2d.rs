@@ -1,0 +1,286 @@
+//! Box2D v3 (through `boxdd-sys`, compiled from C with `cc`) behind the benchmark's `Engine`
+//! interface, built from the same `tiltbox::physics::BodyDef`s as the other engines.
+//!
+//! Which SIMD build this is depends on the cargo feature `avx2` (boxdd-sys' `simd-avx2`); see
+//! [`LABEL`]. Box2D's C allocations go through [`install_allocator`] to the process' counting
+//! allocator, so live bytes and allocation calls count for Box2D as for the Rust engines.
+
+use crate::{BodyState, Engine, Sanity};
+use boxdd_sys::ffi::*;
+use std::alloc::{GlobalAlloc, Layout};
+use tiltbox::measure::cases::Setup;
+use tiltbox::physics::{MassSpec, Mixing, Settings, Shape};
+
+/// How the tables name this build of Box2D.
+pub const LABEL: &str = if cfg!(feature = "avx2") {
+    "Box2D v3 (AVX2)"
+} else {
+    "Box2D v3 (SSE2)"
+};
+
+/// Box2D's version as `major.minor.revision`.
+pub fn version() -> String {
+    // SAFETY: a plain query of constants.
+    let v = unsafe { b2GetVersion() };
+    format!("{}.{}.{}", v.major, v.minor, v.revision)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Allocations: Box2D's b2Alloc/b2Free through the counting global allocator.
+
+fn layout(size: usize, alignment: i32) -> Layout {
+    Layout::from_size_align(size.max(1), (alignment.max(1) as usize).next_power_of_two())
+        .expect("Box2D asked for an impossible layout")
+}
+
+unsafe extern "C" fn b2_alloc(size: usize, alignment: i32) -> *mut std::ffi::c_void {
+    // SAFETY: a non-zero size and a power-of-two alignment (see `layout`).
+    unsafe { crate::GLOBAL.alloc(layout(size, alignment)) as *mut std::ffi::c_void }
+}
+
+unsafe extern "C" fn b2_free(mem: *mut std::ffi::c_void, size: usize) {
+    if !mem.is_null() {
+        // Box2D's b2Alloc rounds sizes up to a multiple of 32 bytes and asks for 32-byte
+        // alignment (B2_ALIGNMENT) before calling us, while b2Free passes the size unrounded:
+        // free with what `b2_alloc` was given.
+        let size32 = ((size.max(1) - 1) | 0x1F) + 1;
+        // SAFETY: `mem` came from `b2_alloc` with this size and alignment.
+        unsafe { crate::GLOBAL.dealloc(mem as *mut u8, layout(size32, 32)) }
+    }
+}
+
+/// Route Box2D's allocations through the counting allocator. Call once, before any world.
+pub fn install_allocator() {
+    // SAFETY: both functions have the C signatures Box2D expects and no world exists yet.
+    unsafe { b2SetAllocator(Some(b2_alloc), Some(b2_free)) }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Mixing rules: tiltbox's `Mixing` as Box2D callbacks.
+
+unsafe extern "C" fn mix_geometric(a: f32, _: u64, b: f32, _: u64) -> f32 {
+    (a * b).sqrt()
+}
+unsafe extern "C" fn mix_product(a: f32, _: u64, b: f32, _: u64) -> f32 {
+    a * b
+}
+unsafe extern "C" fn mix_min(a: f32, _: u64, b: f32, _: u64) -> f32 {
+    a.min(b)
+}
+unsafe extern "C" fn mix_max(a: f32, _: u64, b: f32, _: u64) -> f32 {
+    a.max(b)
+}
+
+/// The Box2D mixing callback (same signature for friction and restitution) of a tiltbox rule.
+fn mixing(m: Mixing) -> unsafe extern "C" fn(f32, u64, f32, u64) -> f32 {
+    match m {
+        Mixing::GeometricMean => mix_geometric,
+        Mixing::Product => mix_product,
+        Mixing::Min => mix_min,
+        Mixing::Max => mix_max,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+/// A Box2D world holding one scene.
+pub struct Box2d {
+    world: b2WorldId,
+    dynamic: Vec<b2BodyId>,
+    floor: f32,
+    dt: f32,
+    substeps: i32,
+}
+
+fn v(x: f32, y: f32) -> b2Vec2 {
+    b2Vec2 { x, y }
+}
+
+impl Box2d {
+    /// The scene at dt 1/60 with 4 substeps (the benchmark's step).
+    pub fn new(setup: &Setup) -> Box2d {
+        Box2d::with_step(setup, crate::DT, 4)
+    }
+
+    /// The scene stepped at `dt` with `substeps` substeps.
+    pub fn with_step(setup: &Setup, dt: f32, substeps: i32) -> Box2d {
+        // tiltbox's `Setup::build` uses the default settings plus the scene's sleep flag: mirror
+        // its mixing rules (Box2D's own defaults are sqrt(a b) for friction, as tiltbox, and
+        // max(a, b) for restitution, where tiltbox takes sqrt(a b)).
+        let settings = Settings::default();
+        // SAFETY: every call below is Box2D's C API used as documented: definitions come from
+        // the b2Default* constructors, ids from the create calls, pointers point at live locals.
+        unsafe {
+            let mut def = b2DefaultWorldDef();
+            def.gravity = v(setup.gravity.x as f32, setup.gravity.y as f32);
+            def.enableSleep = setup.sleep;
+            // Single-threaded: one worker, no task system.
+            def.workerCount = 1;
+            def.enqueueTask = None;
+            def.finishTask = None;
+            def.frictionCallback = Some(mixing(settings.friction_mixing));
+            def.restitutionCallback = Some(mixing(settings.restitution_mixing));
+            // Continuous collision and everything else: Box2D's defaults.
+            let world = b2CreateWorld(&def);
+            let mut dynamic = Vec::new();
+            for d in &setup.bodies {
+                let mut bd = b2DefaultBodyDef();
+                let is_static = d.mass == MassSpec::Static;
+                bd.type_ = if is_static {
+                    b2BodyType_b2_staticBody
+                } else {
+                    b2BodyType_b2_dynamicBody
+                };
+                bd.position = v(d.position.x as f32, d.position.y as f32);
+                // The exact rotation (Box2D's b2ComputeCosSin approximates to about 1e-3 rad).
+                let angle = d.angle as f32;
+                bd.rotation = b2Rot {
+                    c: angle.cos(),
+                    s: angle.sin(),
+                };
+                bd.linearVelocity = v(d.linear_velocity.x as f32, d.linear_velocity.y as f32);
+                bd.angularVelocity = d.angular_velocity as f32;
+                bd.enableSleep = setup.sleep;
+                let body = b2CreateBody(world, &bd);
+
+                let mut sd = b2DefaultShapeDef();
+                sd.material.friction = d.friction as f32;
+                sd.material.restitution = d.restitution as f32;
+                sd.density = match d.mass {
+                    MassSpec::Static => 0.0,
+                    MassSpec::Density(rho) => rho as f32,
+                    // Box2D takes a density: the one that gives this mass.
+                    MassSpec::Mass(m) => (m / d.shape.area()) as f32,
+                };
+                match d.shape {
+                    Shape::Rect { half_extents: h } => {
+                        let p = b2MakeBox(h.x as f32, h.y as f32);
+                        b2CreatePolygonShape(body, &sd, &p);
+                    }
+                    Shape::Circle { radius } => {
+                        let c = b2Circle {
+                            center: v(0.0, 0.0),
+                            radius: radius as f32,
+                        };
+                        b2CreateCircleShape(body, &sd, &c);
+                    }
+                    Shape::Capsule {
+                        half_length,
+                        radius,
+                    } => {
+                        let c = b2Capsule {
+                            center1: v(-half_length as f32, 0.0),
+                            center2: v(half_length as f32, 0.0),
+                            radius: radius as f32,
+                        };
+                        b2CreateCapsuleShape(body, &sd, &c);
+                    }
+                    Shape::Polygon(ref poly) => {
+                        // tiltbox's vertices (counter-clockwise, centred on the centroid) through
+                        // Box2D's hull, so the body origin is the centre of mass in both.
+                        let points: Vec<b2Vec2> = poly
+                            .vertices()
+                            .iter()
+                            .map(|p| v(p.x as f32, p.y as f32))
+                            .collect();
+                        let hull = b2ComputeHull(points.as_ptr(), points.len() as i32);
+                        assert!(
+                            hull.count as usize == points.len(),
+                            "Box2D's hull dropped a vertex of a tiltbox polygon"
+                        );
+                        let p = b2MakePolygon(&hull, 0.0);
+                        b2CreatePolygonShape(body, &sd, &p);
+                    }
+                }
+                if !is_static {
+                    dynamic.push(body);
+                }
+            }
+            Box2d {
+                world,
+                dynamic,
+                floor: crate::lowest_static(&setup.bodies),
+                dt,
+                substeps,
+            }
+        }
+    }
+}
+
+impl Drop for Box2d {
+    fn drop(&mut self) {
+        // SAFETY: the world was created in `with_step` and is destroyed once.
+        unsafe { b2DestroyWorld(self.world) }
+    }
+}
+
+fn angle(r: b2Rot) -> f32 {
+    r.s.atan2(r.c)
+}
+
+impl Engine for Box2d {
+    fn step(&mut self) {
+        // SAFETY: a live world.
+        unsafe { b2World_Step(self.world, self.dt, self.substeps) }
+    }
+    fn contact_pairs(&self) -> usize {
+        // SAFETY: a live world. Box2D's count includes pairs whose AABBs overlap without a
+        // manifold point, so it reads higher than the other engines'.
+        unsafe { b2World_GetCounters(self.world).contactCount as usize }
+    }
+    fn dynamic_bodies(&self) -> Vec<BodyState> {
+        self.dynamic
+            .iter()
+            .map(|&b| {
+                // SAFETY: live bodies of a live world.
+                unsafe {
+                    let p = b2Body_GetPosition(b);
+                    let lin = b2Body_GetLinearVelocity(b);
+                    BodyState {
+                        position: [p.x, p.y],
+                        angle: angle(b2Body_GetRotation(b)),
+                        velocity: [lin.x, lin.y],
+                        angular_velocity: b2Body_GetAngularVelocity(b),
+                        awake: b2Body_IsAwake(b),
+                        mass: b2Body_GetMass(b),
+                        inertia: b2Body_GetRotationalInertia(b),
+                    }
+                }
+            })
+            .collect()
+    }
+    fn sanity(&self) -> Sanity {
+        crate::summarise(
+            self.dynamic.iter().map(|&b| {
+                // SAFETY: live bodies of a live world.
+                unsafe { (b2Body_GetPosition(b).y, b2Body_IsAwake(b)) }
+            }),
+            self.floor,
+        )
+    }
+    fn max_penetration(&self) -> f64 {
+        let mut deepest = 0.0f64;
+        let mut buf: Vec<b2ContactData> = Vec::new();
+        for &b in &self.dynamic {
+            // SAFETY: a live body; the buffer holds `capacity` elements, Box2D writes at most
+            // that many and returns how many it wrote.
+            unsafe {
+                let capacity = b2Body_GetContactCapacity(b);
+                if capacity <= 0 {
+                    continue;
+                }
+                buf.clear();
+                buf.reserve(capacity as usize);
+                let n = b2Body_GetContactData(b, buf.as_mut_ptr(), capacity);
+                buf.set_len(n.clamp(0, capacity) as usize);
+            }
+            for c in &buf {
+                let m = &c.manifold;
+                for p in m.points.iter().take(m.pointCount.clamp(0, 2) as usize) {
+                    deepest = deepest.max(-(p.separation as f64));
+                }
+            }
+        }
+        deepest
+    }
+}

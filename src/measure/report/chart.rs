@@ -2,8 +2,8 @@
 //! solver configuration, drawn to SVG with plotters. Runs that diverged are drawn as red
 //! crosses at the top edge, never dropped.
 
-use crate::measure::accuracy::sweep::{CaseSweep, Point};
 use super::peers;
+use crate::measure::accuracy::sweep::{CaseSweep, Point};
 use plotters::prelude::*;
 use std::io;
 use std::path::Path;

@@ -108,13 +108,15 @@ struct Sanity {
 /// One dynamic body's state, for the settle report and the set-up check.
 #[derive(Clone, Copy, Debug)]
 struct BodyState {
+    /// Mass (kg) and moment of inertia (kg m^2): what the set-up check compares.
+    mass: f32,
+    inertia: f32,
+    /// Centre of mass (m), angle (rad), velocity (m/s), angular velocity (rad/s).
     position: [f32; 2],
     angle: f32,
     velocity: [f32; 2],
     angular_velocity: f32,
     awake: bool,
-    mass: f32,
-    inertia: f32,
 }
 
 trait Engine {
@@ -706,24 +708,23 @@ fn settle(setups: &[&Setup], seconds: f32) {
 // Memory per body.
 
 fn live_bytes_after_10_steps(setup: &Setup, which: &str) -> usize {
-    let before = LIVE_BYTES.load(Relaxed);
     if which == "tiltbox" {
-        let mut e = Tiltbox::new(setup);
-        for _ in 0..10 {
-            e.step();
-        }
-        let used = LIVE_BYTES.load(Relaxed) - before;
-        drop(e);
-        used
+        live_bytes_after(|| Tiltbox::new(setup))
     } else {
-        let mut e = Rapier::new(setup);
-        for _ in 0..10 {
-            e.step();
-        }
-        let used = LIVE_BYTES.load(Relaxed) - before;
-        drop(e);
-        used
+        live_bytes_after(|| Rapier::new(setup))
     }
+}
+
+/// Heap bytes still held after building an engine with `build` and stepping it 10 times.
+fn live_bytes_after<E: Engine>(build: impl FnOnce() -> E) -> usize {
+    let before = LIVE_BYTES.load(Relaxed);
+    let mut e = build();
+    for _ in 0..10 {
+        e.step();
+    }
+    let used = LIVE_BYTES.load(Relaxed) - before;
+    drop(e);
+    used
 }
 
 fn memory(setups: &[Setup]) {

@@ -2,7 +2,7 @@
 //! [`DT_60`] (unless the case is about the step itself) and returns a [`Verdict`] with its
 //! criterion in words, pass/fail and the measured numbers.
 
-use super::{blown_up, max_penetration, new_world, steps_for, Verdict, DT_60, G};
+use super::{max_penetration, new_world, run_steps, steps_for, Breakdown, Verdict, DT_60, G};
 use crate::measure::cases;
 use crate::physics::{
     vec2, BodyDef, BodyId, PhysicsError, Real, Settings, Shape, SolverKind, Vec2, World,
@@ -146,16 +146,17 @@ fn run_stack_with(
     let top = *ids.last().unwrap();
     let mut top_drift: f64 = 0.0;
     let mut top_bob: f64 = 0.0;
-    let mut finite = true;
-    for _ in 0..steps_for(seconds, DT_60) {
-        if w.step(DT_60).is_err() || !all_finite(&w) {
-            finite = false;
-            break;
-        }
-        let d = pos(&w, top) - start[n - 1];
-        top_drift = top_drift.max(d.x.abs() as f64);
-        top_bob = top_bob.max(d.y.abs() as f64);
-    }
+    let finite = run_steps(
+        &mut w,
+        DT_60,
+        steps_for(seconds, DT_60),
+        Breakdown::NonFinite,
+        |w, _| {
+            let d = pos(w, top) - start[n - 1];
+            top_drift = top_drift.max(d.x.abs() as f64);
+            top_bob = top_bob.max(d.y.abs() as f64);
+        },
+    );
     let end: Vec<Vec2> = ids.iter().map(|&id| pos(&w, id)).collect();
     let disp: Vec<Vec2> = end.iter().zip(&start).map(|(e, s)| *e - *s).collect();
     let worst_drift = disp.iter().map(|d| d.x.abs() as f64).fold(0.0, f64::max);
@@ -229,15 +230,9 @@ fn run_pyramid(settings: &Settings, base: usize, seconds: f64) -> (f64, f64, boo
     cases::ground(&mut w, 0.0, 2.0 * base as Real + 20.0, 2.0).unwrap();
     let ids = cases::pyramid(&mut w, base, 1.0, 0.0, 0.6).unwrap();
     let start: Vec<Vec2> = ids.iter().map(|&id| pos(&w, id)).collect();
-    let mut finite = true;
     let n = steps_for(seconds, DT_60);
     let t0 = Instant::now();
-    for _ in 0..n {
-        if w.step(DT_60).is_err() || !all_finite(&w) {
-            finite = false;
-            break;
-        }
-    }
+    let finite = run_steps(&mut w, DT_60, n, Breakdown::NonFinite, |_, _| {});
     let ms = t0.elapsed().as_secs_f64() * 1e3 / n as f64;
     let disp = ids
         .iter()
@@ -275,16 +270,17 @@ pub fn pyramid_sleeps(settings: &Settings) -> Verdict {
     let ids = cases::pyramid(&mut w, 20, 1.0, 0.0, 0.6).unwrap();
     let start: Vec<Vec2> = ids.iter().map(|&id| pos(&w, id)).collect();
     let mut asleep_at = f64::NAN;
-    let mut ok = true;
-    for _ in 0..steps_for(5.0, DT_60) {
-        if w.step(DT_60).is_err() || !all_finite(&w) {
-            ok = false;
-            break;
-        }
-        if asleep_at.is_nan() && ids.iter().all(|&id| !w.body(id).unwrap().is_awake()) {
-            asleep_at = w.time();
-        }
-    }
+    let ok = run_steps(
+        &mut w,
+        DT_60,
+        steps_for(5.0, DT_60),
+        Breakdown::NonFinite,
+        |w, _| {
+            if asleep_at.is_nan() && ids.iter().all(|&id| !w.body(id).unwrap().is_awake()) {
+                asleep_at = w.time();
+            }
+        },
+    );
     let awake = ids
         .iter()
         .filter(|&&id| w.body(id).unwrap().is_awake())
@@ -343,15 +339,16 @@ fn mass_ratio(settings: &Settings, case: &'static str, ratio: Real) -> Verdict {
         .unwrap();
     let mut pen: f64 = 0.0;
     let mut speed: f64 = 0.0;
-    let mut ok = true;
-    for _ in 0..steps_for(5.0, DT_60) {
-        if w.step(DT_60).is_err() || blown_up(&w, 100.0) {
-            ok = false;
-            break;
-        }
-        pen = pen.max(max_penetration(&w));
-        speed = speed.max(max_speed(&w));
-    }
+    let ok = run_steps(
+        &mut w,
+        DT_60,
+        steps_for(5.0, DT_60),
+        Breakdown::BlownUp(100.0),
+        |w, _| {
+            pen = pen.max(max_penetration(w));
+            speed = speed.max(max_speed(w));
+        },
+    );
     let p = pos(&w, big);
     let sinking = 1.5 - p.y as f64;
     let slop = settings.linear_slop as f64;
@@ -407,17 +404,18 @@ pub fn deep_overlap(settings: &Settings) -> Verdict {
         .collect();
     let mut speed: f64 = 0.0;
     let mut outside: f64 = 0.0;
-    let mut ok = true;
-    for _ in 0..steps_for(3.0, DT_60) {
-        if w.step(DT_60).is_err() || blown_up(&w, 100.0) {
-            ok = false;
-            break;
-        }
-        speed = speed.max(max_speed(&w));
-        for &id in &ids {
-            outside = outside.max(outside_box(pos(&w, id), 10.0, 10.0, 0.0));
-        }
-    }
+    let ok = run_steps(
+        &mut w,
+        DT_60,
+        steps_for(3.0, DT_60),
+        Breakdown::BlownUp(100.0),
+        |w, _| {
+            speed = speed.max(max_speed(w));
+            for &id in &ids {
+                outside = outside.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
+            }
+        },
+    );
     let pen = max_penetration(&w);
     let slop = settings.linear_slop as f64;
     // At the end every box must be fully inside, give or take the allowed overlap.
@@ -515,13 +513,14 @@ fn fire_bullet(settings: &Settings, shape: Shape, spin: Real) -> (bool, f64) {
         )
         .unwrap();
     let mut max_x = f64::NEG_INFINITY;
-    for _ in 0..30 {
-        if w.step(DT_60).is_err() || !all_finite(&w) {
-            return (false, f64::NAN);
-        }
-        max_x = max_x.max(pos(&w, b).x as f64);
+    let finite = run_steps(&mut w, DT_60, 30, Breakdown::NonFinite, |w, _| {
+        max_x = max_x.max(pos(w, b).x as f64);
+    });
+    if finite {
+        (true, max_x)
+    } else {
+        (false, f64::NAN)
     }
-    (true, max_x)
 }
 
 /// Spacing between adjacent [`Real`] values at `x` (m): the position resolution there.
@@ -571,14 +570,15 @@ pub fn tiny_bodies(settings: &Settings) -> Verdict {
     let top = ids[2];
     let p0 = pos(&w, top);
     let mut drift: f64 = 0.0;
-    let mut ok = true;
-    for _ in 0..steps_for(5.0, DT_60) {
-        if w.step(DT_60).is_err() || blown_up(&w, 100.0) {
-            ok = false;
-            break;
-        }
-        drift = drift.max((pos(&w, top).x - p0.x).abs() as f64);
-    }
+    let ok = run_steps(
+        &mut w,
+        DT_60,
+        steps_for(5.0, DT_60),
+        Breakdown::BlownUp(100.0),
+        |w, _| {
+            drift = drift.max((pos(w, top).x - p0.x).abs() as f64);
+        },
+    );
     let sinking = (p0.y - pos(&w, top).y) as f64;
     let speed = max_speed(&w);
     let slop = settings.linear_slop as f64;
@@ -610,14 +610,15 @@ pub fn large_bodies(settings: &Settings) -> Verdict {
         .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(10.0, 5.5)))
         .unwrap();
     let mut pen: f64 = 0.0;
-    let mut ok = true;
-    for _ in 0..steps_for(5.0, DT_60) {
-        if w.step(DT_60).is_err() || blown_up(&w, 1000.0) {
-            ok = false;
-            break;
-        }
-        pen = pen.max(max_penetration(&w));
-    }
+    let ok = run_steps(
+        &mut w,
+        DT_60,
+        steps_for(5.0, DT_60),
+        Breakdown::BlownUp(1000.0),
+        |w, _| {
+            pen = pen.max(max_penetration(w));
+        },
+    );
     let s = pos(&w, slab);
     let b = pos(&w, small);
     let tilt = w.body(slab).unwrap().angle().abs() as f64;
@@ -665,17 +666,13 @@ pub fn gravity_flip(settings: &Settings) -> Verdict {
     for s in 0..10 {
         let sign = if s % 2 == 0 { -1.0 } else { 1.0 };
         w.set_gravity(vec2(0.0, sign * 10.0 * G)).unwrap();
-        for _ in 0..per_second {
-            if w.step(DT_60).is_err() || !all_finite(&w) {
-                ok = false;
-                break;
-            }
-            speed = speed.max(max_speed(&w));
-            pen = pen.max(max_penetration(&w));
+        ok = run_steps(&mut w, DT_60, per_second, Breakdown::NonFinite, |w, _| {
+            speed = speed.max(max_speed(w));
+            pen = pen.max(max_penetration(w));
             for &id in &ids {
-                inside_wall = inside_wall.max(outside_box(pos(&w, id), 10.0, 10.0, 0.0));
+                inside_wall = inside_wall.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
             }
-        }
+        });
         if !ok {
             break;
         }
@@ -709,19 +706,14 @@ pub fn huge_dt(settings: &Settings) -> Verdict {
     let mut ids = cases::falling_bricks(&mut w).unwrap();
     ids.extend(cases::stack(&mut w, 5, 0.8, -3.8, 0.0).unwrap());
     let dt: Real = 0.1;
-    let mut ok = true;
     let mut outside: f64 = 0.0;
     let mut speed: f64 = 0.0;
-    for _ in 0..100 {
-        if w.step(dt).is_err() || !all_finite(&w) {
-            ok = false;
-            break;
-        }
-        speed = speed.max(max_speed(&w));
+    let ok = run_steps(&mut w, dt, 100, Breakdown::NonFinite, |w, _| {
+        speed = speed.max(max_speed(w));
         for &id in &ids {
-            outside = outside.max(outside_box(pos(&w, id), 10.0, 10.0, 0.0));
+            outside = outside.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
         }
-    }
+    });
     let cap = settings.max_linear_speed as f64;
     let passed = ok && speed < 0.99 * cap;
     verdict(
@@ -845,31 +837,26 @@ pub fn mixed_pile(settings: &Settings) -> Verdict {
             .with_angular_velocity(spin);
         ids.push(w.add_body(&def).unwrap());
     }
-    let mut ok = true;
     let mut outside: f64 = 0.0;
     let mut pen_late: f64 = 0.0;
     let mut speed_late: f64 = 0.0;
     let mut spin_late: f64 = 0.0;
     let n = steps_for(10.0, DT_60);
-    for k in 0..n {
-        if w.step(DT_60).is_err() || !all_finite(&w) {
-            ok = false;
-            break;
-        }
+    let ok = run_steps(&mut w, DT_60, n, Breakdown::NonFinite, |w, k| {
         for &id in &ids {
-            outside = outside.max(outside_box(pos(&w, id), 10.0, 10.0, 0.0));
+            outside = outside.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
         }
         // The last second: the pile should be at rest.
         if k >= n - steps_for(1.0, DT_60) {
-            pen_late = pen_late.max(max_penetration(&w));
-            speed_late = speed_late.max(max_speed(&w));
+            pen_late = pen_late.max(max_penetration(w));
+            speed_late = speed_late.max(max_speed(w));
             spin_late = spin_late.max(
                 w.bodies()
                     .map(|b| b.angular_velocity().abs() as f64)
                     .fold(0.0, f64::max),
             );
         }
-    }
+    });
     let slop = settings.linear_slop as f64;
     let passed =
         ok && outside == 0.0 && speed_late < 0.05 && spin_late < 0.2 && pen_late <= 2.0 * slop;

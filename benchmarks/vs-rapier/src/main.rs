@@ -108,15 +108,17 @@ struct Sanity {
 /// One dynamic body's state, for the settle report and the set-up check.
 #[derive(Clone, Copy, Debug)]
 struct BodyState {
+    /// Whether the engine still steps it.
+    awake: bool,
     /// Mass (kg) and moment of inertia (kg m^2): what the set-up check compares.
     mass: f32,
     inertia: f32,
-    /// Centre of mass (m), angle (rad), velocity (m/s), angular velocity (rad/s).
+    /// Centre of mass (m) and velocity (m/s).
     position: [f32; 2],
-    angle: f32,
     velocity: [f32; 2],
+    /// Angle (rad) and angular velocity (rad/s).
+    angle: f32,
     angular_velocity: f32,
-    awake: bool,
 }
 
 trait Engine {

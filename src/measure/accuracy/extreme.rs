@@ -22,49 +22,42 @@ pub struct ExtremeCase {
     pub report_only: bool,
 }
 
+/// The cases with a criterion, in report order: machine name, title, runner.
+#[rustfmt::skip] // a table: one case a line
+const CASES: [(&str, &str, fn(&Settings) -> Verdict); 15] = [
+    ("stack_20", "Stack of 20, 30 s", stack_20),
+    ("stack_50", "Stack of 50, 10 s", stack_50),
+    ("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
+    ("pyramid_sleeps", "Pyramid base 20 falls asleep", pyramid_sleeps),
+    ("mass_ratio_100", "Mass ratio 100:1", mass_ratio_100),
+    ("mass_ratio_1000", "Mass ratio 1000:1", mass_ratio_1000),
+    ("deep_overlap", "Deep overlap at spawn", deep_overlap),
+    ("bullet", "Bullet 200 m/s vs 0.1 m wall", bullet),
+    ("far_from_origin", "Stack at x = 10 km", far_from_origin),
+    ("tiny_bodies", "Tiny bodies (1 cm)", tiny_bodies),
+    ("large_bodies", "Large body (50 m)", large_bodies),
+    ("gravity_flip", "Gravity flipped at 10 g", gravity_flip),
+    ("mixed_pile", "Pile of mixed shapes comes to rest", mixed_pile),
+    ("huge_dt", "Huge dt (0.1 s)", huge_dt),
+    ("non_finite_refused", "NaN / inf refused", non_finite_refused),
+];
+
 /// Every case, in report order (`pyramid_100` last, report only).
 pub fn all() -> Vec<ExtremeCase> {
-    let c = |name, title, run: fn(&Settings) -> Verdict| ExtremeCase {
+    let with_criterion = CASES.iter().map(|&(name, title, run)| ExtremeCase {
         name,
         title,
         run,
         report_only: false,
-    };
-    vec![
-        c("stack_20", "Stack of 20, 30 s", stack_20),
-        c("stack_50", "Stack of 50, 10 s", stack_50),
-        c("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
-        c(
-            "pyramid_sleeps",
-            "Pyramid base 20 falls asleep",
-            pyramid_sleeps,
-        ),
-        c("mass_ratio_100", "Mass ratio 100:1", mass_ratio_100),
-        c("mass_ratio_1000", "Mass ratio 1000:1", mass_ratio_1000),
-        c("deep_overlap", "Deep overlap at spawn", deep_overlap),
-        c("bullet", "Bullet 200 m/s vs 0.1 m wall", bullet),
-        c("far_from_origin", "Stack at x = 10 km", far_from_origin),
-        c("tiny_bodies", "Tiny bodies (1 cm)", tiny_bodies),
-        c("large_bodies", "Large body (50 m)", large_bodies),
-        c("gravity_flip", "Gravity flipped at 10 g", gravity_flip),
-        c(
-            "mixed_pile",
-            "Pile of mixed shapes comes to rest",
-            mixed_pile,
-        ),
-        c("huge_dt", "Huge dt (0.1 s)", huge_dt),
-        c(
-            "non_finite_refused",
-            "NaN / inf refused",
-            non_finite_refused,
-        ),
-        ExtremeCase {
+    });
+    with_criterion
+        .chain(std::iter::once(ExtremeCase {
             name: "pyramid_100",
             title: "Pyramid base 100 (5,050 boxes)",
             run: pyramid_100,
             report_only: true,
-        },
-    ]
+        }))
+        .collect()
 }
 
 /// Run every case (`with_report_only` adds the pyramid of base 100) with `settings`.
@@ -111,6 +104,16 @@ fn max_speed(w: &World) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Step `w` for `seconds` at [`DT_60`]: [`run_steps`] counted in seconds.
+fn for_seconds(
+    w: &mut World,
+    seconds: f64,
+    breakdown: Breakdown,
+    each: impl FnMut(&World, u64),
+) -> bool {
+    run_steps(w, DT_60, steps_for(seconds, DT_60), breakdown, each)
+}
+
 /// What a stack run measured.
 struct StackRun {
     /// Largest |x - x0| of the top box at any step (m).
@@ -146,17 +149,11 @@ fn run_stack_with(
     let top = *ids.last().unwrap();
     let mut top_drift: f64 = 0.0;
     let mut top_bob: f64 = 0.0;
-    let finite = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(seconds, DT_60),
-        Breakdown::NonFinite,
-        |w, _| {
-            let d = pos(w, top) - start[n - 1];
-            top_drift = top_drift.max(d.x.abs() as f64);
-            top_bob = top_bob.max(d.y.abs() as f64);
-        },
-    );
+    let finite = for_seconds(&mut w, seconds, Breakdown::NonFinite, |w, _| {
+        let d = pos(w, top) - start[n - 1];
+        top_drift = top_drift.max(d.x.abs() as f64);
+        top_bob = top_bob.max(d.y.abs() as f64);
+    });
     let end: Vec<Vec2> = ids.iter().map(|&id| pos(&w, id)).collect();
     let disp: Vec<Vec2> = end.iter().zip(&start).map(|(e, s)| *e - *s).collect();
     let worst_drift = disp.iter().map(|d| d.x.abs() as f64).fold(0.0, f64::max);
@@ -270,17 +267,11 @@ pub fn pyramid_sleeps(settings: &Settings) -> Verdict {
     let ids = cases::pyramid(&mut w, 20, 1.0, 0.0, 0.6).unwrap();
     let start: Vec<Vec2> = ids.iter().map(|&id| pos(&w, id)).collect();
     let mut asleep_at = f64::NAN;
-    let ok = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(5.0, DT_60),
-        Breakdown::NonFinite,
-        |w, _| {
-            if asleep_at.is_nan() && ids.iter().all(|&id| !w.body(id).unwrap().is_awake()) {
-                asleep_at = w.time();
-            }
-        },
-    );
+    let ok = for_seconds(&mut w, 5.0, Breakdown::NonFinite, |w, _| {
+        if asleep_at.is_nan() && ids.iter().all(|&id| !w.body(id).unwrap().is_awake()) {
+            asleep_at = w.time();
+        }
+    });
     let awake = ids
         .iter()
         .filter(|&&id| w.body(id).unwrap().is_awake())
@@ -339,16 +330,10 @@ fn mass_ratio(settings: &Settings, case: &'static str, ratio: Real) -> Verdict {
         .unwrap();
     let mut pen: f64 = 0.0;
     let mut speed: f64 = 0.0;
-    let ok = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(5.0, DT_60),
-        Breakdown::BlownUp(100.0),
-        |w, _| {
-            pen = pen.max(max_penetration(w));
-            speed = speed.max(max_speed(w));
-        },
-    );
+    let ok = for_seconds(&mut w, 5.0, Breakdown::BlownUp(100.0), |w, _| {
+        pen = pen.max(max_penetration(w));
+        speed = speed.max(max_speed(w));
+    });
     let p = pos(&w, big);
     let sinking = 1.5 - p.y as f64;
     let slop = settings.linear_slop as f64;
@@ -404,18 +389,12 @@ pub fn deep_overlap(settings: &Settings) -> Verdict {
         .collect();
     let mut speed: f64 = 0.0;
     let mut outside: f64 = 0.0;
-    let ok = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(3.0, DT_60),
-        Breakdown::BlownUp(100.0),
-        |w, _| {
-            speed = speed.max(max_speed(w));
-            for &id in &ids {
-                outside = outside.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
-            }
-        },
-    );
+    let ok = for_seconds(&mut w, 3.0, Breakdown::BlownUp(100.0), |w, _| {
+        speed = speed.max(max_speed(w));
+        for &id in &ids {
+            outside = outside.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
+        }
+    });
     let pen = max_penetration(&w);
     let slop = settings.linear_slop as f64;
     // At the end every box must be fully inside, give or take the allowed overlap.
@@ -570,15 +549,9 @@ pub fn tiny_bodies(settings: &Settings) -> Verdict {
     let top = ids[2];
     let p0 = pos(&w, top);
     let mut drift: f64 = 0.0;
-    let ok = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(5.0, DT_60),
-        Breakdown::BlownUp(100.0),
-        |w, _| {
-            drift = drift.max((pos(w, top).x - p0.x).abs() as f64);
-        },
-    );
+    let ok = for_seconds(&mut w, 5.0, Breakdown::BlownUp(100.0), |w, _| {
+        drift = drift.max((pos(w, top).x - p0.x).abs() as f64);
+    });
     let sinking = (p0.y - pos(&w, top).y) as f64;
     let speed = max_speed(&w);
     let slop = settings.linear_slop as f64;
@@ -610,15 +583,9 @@ pub fn large_bodies(settings: &Settings) -> Verdict {
         .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(10.0, 5.5)))
         .unwrap();
     let mut pen: f64 = 0.0;
-    let ok = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(5.0, DT_60),
-        Breakdown::BlownUp(1000.0),
-        |w, _| {
-            pen = pen.max(max_penetration(w));
-        },
-    );
+    let ok = for_seconds(&mut w, 5.0, Breakdown::BlownUp(1000.0), |w, _| {
+        pen = pen.max(max_penetration(w));
+    });
     let s = pos(&w, slab);
     let b = pos(&w, small);
     let tilt = w.body(slab).unwrap().angle().abs() as f64;

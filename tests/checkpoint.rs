@@ -3,29 +3,24 @@
 //! SIGKILL loses at most one checkpoint interval.
 #![cfg(feature = "net")]
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::net::{query_scene as scene, subscribe, zenoh_config as client_config, WAIT};
+use common::temp_dir;
+use std::path::Path;
 use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
 use tiltbox::service::checkpoint::{self, load, previous_path, write_atomic};
 use tiltbox::service::{parse_command, Incoming, SceneSource, Server, ServerConfig, Simulation};
 
-const WAIT: Duration = Duration::from_secs(5);
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tiltbox-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
+/// A turning, moving 0.8 x 0.6 m box named `name` at (`x`, `y`), `vx` m/s to the right.
 fn spawn_body(name: &str, x: f32, y: f32, vx: f32) -> SpawnBody {
+    let shape = ShapeSpec::Rect {
+        width: 0.8,
+        height: 0.6,
+    };
     SpawnBody {
         name: Some(name.into()),
-        shape: ShapeSpec::Rect {
-            width: 0.8,
-            height: 0.6,
-        },
-        position: Vector::new(x, y),
         angle: 0.3,
         velocity: Vector::new(vx, 0.0),
         angular_velocity: 1.0,
@@ -33,6 +28,7 @@ fn spawn_body(name: &str, x: f32, y: f32, vx: f32) -> SpawnBody {
         friction: 0.4,
         restitution: 0.2,
         colour: Colour { r: 1, g: 2, b: 3 },
+        ..SpawnBody::at(shape, Vector::new(x, y))
     }
 }
 
@@ -261,30 +257,6 @@ fn damaged_checkpoints_fall_back_to_the_previous_generation() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-fn client_config(port: u16) -> zenoh::Config {
-    let mut c = zenoh::Config::default();
-    c.insert_json5("mode", "\"peer\"").unwrap();
-    c.insert_json5("connect/endpoints", &format!("[\"tcp/127.0.0.1:{port}\"]"))
-        .unwrap();
-    c.insert_json5("listen/endpoints", "[]").unwrap();
-    c.insert_json5("scouting/multicast/enabled", "false")
-        .unwrap();
-    c
-}
-
-async fn scene(session: &zenoh::Session, keys: &Keys) -> SceneState {
-    let end = Instant::now() + WAIT;
-    loop {
-        assert!(Instant::now() < end, "no scene reply");
-        let replies = session.get(keys.scene()).await.unwrap();
-        if let Ok(Ok(reply)) = tokio::time::timeout(WAIT, replies.recv_async()).await {
-            if let Ok(sample) = reply.into_result() {
-                return decode::<SceneState>(&sample.payload().to_bytes()).unwrap();
-            }
-        }
-    }
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_daemon_resumes_from_its_checkpoint() {
     let dir = temp_dir("ckpt-daemon");
@@ -296,16 +268,7 @@ async fn the_daemon_resumes_from_its_checkpoint() {
     let server = Server::start(&config, Default::default()).await.unwrap();
     let keys = server.keys().clone();
     let session = zenoh::open(client_config(17520)).await.unwrap();
-    let (etx, mut events) = tokio::sync::mpsc::unbounded_channel();
-    let _sub = session
-        .declare_subscriber(keys.events())
-        .callback(move |s| {
-            if let Ok(e) = decode::<Event>(&s.payload().to_bytes()) {
-                let _ = etx.send(e);
-            }
-        })
-        .await
-        .unwrap();
+    let (mut events, _sub) = subscribe::<Event>(&session, keys.events()).await;
     let spawn = Spawn {
         bodies: vec![spawn_body("keeper", 0.0, 6.0, 0.0)],
     };
@@ -372,28 +335,21 @@ async fn sigkill_loses_at_most_one_checkpoint_interval() {
         .await
         .expect("connected in time")
         .unwrap();
-    let (ftx, mut frames) = tokio::sync::mpsc::unbounded_channel();
-    let _sub = session
-        .declare_subscriber(keys.poses())
-        .callback(move |s| {
-            if let Ok(snap) = decode::<Snapshot>(&s.payload().to_bytes()) {
-                let _ = ftx.send(snap.frame);
-            }
-        })
-        .await
-        .unwrap();
+    let (mut snapshots, _sub) = subscribe::<Snapshot>(&session, keys.poses()).await;
     let end = Instant::now() + Duration::from_secs(10);
     let mut last = 0;
     while last < 80 {
         assert!(Instant::now() < end, "no snapshots from the daemon");
-        if let Ok(Some(f)) = tokio::time::timeout(Duration::from_millis(500), frames.recv()).await {
-            last = f;
+        if let Ok(Some(s)) =
+            tokio::time::timeout(Duration::from_millis(500), snapshots.recv()).await
+        {
+            last = s.frame;
         }
     }
     child.kill().unwrap(); // SIGKILL
     child.wait().unwrap();
-    while let Ok(f) = frames.try_recv() {
-        last = last.max(f);
+    while let Ok(s) = snapshots.try_recv() {
+        last = last.max(s.frame);
     }
     let loaded = load(&path).unwrap().expect("a checkpoint on disk");
     let lost = last.saturating_sub(loaded.state.frame);

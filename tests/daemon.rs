@@ -2,26 +2,15 @@
 //! port per test, multicast scouting off. Waits are on conditions with deadlines.
 #![cfg(feature = "net")]
 
+mod common;
+
+use common::net::{daemon_config as config, query_scene, serve, subscribe, zenoh_config_as, WAIT};
 use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
-use tiltbox::service::{Server, ServerConfig, ServerOptions, POSE_EPSILON};
-use tokio::sync::mpsc::{unbounded_channel, UnboundedReceiver};
+use tiltbox::service::{Server, ServerOptions, POSE_EPSILON};
+use tokio::sync::mpsc::UnboundedReceiver;
 use zenoh::pubsub::Subscriber;
 use zenoh::Session;
-
-const WAIT: Duration = Duration::from_secs(5);
-
-fn config(port: u16) -> ServerConfig {
-    let mut c = ServerConfig::default();
-    c.zenoh.listen = vec![format!("tcp/127.0.0.1:{port}")];
-    c
-}
-
-async fn serve(config: &ServerConfig) -> Server {
-    Server::start(config, ServerOptions::default())
-        .await
-        .expect("daemon starts")
-}
 
 struct Client {
     session: Session,
@@ -40,52 +29,17 @@ impl Client {
 
     /// Connect in Zenoh mode `mode` (`peer` or `client`).
     async fn connect_as(mode: &str, port: u16, keys: &Keys) -> Client {
-        let mut c = zenoh::Config::default();
-        c.insert_json5("mode", &format!("\"{mode}\"")).unwrap();
-        c.insert_json5("connect/endpoints", &format!("[\"tcp/127.0.0.1:{port}\"]"))
-            .unwrap();
-        c.insert_json5("listen/endpoints", "[]").unwrap();
-        c.insert_json5("scouting/multicast/enabled", "false")
-            .unwrap();
-        let session = zenoh::open(c).await.unwrap();
-        let (stx, snapshots) = unbounded_channel();
-        let (etx, events) = unbounded_channel();
-        let (ttx, stats) = unbounded_channel();
-        let mut subs = Vec::new();
-        subs.push(
-            session
-                .declare_subscriber(keys.poses())
-                .callback(move |s| {
-                    let _ = stx.send(decode::<Snapshot>(&s.payload().to_bytes()).unwrap());
-                })
-                .await
-                .unwrap(),
-        );
-        subs.push(
-            session
-                .declare_subscriber(keys.events())
-                .callback(move |s| {
-                    let _ = etx.send(decode::<Event>(&s.payload().to_bytes()).unwrap());
-                })
-                .await
-                .unwrap(),
-        );
-        subs.push(
-            session
-                .declare_subscriber(keys.stats())
-                .callback(move |s| {
-                    let _ = ttx.send(decode::<Stats>(&s.payload().to_bytes()).unwrap());
-                })
-                .await
-                .unwrap(),
-        );
+        let session = zenoh::open(zenoh_config_as(mode, port)).await.unwrap();
+        let (snapshots, poses) = subscribe(&session, keys.poses()).await;
+        let (events, events_sub) = subscribe(&session, keys.events()).await;
+        let (stats, stats_sub) = subscribe(&session, keys.stats()).await;
         let mut client = Client {
             session,
             keys: keys.clone(),
             snapshots,
             events,
             stats,
-            _subs: subs,
+            _subs: vec![poses, events_sub, stats_sub],
         };
         client.snapshot_where(|_| true).await;
         client
@@ -99,28 +53,12 @@ impl Client {
         self.put_raw(key, encode(msg).unwrap()).await;
     }
 
-    async fn snapshot_where(&mut self, mut pred: impl FnMut(&Snapshot) -> bool) -> Snapshot {
-        let end = Instant::now() + WAIT;
-        loop {
-            let left = end.saturating_duration_since(Instant::now());
-            match tokio::time::timeout(left, self.snapshots.recv()).await {
-                Ok(Some(s)) if pred(&s) => return s,
-                Ok(Some(_)) => {}
-                _ => panic!("no matching snapshot within {WAIT:?}"),
-            }
-        }
+    async fn snapshot_where(&mut self, pred: impl FnMut(&Snapshot) -> bool) -> Snapshot {
+        first_where(&mut self.snapshots, pred, "snapshot").await
     }
 
-    async fn event_where(&mut self, mut pred: impl FnMut(&Event) -> bool) -> Event {
-        let end = Instant::now() + WAIT;
-        loop {
-            let left = end.saturating_duration_since(Instant::now());
-            match tokio::time::timeout(left, self.events.recv()).await {
-                Ok(Some(e)) if pred(&e) => return e,
-                Ok(Some(_)) => {}
-                _ => panic!("no matching event within {WAIT:?}"),
-            }
-        }
+    async fn event_where(&mut self, pred: impl FnMut(&Event) -> bool) -> Event {
+        first_where(&mut self.events, pred, "event").await
     }
 
     async fn rejected(&mut self, key: &str, reason_has: &str) -> Event {
@@ -133,13 +71,7 @@ impl Client {
     }
 
     async fn scene(&self) -> SceneState {
-        let replies = self.session.get(self.keys.scene()).await.unwrap();
-        let reply = tokio::time::timeout(WAIT, replies.recv_async())
-            .await
-            .expect("scene reply in time")
-            .expect("a scene reply");
-        let sample = reply.into_result().expect("scene reply is ok");
-        decode::<SceneState>(&sample.payload().to_bytes()).unwrap()
+        query_scene(&self.session, &self.keys).await
     }
 
     /// Wait until `frames` more frames have been stepped.
@@ -153,6 +85,23 @@ impl Client {
     }
 }
 
+/// The first message from `rx` that satisfies `pred`, within [`WAIT`].
+async fn first_where<M>(
+    rx: &mut UnboundedReceiver<M>,
+    mut pred: impl FnMut(&M) -> bool,
+    what: &str,
+) -> M {
+    let end = Instant::now() + WAIT;
+    loop {
+        let left = end.saturating_duration_since(Instant::now());
+        match tokio::time::timeout(left, rx.recv()).await {
+            Ok(Some(m)) if pred(&m) => return m,
+            Ok(Some(_)) => {}
+            _ => panic!("no matching {what} within {WAIT:?}"),
+        }
+    }
+}
+
 fn mean_dynamic(state: &SceneState) -> (f32, f32) {
     let d: Vec<_> = state.bodies.iter().filter(|b| !b.is_static).collect();
     let n = d.len() as f32;
@@ -162,21 +111,18 @@ fn mean_dynamic(state: &SceneState) -> (f32, f32) {
     )
 }
 
+/// A 0.6 x 0.3 m brick named `name` at (`x`, `y`), coloured #010203.
 fn brick(name: &str, x: f32, y: f32) -> SpawnBody {
     SpawnBody {
         name: Some(name.into()),
-        shape: ShapeSpec::Rect {
-            width: 0.6,
-            height: 0.3,
-        },
-        position: Vector::new(x, y),
-        angle: 0.0,
-        velocity: Vector::default(),
-        angular_velocity: 0.0,
-        density: 1.0,
-        friction: 0.6,
-        restitution: 0.0,
         colour: Colour { r: 1, g: 2, b: 3 },
+        ..SpawnBody::at(
+            ShapeSpec::Rect {
+                width: 0.6,
+                height: 0.3,
+            },
+            Vector::new(x, y),
+        )
     }
 }
 
@@ -631,19 +577,18 @@ async fn a_scene_file_is_served_and_reloaded_on_reset() {
 /// A flat static floor 40 m wide whose top is at y = `GROUND_TOP`, no gravity until the
 /// test sets it: spawned bodies stay exactly where they were put until then.
 const GROUND_TOP: f32 = 0.0;
-const FLOOR_SCENE: &str = r#"
-name = "floor"
-gravity = [0.0, 0.0]
-
-[[body]]
-name = "floor"
-static = true
-shape = { type = "rect", width = 40.0, height = 1.0 }
-position = [0.0, -0.5]
-"#;
 
 async fn serve_floor(port: u16) -> Server {
-    let scene = tiltbox::scene::Scene::from_toml_str(FLOOR_SCENE).unwrap();
+    use tiltbox::physics::{vec2, BodyDef, Shape};
+    use tiltbox::scene::{Scene, SceneBody};
+    // 1 m thick, its top at y = GROUND_TOP = 0
+    let floor = BodyDef::fixed(Shape::rect(40.0, 1.0), vec2(0.0, -0.5));
+    let scene = Scene {
+        name: "floor".into(),
+        gravity: vec2(0.0, 0.0),
+        settings: Default::default(),
+        bodies: vec![SceneBody::new("floor", floor)],
+    };
     let options = ServerOptions {
         source: Some(tiltbox::service::SceneSource::Given(Box::new(scene))),
         ..Default::default()

@@ -4,6 +4,9 @@
 //! infinity, and nothing may grow without bound. Deterministic (fixed seeds), a few seconds.
 #![cfg(feature = "net")]
 
+mod common;
+
+use common::rng::Rng;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::sync_channel;
 use std::sync::Arc;
@@ -11,22 +14,6 @@ use tiltbox::protocol::*;
 use tiltbox::service::{
     parse_command, Incoming, Intake, Limits, SceneSource, ServerConfig, Simulation,
 };
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn pick<T: Copy>(&mut self, v: &[T]) -> T {
-        v[self.below(v.len())]
-    }
-}
 
 /// Floats that break careless code.
 const EDGE: [f32; 16] = [

@@ -4,6 +4,12 @@
 //! replays up to where it ends. The last test records through a real daemon over Zenoh.
 #![cfg(feature = "net")]
 
+mod common;
+
+use common::bodies::random_brick as brick;
+use common::net::{daemon_config, open, subscribe};
+use common::rng::Rng;
+use common::temp_dir;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::sync_channel;
 use std::sync::{Arc, Mutex};
@@ -26,38 +32,6 @@ impl Outputs for Hashes {
     fn stepped(&mut self, sim: &Simulation) {
         let mut v = self.0.lock().unwrap();
         v.push((sim.frame(), sim.world().state_hash()));
-    }
-}
-
-/// A small deterministic generator (xorshift64*), so the command mix is the same every run.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn f(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
-
-fn brick(rng: &mut Rng) -> SpawnBody {
-    SpawnBody {
-        name: Some(format!("b{}", rng.next() % 1000)),
-        shape: ShapeSpec::Rect {
-            width: rng.f(0.3, 1.5),
-            height: rng.f(0.3, 1.0),
-        },
-        position: Vector::new(rng.f(-4.0, 4.0), rng.f(2.0, 9.0)),
-        angle: rng.f(-1.0, 1.0),
-        velocity: Vector::new(rng.f(-3.0, 3.0), rng.f(-3.0, 3.0)),
-        angular_velocity: rng.f(-2.0, 2.0),
-        density: rng.f(0.5, 3.0),
-        friction: rng.f(0.0, 1.0),
-        restitution: rng.f(0.0, 0.5),
-        colour: Colour::default(),
     }
 }
 
@@ -163,8 +137,7 @@ fn record(path: &std::path::Path, frames: u64, seed: u64) -> Vec<(u64, u64)> {
 
 #[test]
 fn a_recorded_run_replays_bit_identically_at_every_frame() {
-    let dir = std::env::temp_dir().join(format!("tiltbox-replay-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = temp_dir("replay");
     let path = dir.join("run.journal");
     let live = record(&path, 400, 0x9e37_79b9_7f4a_7c15);
 
@@ -241,35 +214,17 @@ fn a_damaged_journal_header_is_refused() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_daemon_records_a_journal_that_replays() {
     let port = 17510;
-    let dir = std::env::temp_dir().join(format!("tiltbox-replayd-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = temp_dir("replayd");
     let path = dir.join("daemon.journal");
-    let mut config = ServerConfig::default();
-    config.zenoh.listen = vec![format!("tcp/127.0.0.1:{port}")];
+    let mut config = daemon_config(port);
     config.record = Some(path.clone());
     let server = tiltbox::service::Server::start(&config, Default::default())
         .await
         .unwrap();
     let keys = server.keys().clone();
 
-    let mut c = zenoh::Config::default();
-    c.insert_json5("mode", "\"peer\"").unwrap();
-    c.insert_json5("connect/endpoints", &format!("[\"tcp/127.0.0.1:{port}\"]"))
-        .unwrap();
-    c.insert_json5("listen/endpoints", "[]").unwrap();
-    c.insert_json5("scouting/multicast/enabled", "false")
-        .unwrap();
-    let session = zenoh::open(c).await.unwrap();
-    let (etx, mut events) = tokio::sync::mpsc::unbounded_channel();
-    let _sub = session
-        .declare_subscriber(keys.events())
-        .callback(move |s| {
-            if let Ok(e) = decode::<Event>(&s.payload().to_bytes()) {
-                let _ = etx.send(e);
-            }
-        })
-        .await
-        .unwrap();
+    let session = open(port).await;
+    let (mut events, _sub) = subscribe::<Event>(&session, keys.events()).await;
     // Wait until the daemon hears us: put spawns until one is acknowledged.
     let mut rng = Rng(7);
     let deadline = Instant::now() + Duration::from_secs(5);

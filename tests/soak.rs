@@ -7,11 +7,16 @@
 //! `TILTBOX_SOAK_SECS=600 cargo test --release --test soak -- --nocapture`.
 #![cfg(feature = "net")]
 
+mod common;
+
+use common::bodies::random_brick;
+use common::net::{daemon_config, open};
+use common::rng::Rng;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
-use tiltbox::service::{Server, ServerConfig, ServerOptions};
+use tiltbox::service::{Server, ServerOptions};
 
 fn rss_bytes() -> u64 {
     // /proc/self/statm: size resident shared text lib data dt (pages)
@@ -22,30 +27,6 @@ fn rss_bytes() -> u64 {
         .and_then(|s| s.parse().ok())
         .unwrap_or(0);
     pages * 4096
-}
-
-fn client_config(port: u16) -> zenoh::Config {
-    let mut c = zenoh::Config::default();
-    c.insert_json5("mode", "\"peer\"").unwrap();
-    c.insert_json5("connect/endpoints", &format!("[\"tcp/127.0.0.1:{port}\"]"))
-        .unwrap();
-    c.insert_json5("listen/endpoints", "[]").unwrap();
-    c.insert_json5("scouting/multicast/enabled", "false")
-        .unwrap();
-    c
-}
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn f(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
 }
 
 fn percentile(sorted: &[u32], p: f64) -> u32 {
@@ -63,8 +44,7 @@ async fn soak_spawn_storm_tilts_and_a_stalled_subscriber() {
         .unwrap_or(22)
         .clamp(5, 3600);
     let port = 17530;
-    let mut config = ServerConfig::default();
-    config.zenoh.listen = vec![format!("tcp/127.0.0.1:{port}")];
+    let mut config = daemon_config(port);
     config.limits.max_bodies = 400;
     let daemon_started = Instant::now();
     let server = Server::start(
@@ -79,14 +59,14 @@ async fn soak_spawn_storm_tilts_and_a_stalled_subscriber() {
     let keys = server.keys().clone();
 
     // The stalled subscriber: its own session, a FIFO on everything, never read.
-    let stalled = zenoh::open(client_config(port)).await.unwrap();
+    let stalled = open(port).await;
     let stalled_sub = stalled
         .declare_subscriber(format!("{}/**", keys.prefix()))
         .await
         .unwrap();
 
     // The monitor: stats and events.
-    let monitor = zenoh::open(client_config(port)).await.unwrap();
+    let monitor = open(port).await;
     let last_stats: Arc<Mutex<Option<Stats>>> = Arc::default();
     let ids: Arc<Mutex<Vec<BodyRef>>> = Arc::default();
     let _stats_sub = {
@@ -130,7 +110,7 @@ async fn soak_spawn_storm_tilts_and_a_stalled_subscriber() {
 
     // The storm: a spawn every 10 ms (5x the rate limit), a tilt every 20 ms, a remove of a
     // few known bodies every 100 ms, a reset every 10 s, and garbage now and then.
-    let storm = zenoh::open(client_config(port)).await.unwrap();
+    let storm = open(port).await;
     let stop = Arc::new(AtomicBool::new(false));
     let storm_task = {
         let (keys, ids, stop) = (keys.clone(), ids.clone(), stop.clone());
@@ -146,18 +126,7 @@ async fn soak_spawn_storm_tilts_and_a_stalled_subscriber() {
                 let bodies = (0..k)
                     .map(|_| SpawnBody {
                         name: Some(format!("storm{n}")),
-                        shape: ShapeSpec::Rect {
-                            width: rng.f(0.2, 1.0),
-                            height: rng.f(0.2, 1.0),
-                        },
-                        position: Vector::new(rng.f(-6.0, 6.0), rng.f(5.0, 15.0)),
-                        angle: rng.f(-3.0, 3.0),
-                        velocity: Vector::new(rng.f(-5.0, 5.0), 0.0),
-                        angular_velocity: rng.f(-3.0, 3.0),
-                        density: rng.f(0.5, 5.0),
-                        friction: 0.5,
-                        restitution: 0.2,
-                        colour: Colour::default(),
+                        ..random_brick(&mut rng)
                     })
                     .collect();
                 let _ = storm

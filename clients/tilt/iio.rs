@@ -134,13 +134,7 @@ pub async fn read_iio(dev: IioAccel, rate: f64, tx: Sender<Tilt>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn accel(t: Option<Tilt>) -> (f32, f32, f32) {
-        match t {
-            Some(Tilt::Accelerometer { x, y, z }) => (x, y, z),
-            other => panic!("not a reading: {other:?}"),
-        }
-    }
+    use crate::client::tilt::test_support::accel;
 
     #[test]
     fn iio_devices_are_read_and_absence_is_explained() {

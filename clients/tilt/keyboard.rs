@@ -116,13 +116,10 @@ impl KeyboardTilt {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::client::tilt::test_support::{gravity as g, near as close};
 
     #[test]
     fn arrows_and_orientation_keys_point_gravity_where_expected() {
-        let g = |t: Tilt| t.gravity(STANDARD_GRAVITY);
-        let close = |a: crate::protocol::Vector, x: f32, y: f32| {
-            (a.x - x).abs() < 1e-4 && (a.y - y).abs() < 1e-4
-        };
         let mut k = KeyboardTilt::default();
         assert_eq!(k.tilt(), Tilt::Orientation(Orientation::Portrait));
         for _ in 0..6 {

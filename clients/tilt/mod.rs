@@ -219,3 +219,28 @@ async fn run_until_signal(
         _ = wait_for_signal() => Ok(ExitCode::SUCCESS),
     }
 }
+
+/// What the sources' tests share.
+#[cfg(test)]
+mod test_support {
+    use super::STANDARD_GRAVITY;
+    use crate::protocol::{Tilt, Vector};
+
+    /// The reading a source made, or a panic naming what it made instead.
+    pub(super) fn accel(t: Option<Tilt>) -> (f32, f32, f32) {
+        match t {
+            Some(Tilt::Accelerometer { x, y, z }) => (x, y, z),
+            other => panic!("not a reading: {other:?}"),
+        }
+    }
+
+    /// The gravity the daemon makes of `t` in a scene of standard gravity.
+    pub(super) fn gravity(t: Tilt) -> Vector {
+        t.gravity(STANDARD_GRAVITY)
+    }
+
+    /// `g` is (`x`, `y`) to within 1e-4 m/s^2.
+    pub(super) fn near(g: Vector, x: f32, y: f32) -> bool {
+        (g.x - x).abs() < 1e-4 && (g.y - y).abs() < 1e-4
+    }
+}

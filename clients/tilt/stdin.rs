@@ -193,13 +193,7 @@ pub fn read_stdin(tx: Sender<Tilt>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn accel(t: Option<Tilt>) -> (f32, f32, f32) {
-        match t {
-            Some(Tilt::Accelerometer { x, y, z }) => (x, y, z),
-            other => panic!("not a reading: {other:?}"),
-        }
-    }
+    use crate::client::tilt::test_support::accel;
 
     #[test]
     fn plain_lines_parse() {

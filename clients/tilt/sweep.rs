@@ -35,13 +35,10 @@ pub async fn sweep(deg_per_s: f64, rate_hz: f64, tx: Sender<Tilt>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::client::tilt::test_support::{gravity as g, near as close};
 
     #[test]
     fn the_sweep_turns_gravity_down_left_then_up() {
-        let g = |t: Tilt| t.gravity(STANDARD_GRAVITY);
-        let close = |a: crate::protocol::Vector, x: f32, y: f32| {
-            (a.x - x).abs() < 1e-4 && (a.y - y).abs() < 1e-4
-        };
         assert!(close(g(sweep_reading(0.0)), 0.0, -9.81));
         assert!(close(g(sweep_reading(90.0)), -9.81, 0.0));
         assert!(close(g(sweep_reading(180.0)), 0.0, 9.81));

@@ -485,74 +485,101 @@ impl BodyEntry {
     }
 }
 
-/// Checks shared by the generators.
-fn check_common(
-    at: &str,
+/// The fields both generators have, as written: square boxes of side `size` around `x`, on
+/// y = `base_y`, of one material and colour.
+struct Generated<'a> {
     size: Real,
     x: Real,
     base_y: Real,
     density: Real,
     friction: Real,
     restitution: Real,
-) -> Result<(), SceneError> {
-    check_positive(at, "size", size)?;
-    check_finite(at, "x", x)?;
-    check_finite(at, "base_y", base_y)?;
-    check_positive(at, "density", density)?;
-    check_non_negative(at, "friction", friction)?;
-    check_unit(at, "restitution", restitution)
+    colour: Option<&'a str>,
 }
 
-/// Validate a generated box and add it.
-fn push_box(
-    bodies: &mut Vec<SceneBody>,
-    name: String,
-    def: BodyDef,
-    colour: Colour,
-) -> Result<(), SceneError> {
-    let index = bodies.len();
-    def.validate()
-        .map_err(|e| SceneError::physics(body_label(Some(&name), index), e))?;
-    bodies.push(SceneBody {
-        name,
-        def,
-        colour,
-        is_static: false,
-    });
+impl Generated<'_> {
+    /// Check the numbers (size, x, base_y, density, friction, restitution, in that order),
+    /// naming the generator `at`.
+    fn check(&self, at: &str) -> Result<(), SceneError> {
+        check_positive(at, "size", self.size)?;
+        check_finite(at, "x", self.x)?;
+        check_finite(at, "base_y", self.base_y)?;
+        check_positive(at, "density", self.density)?;
+        check_non_negative(at, "friction", self.friction)?;
+        check_unit(at, "restitution", self.restitution)
+    }
+
+    /// Validate one box at `position` named `name` in `colour`, and add it.
+    fn push(
+        &self,
+        bodies: &mut Vec<SceneBody>,
+        name: String,
+        position: Vec2,
+        colour: Colour,
+    ) -> Result<(), SceneError> {
+        let def = BodyDef::dynamic(Shape::rect(self.size, self.size), position)
+            .with_density(self.density)
+            .with_friction(self.friction)
+            .with_restitution(self.restitution);
+        let index = bodies.len();
+        def.validate()
+            .map_err(|e| SceneError::physics(body_label(Some(&name), index), e))?;
+        bodies.push(SceneBody {
+            name,
+            def,
+            colour,
+            is_static: false,
+        });
+        Ok(())
+    }
+}
+
+/// The [`Generated`] fields of a `[[stack]]` or `[[pyramid]]` entry (the same names in both).
+macro_rules! generated {
+    ($entry:expr) => {
+        Generated {
+            size: $entry.size,
+            x: $entry.x,
+            base_y: $entry.base_y,
+            density: $entry.density,
+            friction: $entry.friction,
+            restitution: $entry.restitution,
+            colour: $entry.colour.as_deref(),
+        }
+    };
+}
+
+/// A generator's count (`count`, `base`) must be at least 1.
+fn at_least_one(at: &str, field: &str, count: u32) -> Result<(), SceneError> {
+    if count == 0 {
+        return Err(SceneError::invalid(
+            at,
+            field,
+            Some("0".into()),
+            "must be >= 1",
+        ));
+    }
     Ok(())
 }
 
 impl StackEntry {
     /// Box i (from 0 at the bottom) is centred at (x, base_y + size/2 + i (size + gap)).
     fn expand(self, at: &str, bodies: &mut Vec<SceneBody>) -> Result<(), SceneError> {
-        if self.count == 0 {
-            return Err(SceneError::invalid(
-                at,
-                "count",
-                Some("0".into()),
-                "must be >= 1",
-            ));
-        }
-        check_common(
-            at,
-            self.size,
-            self.x,
-            self.base_y,
-            self.density,
-            self.friction,
-            self.restitution,
-        )?;
+        at_least_one(at, "count", self.count)?;
+        let boxes = generated!(self);
+        boxes.check(at)?;
         check_non_negative(at, "gap", self.gap)?;
-        let colour = parse_colour(at, self.colour.as_deref())?;
+        let colour = parse_colour(at, boxes.colour)?;
         reserve(bodies, self.count as u64)?;
         let prefix = self.name.as_deref().unwrap_or("stack");
         for i in 0..self.count {
             let y = self.base_y + 0.5 * self.size + i as Real * (self.size + self.gap);
-            let def = BodyDef::dynamic(Shape::rect(self.size, self.size), Vec2::new(self.x, y))
-                .with_density(self.density)
-                .with_friction(self.friction)
-                .with_restitution(self.restitution);
-            push_box(bodies, format!("{prefix}[{i}]"), def, colour)?;
+            boxes.push(
+                bodies,
+                format!("{prefix}[{i}]"),
+                Vec2::new(self.x, y),
+                colour,
+            )?;
         }
         Ok(())
     }
@@ -562,24 +589,10 @@ impl PyramidEntry {
     /// Row r (from 0 at the bottom) has base - r boxes, centred on x, at y = base_y + (r + 1/2) size;
     /// box c of the row is at x - (base - r - 1) size / 2 + c size (Box2D's benchmark layout).
     fn expand(self, at: &str, bodies: &mut Vec<SceneBody>) -> Result<(), SceneError> {
-        if self.base == 0 {
-            return Err(SceneError::invalid(
-                at,
-                "base",
-                Some("0".into()),
-                "must be >= 1",
-            ));
-        }
-        check_common(
-            at,
-            self.size,
-            self.x,
-            self.base_y,
-            self.density,
-            self.friction,
-            self.restitution,
-        )?;
-        let colour = parse_colour(at, self.colour.as_deref())?;
+        at_least_one(at, "base", self.base)?;
+        let boxes = generated!(self);
+        boxes.check(at)?;
+        let colour = parse_colour(at, boxes.colour)?;
         let base = self.base as u64;
         reserve(bodies, base * (base + 1) / 2)?;
         let prefix = self.name.as_deref().unwrap_or("pyramid");
@@ -589,11 +602,7 @@ impl PyramidEntry {
             let x0 = self.x - 0.5 * (count as Real - 1.0) * self.size;
             for col in 0..count {
                 let position = Vec2::new(x0 + col as Real * self.size, y);
-                let def = BodyDef::dynamic(Shape::rect(self.size, self.size), position)
-                    .with_density(self.density)
-                    .with_friction(self.friction)
-                    .with_restitution(self.restitution);
-                push_box(bodies, format!("{prefix}[{row},{col}]"), def, colour)?;
+                boxes.push(bodies, format!("{prefix}[{row},{col}]"), position, colour)?;
             }
         }
         Ok(())

@@ -2,7 +2,7 @@
 //! Zenoh session over TCP loopback, and measure tick lateness, publish-to-receive latency of
 //! snapshots and snapshot sizes.
 
-use super::config::ServerConfig;
+use super::config::{ServerConfig, ZenohSettings};
 use super::net::{Server, ServerOptions, ServiceError};
 use crate::protocol::{decode, Snapshot};
 use std::fmt;
@@ -129,19 +129,14 @@ pub async fn bench_net(config: &ServerConfig, seconds: f64) -> Result<BenchRepor
         .first()
         .cloned()
         .unwrap_or_else(|| "tcp/127.0.0.1:7447".into());
-    let mut client = zenoh::Config::default();
-    let set = |c: &mut zenoh::Config, k: &str, v: &str| {
-        c.insert_json5(k, v)
-            .map_err(|e| ServiceError::Zenoh(format!("client config {k}: {e}")))
-    };
-    set(&mut client, "mode", "\"peer\"")?;
-    set(
-        &mut client,
-        "connect/endpoints",
-        &format!("[\"{endpoint}\"]"),
-    )?;
-    set(&mut client, "listen/endpoints", "[]")?;
-    set(&mut client, "scouting/multicast/enabled", "false")?;
+    // A peer that connects to the daemon and listens on nothing, as the clients are.
+    let client = ZenohSettings {
+        mode: "peer".into(),
+        listen: Vec::new(),
+        connect: vec![endpoint],
+        ..ZenohSettings::default()
+    }
+    .zenoh_config()?;
     let session = zenoh::open(client)
         .await
         .map_err(|e| ServiceError::Zenoh(format!("client session: {e}")))?;

@@ -142,6 +142,52 @@ impl Default for Limits {
     }
 }
 
+impl ZenohSettings {
+    /// The Zenoh configuration these settings describe (the file's when `config_file` is
+    /// set); a value Zenoh refuses is named by its key.
+    pub fn zenoh_config(&self) -> Result<zenoh::Config, ConfigError> {
+        let z = self;
+        if let Some(path) = &z.config_file {
+            return zenoh::Config::from_file(path).map_err(|e| {
+                invalid(
+                    "zenoh.config_file",
+                    path.display(),
+                    format!("not a usable Zenoh config: {e}"),
+                )
+            });
+        }
+        let json_list = |v: &[String]| {
+            let items: Vec<String> = v.iter().map(|s| format!("\"{s}\"")).collect();
+            format!("[{}]", items.join(","))
+        };
+        let mut c = zenoh::Config::default();
+        let set = |c: &mut zenoh::Config, zkey: &str, key: &'static str, value: String| {
+            c.insert_json5(zkey, &value)
+                .map_err(|e| invalid(key, &value, format!("refused by Zenoh: {e}")))
+        };
+        set(&mut c, "mode", "zenoh.mode", format!("\"{}\"", z.mode))?;
+        set(
+            &mut c,
+            "listen/endpoints",
+            "zenoh.listen",
+            json_list(&z.listen),
+        )?;
+        set(
+            &mut c,
+            "connect/endpoints",
+            "zenoh.connect",
+            json_list(&z.connect),
+        )?;
+        set(
+            &mut c,
+            "scouting/multicast/enabled",
+            "zenoh.multicast_scouting",
+            z.multicast_scouting.to_string(),
+        )?;
+        Ok(c)
+    }
+}
+
 impl Default for ZenohSettings {
     fn default() -> Self {
         ZenohSettings {
@@ -371,45 +417,7 @@ impl ServerConfig {
     /// The Zenoh configuration: `zenoh.config_file` as it is, or one built from mode, listen,
     /// connect and multicast scouting.
     pub fn zenoh_config(&self) -> Result<zenoh::Config, ConfigError> {
-        let z = &self.zenoh;
-        if let Some(path) = &z.config_file {
-            return zenoh::Config::from_file(path).map_err(|e| {
-                invalid(
-                    "zenoh.config_file",
-                    path.display(),
-                    format!("not a usable Zenoh config: {e}"),
-                )
-            });
-        }
-        let json_list = |v: &[String]| {
-            let items: Vec<String> = v.iter().map(|s| format!("\"{s}\"")).collect();
-            format!("[{}]", items.join(","))
-        };
-        let mut c = zenoh::Config::default();
-        let set = |c: &mut zenoh::Config, zkey: &str, key: &'static str, value: String| {
-            c.insert_json5(zkey, &value)
-                .map_err(|e| invalid(key, &value, format!("refused by Zenoh: {e}")))
-        };
-        set(&mut c, "mode", "zenoh.mode", format!("\"{}\"", z.mode))?;
-        set(
-            &mut c,
-            "listen/endpoints",
-            "zenoh.listen",
-            json_list(&z.listen),
-        )?;
-        set(
-            &mut c,
-            "connect/endpoints",
-            "zenoh.connect",
-            json_list(&z.connect),
-        )?;
-        set(
-            &mut c,
-            "scouting/multicast/enabled",
-            "zenoh.multicast_scouting",
-            z.multicast_scouting.to_string(),
-        )?;
-        Ok(c)
+        self.zenoh.zenoh_config()
     }
 }
 

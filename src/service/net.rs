@@ -316,23 +316,12 @@ impl Server {
     /// Stop: undeclare the subscribers and the queryable, stop the tick thread after its
     /// current tick, flush events, undeclare the publishers and the token, close the session.
     pub async fn shutdown(self) -> Result<RunSummary, ServiceError> {
-        let Server {
-            session,
-            owns_session,
-            subscribers,
-            queryable,
-            token,
-            stop,
-            tick,
-            publisher_task,
-            query_task,
-            ..
-        } = self;
-        for s in subscribers {
+        for s in self.subscribers {
             let _ = s.undeclare().await;
         }
-        let _ = queryable.undeclare().await;
-        query_task.abort();
+        let _ = self.queryable.undeclare().await;
+        self.query_task.abort();
+        let (session, stop, tick) = (self.session, self.stop, self.tick);
         stop.store(true, std::sync::atomic::Ordering::Relaxed);
         let joined = tokio::task::spawn_blocking(move || tick.join())
             .await
@@ -342,14 +331,14 @@ impl Server {
         let ZenohOutputs { poses, tx, .. } = outputs.inner;
         drop(tx);
         let _ = poses.undeclare().await;
-        if tokio::time::timeout(Duration::from_millis(500), publisher_task)
+        if tokio::time::timeout(Duration::from_millis(500), self.publisher_task)
             .await
             .is_err()
         {
             tracing::warn!("events still queued at shutdown were dropped");
         }
-        let _ = token.undeclare().await;
-        if owns_session {
+        let _ = self.token.undeclare().await;
+        if self.owns_session {
             match tokio::time::timeout(Duration::from_millis(1000), session.close()).await {
                 Ok(Ok(())) => {}
                 Ok(Err(e)) => tracing::warn!("closing the session: {e}"),

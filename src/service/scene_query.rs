@@ -49,14 +49,18 @@ mod tests {
     use super::*;
     use crate::protocol::Vector;
 
+    /// An empty world at `frame`.
     fn state(frame: u64) -> SceneState {
+        let (world, scene) = (String::from("w"), String::from("s"));
+        let time = frame as f64 / 60.0;
+        let (gravity, bodies) = (Vector::new(0.0, -9.81), Vec::new());
         SceneState {
-            world: "w".into(),
-            scene: "s".into(),
             frame,
-            time: 0.0,
-            gravity: Vector::default(),
-            bodies: Vec::new(),
+            time,
+            world,
+            scene,
+            gravity,
+            bodies,
         }
     }
 

@@ -17,7 +17,10 @@
 //! Coefficients are given to both bodies of a pair, so every mixing rule except `Product`
 //! yields the coefficient itself; the expected values use `Settings::*_mixing` to be exact.
 
-use super::{blown_up, integration_step, max_penetration, new_world, steps_for, Measurement, G};
+use super::{
+    blown_up, integration_step, max_penetration, new_world, run_steps, steps_for, Breakdown,
+    Measurement, G,
+};
 use crate::physics::{vec2, BodyDef, BodyId, Real, Settings, Shape, Vec2, World};
 
 /// A closed-form case: its name, a title for humans, and its runner.
@@ -136,16 +139,37 @@ fn finish(
     }
 }
 
-/// Step `world` `n` times with `dt`, calling `each` after every step; stops early (returning
-/// true) if the world blows up beyond `arena` metres.
-fn run(world: &mut World, dt: Real, n: u64, arena: f64, mut each: impl FnMut(&World)) -> bool {
-    for _ in 0..n {
-        if world.step(dt).is_err() || blown_up(world, arena) {
-            return true;
-        }
-        each(world);
-    }
-    false
+/// A body that started at rest and accelerated uniformly at `a` (m/s^2) for `t` s covered
+/// `x` (m): the measurement of `case` with error |x - a t^2/2|, its supporting numbers first,
+/// then `more`.
+#[allow(clippy::too_many_arguments)] // the case's words, its world and its numbers
+fn uniformly_accelerated(
+    case: &'static str,
+    error_meaning: &'static str,
+    world: &World,
+    diverged: bool,
+    x: f64,
+    a: f64,
+    t: f64,
+    more: Vec<(&'static str, f64)>,
+) -> Measurement {
+    let expected = 0.5 * a * t * t;
+    let mut details = vec![
+        ("x (m)", x),
+        ("expected x (m)", expected),
+        ("measured a = 2x/t^2 (m/s^2)", 2.0 * x / (t * t)),
+        ("expected a (m/s^2)", a),
+    ];
+    details.extend(more);
+    finish(
+        case,
+        "m",
+        error_meaning,
+        world,
+        diverged,
+        (x - expected).abs(),
+        details,
+    )
 }
 
 fn pos(world: &World, id: BodyId) -> Vec2 {
@@ -180,7 +204,7 @@ pub fn free_fall(settings: &Settings, dt: Real) -> Measurement {
         .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, y0)))
         .unwrap();
     let n = steps_for(1.0, dt);
-    let diverged = run(&mut w, dt, n, 1e4, |_| {});
+    let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e4), |_, _| {});
     let t = n as f64 * dt as f64;
     let g = G as f64;
     let h = integration_step(settings, dt);
@@ -224,7 +248,7 @@ pub fn slide_to_stop(settings: &Settings, dt: Real) -> Measurement {
     let n = steps_for(t_expected + 1.0, dt);
     let mut stop_time = f64::NAN;
     let mut max_tilt: f64 = 0.0;
-    let diverged = run(&mut w, dt, n, 1e3, |w| {
+    let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e3), |w, _| {
         let b = w.body(id).unwrap();
         max_tilt = max_tilt.max(b.angle().abs() as f64);
         if stop_time.is_nan() && b.linear_velocity().x.abs() < 1e-3 {
@@ -265,7 +289,7 @@ pub fn slope_stick(settings: &Settings, dt: Real) -> Measurement {
         .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)).with_friction(mu))
         .unwrap();
     let n = steps_for(2.0, dt);
-    let diverged = run(&mut w, dt, n, 1e3, |_| {});
+    let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e3), |_, _| {});
     let p = pos(&w, id);
     finish(
         "slope_stick",
@@ -300,24 +324,19 @@ pub fn slope_slide(settings: &Settings, dt: Real) -> Measurement {
         .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)).with_friction(mu))
         .unwrap();
     let n = steps_for(1.0, dt);
-    let diverged = run(&mut w, dt, n, 1e3, |_| {});
+    let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e3), |_, _| {});
     let t = w.time();
     let x = pos(&w, id).x as f64;
-    let expected = 0.5 * a * t * t;
-    finish(
+    let speed = vel(&w, id).x as f64;
+    uniformly_accelerated(
         "slope_slide",
-        "m",
         "|x - a t^2/2| at t = 1 s",
         &w,
         diverged,
-        (x - expected).abs(),
-        vec![
-            ("x (m)", x),
-            ("expected x (m)", expected),
-            ("measured a = 2x/t^2 (m/s^2)", 2.0 * x / (t * t)),
-            ("expected a (m/s^2)", a),
-            ("speed at 1 s (m/s)", vel(&w, id).x as f64),
-        ],
+        x,
+        a,
+        t,
+        vec![("speed at 1 s (m/s)", speed)],
     )
 }
 
@@ -338,7 +357,7 @@ pub fn bounce(settings: &Settings, dt: Real) -> Measurement {
     let mut apex = f64::NAN;
     let mut impact_speed = f64::NAN;
     let mut last_vy = 0.0f64;
-    let diverged = run(&mut w, dt, n, 1e3, |w| {
+    let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e3), |w, _| {
         let b = w.body(id).unwrap();
         let vy = b.linear_velocity().y as f64;
         let bottom = b.position().y as f64 - 0.5;
@@ -409,7 +428,7 @@ pub fn head_on(settings: &Settings, dt: Real) -> Measurement {
         .unwrap();
     // The 3 m gap closes at 6 m/s in 0.5 s.
     let n = steps_for(1.0, dt);
-    let diverged = run(&mut w, dt, n, 1e3, |_| {});
+    let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e3), |_, _| {});
     let (u1, u2) = (vel(&w, a), vel(&w, b));
     let (m1, m2, v1, v2) = (m1 as f64, m2 as f64, v1 as f64, v2 as f64);
     let p0 = m1 * v1 + m2 * v2;
@@ -486,7 +505,7 @@ pub fn resting_stack(settings: &Settings, dt: Real) -> Measurement {
     let p0 = pos(&w, top);
     let n = steps_for(10.0, dt);
     let mut max_drift: f64 = 0.0;
-    let diverged = run(&mut w, dt, n, 1e3, |w| {
+    let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e3), |w, _| {
         max_drift = max_drift.max((pos(w, top).x - p0.x).abs() as f64);
     });
     let p = pos(&w, top);
@@ -516,7 +535,7 @@ fn disc_on_slope(settings: &Settings, dt: Real, mu: Real) -> (World, bool, f64, 
         .add_body(&BodyDef::dynamic(Shape::circle(DISC_R), vec2(0.0, DISC_R)).with_friction(mu))
         .unwrap();
     let n = steps_for(1.0, dt);
-    let diverged = run(&mut w, dt, n, 1e3, |_| {});
+    let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e3), |_, _| {});
     let x = pos(&w, id).x as f64;
     let v = vel(&w, id).x as f64;
     let omega = w.body(id).map_or(f64::NAN, |b| b.angular_velocity() as f64);
@@ -535,19 +554,15 @@ pub fn disc_rolls(settings: &Settings, dt: Real) -> Measurement {
     let theta = (30.0f64).to_radians();
     let a = 2.0 / 3.0 * G as f64 * theta.sin();
     let (w, diverged, x, v, omega, t) = disc_on_slope(settings, dt, 0.5);
-    let expected = 0.5 * a * t * t;
-    finish(
+    uniformly_accelerated(
         "disc_rolls",
-        "m",
         "|x - a t^2/2| at t = 1 s, a = (2/3) g sin theta",
         &w,
         diverged,
-        (x - expected).abs(),
+        x,
+        a,
+        t,
         vec![
-            ("x (m)", x),
-            ("expected x (m)", expected),
-            ("measured a = 2x/t^2 (m/s^2)", 2.0 * x / (t * t)),
-            ("expected a (m/s^2)", a),
             ("slip speed v + omega r (m/s)", v + omega * DISC_R as f64),
             ("speed at 1 s (m/s)", v),
         ],
@@ -564,19 +579,15 @@ pub fn disc_slides(settings: &Settings, dt: Real) -> Measurement {
     let a = G as f64 * (theta.sin() - mu_mixed * theta.cos());
     let alpha = 2.0 * mu_mixed * G as f64 * theta.cos() / DISC_R as f64;
     let (w, diverged, x, v, omega, t) = disc_on_slope(settings, dt, mu);
-    let expected = 0.5 * a * t * t;
-    finish(
+    uniformly_accelerated(
         "disc_slides",
-        "m",
         "|x - a t^2/2| at t = 1 s, a = g (sin theta - mu cos theta)",
         &w,
         diverged,
-        (x - expected).abs(),
+        x,
+        a,
+        t,
         vec![
-            ("x (m)", x),
-            ("expected x (m)", expected),
-            ("measured a = 2x/t^2 (m/s^2)", 2.0 * x / (t * t)),
-            ("expected a (m/s^2)", a),
             ("spin |omega| at 1 s (rad/s)", omega.abs()),
             ("expected spin alpha t (rad/s)", alpha * t),
             ("slip speed v + omega r (m/s)", v + omega * DISC_R as f64),

@@ -54,11 +54,24 @@ pub struct Measurement {
 impl Measurement {
     /// The supporting number called `name`, if present.
     pub fn detail(&self, name: &str) -> Option<f64> {
-        self.details
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|&(_, v)| v)
+        named(&self.details, name)
     }
+}
+
+/// The number called `name` in a list of (name, value).
+fn named(numbers: &[(&'static str, f64)], name: &str) -> Option<f64> {
+    numbers.iter().find(|(n, _)| *n == name).map(|&(_, v)| v)
+}
+
+/// How a stiff or extreme case came out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// The criterion held.
+    Passed,
+    /// The criterion did not hold.
+    Failed,
+    /// Measured for the report, with no criterion.
+    ReportOnly,
 }
 
 /// The outcome of one stiff or extreme case.
@@ -81,30 +94,37 @@ pub struct Verdict {
 impl Verdict {
     /// The measured number called `name`, if present.
     pub fn value(&self, name: &str) -> Option<f64> {
+        named(&self.measured, name)
+    }
+
+    /// Passed, failed, or measured for the report only.
+    pub fn outcome(&self) -> Outcome {
+        match (self.report_only, self.passed) {
+            (true, _) => Outcome::ReportOnly,
+            (false, true) => Outcome::Passed,
+            (false, false) => Outcome::Failed,
+        }
+    }
+
+    /// The measured numbers as `name<between>value` texts ([`fmt_num`]).
+    pub fn measured_texts(&self, between: &str) -> Vec<String> {
         self.measured
             .iter()
-            .find(|(n, _)| *n == name)
-            .map(|&(_, v)| v)
+            .map(|(n, v)| format!("{n}{between}{}", fmt_num(*v)))
+            .collect()
     }
 
     /// One line: case, PASS/FAIL, measured numbers, criterion.
     pub fn summary(&self) -> String {
-        let status = if self.report_only {
-            "REPORT"
-        } else if self.passed {
-            "PASS"
-        } else {
-            "FAIL"
+        let status = match self.outcome() {
+            Outcome::ReportOnly => "REPORT",
+            Outcome::Passed => "PASS",
+            Outcome::Failed => "FAIL",
         };
-        let nums: Vec<String> = self
-            .measured
-            .iter()
-            .map(|(n, v)| format!("{n} = {}", fmt_num(*v)))
-            .collect();
         format!(
             "{}: {status} [{}] (criterion: {})",
             self.case,
-            nums.join(", "),
+            self.measured_texts(" = ").join(", "),
             self.criterion
         )
     }
@@ -194,6 +214,39 @@ pub(crate) fn blown_up(world: &World, arena: f64) -> bool {
             || (b.position().length() as f64) > arena
             || (b.linear_velocity().length() as f64) >= cap
     })
+}
+
+/// What ends a run early: the step after which the world counts as broken.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Breakdown {
+    /// Any body holds a non-finite number.
+    NonFinite,
+    /// [`blown_up`]: non-finite, farther than this many metres from the origin, or at the
+    /// speed cap.
+    BlownUp(f64),
+}
+
+/// Step `world` `n` times by `dt`, calling `each(world, k)` after step `k` (from 0), until a
+/// step fails or the world breaks down as `breakdown` says; true when all `n` steps ran.
+pub(crate) fn run_steps(
+    world: &mut World,
+    dt: Real,
+    n: u64,
+    breakdown: Breakdown,
+    mut each: impl FnMut(&World, u64),
+) -> bool {
+    for k in 0..n {
+        let broken = world.step(dt).is_err()
+            || match breakdown {
+                Breakdown::NonFinite => !world.bodies().all(|b| b.is_finite()),
+                Breakdown::BlownUp(arena) => blown_up(world, arena),
+            };
+        if broken {
+            return false;
+        }
+        each(world, k);
+    }
+    true
 }
 
 /// Deepest overlap among the current contacts (m, >= 0).

@@ -5,7 +5,7 @@
 use super::chart::{chart_file, ERROR_FLOOR};
 use super::Report;
 use crate::measure::accuracy::sweep::{configurations, repeats, step_sizes};
-use crate::measure::accuracy::{config_label, extreme, fmt_num, Measurement, Verdict};
+use crate::measure::accuracy::{config_label, extreme, fmt_num, Measurement, Outcome, Verdict};
 use crate::physics::{Real, Settings};
 use std::fmt::Write as _;
 
@@ -40,19 +40,12 @@ fn hz(dt: Real) -> String {
 }
 
 fn verdict_cell(v: &Verdict) -> String {
-    let status = if v.report_only {
-        "report"
-    } else if v.passed {
-        "**pass**"
-    } else {
-        "**FAIL**"
+    let status = match v.outcome() {
+        Outcome::ReportOnly => "report",
+        Outcome::Passed => "**pass**",
+        Outcome::Failed => "**FAIL**",
     };
-    let nums: Vec<String> = v
-        .measured
-        .iter()
-        .map(|(n, x)| format!("{n}: {}", fmt_num(*x)))
-        .collect();
-    format!("{status}<br>{}", nums.join("<br>"))
+    format!("{status}<br>{}", v.measured_texts(": ").join("<br>"))
 }
 
 /// The document.
@@ -94,25 +87,18 @@ pub fn markdown(r: &Report) -> String {
         Settings::soft_step().max_push_out_speed,
         Settings::soft_step().linear_slop,
     );
-    let soft_pass = r
-        .suite
-        .soft_step
-        .iter()
-        .filter(|v| !v.report_only && v.passed)
-        .count();
-    let seq_pass = r
-        .suite
-        .sequential
-        .iter()
-        .filter(|v| !v.report_only && v.passed)
-        .count();
-    let stiff_pass = r
-        .suite
-        .soft_step_fixed
-        .iter()
-        .filter(|v| !v.report_only && v.passed)
-        .count();
-    let total = r.suite.soft_step.iter().filter(|v| !v.report_only).count();
+    let count = |suite: &[Verdict], outcome: Option<Outcome>| {
+        suite
+            .iter()
+            .filter(|v| v.outcome() != Outcome::ReportOnly)
+            .filter(|v| outcome.map_or(true, |o| v.outcome() == o))
+            .count()
+    };
+    let passed = Some(Outcome::Passed);
+    let soft_pass = count(&r.suite.soft_step, passed);
+    let seq_pass = count(&r.suite.sequential, passed);
+    let stiff_pass = count(&r.suite.soft_step_fixed, passed);
+    let total = count(&r.suite.soft_step, None);
     let _ = writeln!(
         m,
         "Passed: soft step {soft_pass} of {total}, sequential {seq_pass} of {total}, fixed (adaptive off) {stiff_pass} of {total}.\n"

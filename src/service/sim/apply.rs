@@ -145,11 +145,7 @@ impl Simulation {
         Ok(EventKind::Reset {
             scene: self.scene_name.clone(),
             gravity: vector(self.world.gravity()),
-            bodies: self
-                .world
-                .bodies()
-                .map(|b| body_info(b, &self.bodies.meta_of(b)))
-                .collect(),
+            bodies: self.body_infos(),
         })
     }
 }

@@ -24,7 +24,7 @@ pub use state::{SimState, StartError};
 use super::config::{Limits, ServerConfig};
 use super::wire::{body_info, vector};
 use crate::physics::{PhysicsError, Real, World};
-use crate::protocol::{Event, Keys, SceneState, Snapshot};
+use crate::protocol::{BodyInfo, Event, Keys, SceneState, Snapshot};
 use bodies::BodyRegistry;
 use poses::PoseDeltas;
 use std::collections::VecDeque;
@@ -283,11 +283,15 @@ impl Simulation {
             frame: self.frame,
             time: self.time(),
             gravity: vector(self.world.gravity()),
-            bodies: self
-                .world
-                .bodies()
-                .map(|b| body_info(b, &self.bodies.meta_of(b)))
-                .collect(),
+            bodies: self.body_infos(),
         }
+    }
+
+    /// Every body, static ones included, in slot order, as the wire describes it.
+    fn body_infos(&self) -> Vec<BodyInfo> {
+        self.world
+            .bodies()
+            .map(|b| body_info(b, &self.bodies.meta_of(b)))
+            .collect()
     }
 }

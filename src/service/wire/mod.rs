@@ -270,20 +270,14 @@ mod tests {
     }
 
     #[test]
-    fn engine_shapes_go_out_with_the_sizes_they_came_in_with() {
-        for spec in [
-            ShapeSpec::Rect {
-                width: 1.0,
-                height: 0.5,
-            },
-            ShapeSpec::Circle { radius: 0.25 },
-            ShapeSpec::Capsule {
-                length: 2.0,
-                radius: 0.5,
-            },
+    fn engine_shapes_go_out_as_the_shapes_they_came_in_as() {
+        for shape in [
+            Shape::rect(1.0, 0.5),
+            Shape::circle(0.25),
+            Shape::capsule(2.0, 0.5),
         ] {
-            let (shape, _) = spawn::shape_from_spec(&spec).unwrap();
-            assert_eq!(shape_spec(&shape), spec);
+            let (back, offset) = spawn::shape_from_spec(&shape_spec(&shape)).unwrap();
+            assert_eq!((back, offset), (shape, Vec2::ZERO));
         }
     }
 }

@@ -1,0 +1,94 @@
+//! A daemon on a loopback port and Zenoh peers towards it. Every test uses its own port, so
+//! tests in one process never see each other (multicast scouting is off everywhere).
+
+use std::time::{Duration, Instant};
+use tiltbox::protocol::{decode, Keys, Message, SceneState};
+use tiltbox::service::{Server, ServerConfig, ServerOptions};
+use tokio::sync::mpsc::{unbounded_channel, UnboundedReceiver};
+use zenoh::pubsub::Subscriber;
+use zenoh::Session;
+
+/// How long a test waits for anything to arrive.
+pub const WAIT: Duration = Duration::from_secs(5);
+
+/// The default config, listening on `tcp/127.0.0.1:port` only.
+pub fn daemon_config(port: u16) -> ServerConfig {
+    let mut c = ServerConfig::default();
+    c.zenoh.listen = vec![endpoint(port)];
+    c
+}
+
+/// `tcp/127.0.0.1:port`.
+pub fn endpoint(port: u16) -> String {
+    format!("tcp/127.0.0.1:{port}")
+}
+
+/// Start a daemon with `config`.
+pub async fn serve(config: &ServerConfig) -> Server {
+    Server::start(config, ServerOptions::default())
+        .await
+        .expect("daemon starts")
+}
+
+/// The Zenoh config of a test's own session: `mode` (`peer` or `client`) connecting to
+/// `port`, listening on nothing, no scouting.
+pub fn zenoh_config_as(mode: &str, port: u16) -> zenoh::Config {
+    let mut c = zenoh::Config::default();
+    c.insert_json5("mode", &format!("\"{mode}\"")).unwrap();
+    c.insert_json5("connect/endpoints", &format!("[\"{}\"]", endpoint(port)))
+        .unwrap();
+    c.insert_json5("listen/endpoints", "[]").unwrap();
+    c.insert_json5("scouting/multicast/enabled", "false")
+        .unwrap();
+    c
+}
+
+/// [`zenoh_config_as`] in peer mode.
+pub fn zenoh_config(port: u16) -> zenoh::Config {
+    zenoh_config_as("peer", port)
+}
+
+/// A peer session towards the daemon on `port`.
+pub async fn open(port: u16) -> Session {
+    zenoh::open(zenoh_config(port)).await.unwrap()
+}
+
+/// Every message of type `M` put on `key`, decoded, in a channel (undecodable ones dropped).
+pub async fn subscribe<M: Message + Send + 'static>(
+    session: &Session,
+    key: String,
+) -> (UnboundedReceiver<M>, Subscriber<()>) {
+    let (tx, rx) = unbounded_channel();
+    let sub = session
+        .declare_subscriber(key)
+        .callback(move |s| {
+            if let Ok(m) = decode::<M>(&s.payload().to_bytes()) {
+                let _ = tx.send(m);
+            }
+        })
+        .await
+        .unwrap();
+    (rx, sub)
+}
+
+/// The next message from `rx` within [`WAIT`].
+pub async fn next<M>(rx: &mut UnboundedReceiver<M>) -> M {
+    tokio::time::timeout(WAIT, rx.recv())
+        .await
+        .expect("a message in time")
+        .expect("the subscription is open")
+}
+
+/// The `…/scene` reply, asking again until one comes (within [`WAIT`]).
+pub async fn query_scene(session: &Session, keys: &Keys) -> SceneState {
+    let end = Instant::now() + WAIT;
+    loop {
+        assert!(Instant::now() < end, "no scene reply");
+        let replies = session.get(keys.scene()).await.unwrap();
+        if let Ok(Ok(reply)) = tokio::time::timeout(WAIT, replies.recv_async()).await {
+            if let Ok(sample) = reply.into_result() {
+                return decode::<SceneState>(&sample.payload().to_bytes()).unwrap();
+            }
+        }
+    }
+}

@@ -2,6 +2,9 @@
 //! per test (17480, 17481), multicast scouting off; waits are on conditions with deadlines.
 #![cfg(all(feature = "net", feature = "cli"))]
 
+mod common;
+
+use common::net::{daemon_config, endpoint, serve, subscribe, WAIT};
 use std::io::Write;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -11,16 +14,8 @@ use tiltbox::client::tilt::sweep;
 use tiltbox::client::view::query_scene;
 use tiltbox::client::view::world::{Join, Received};
 use tiltbox::protocol::*;
-use tiltbox::service::{Server, ServerConfig, ServerOptions};
+use tiltbox::service::Server;
 use tokio::sync::mpsc;
-
-async fn daemon(port: u16) -> Server {
-    let mut cfg = ServerConfig::default();
-    cfg.zenoh.listen = vec![format!("tcp/127.0.0.1:{port}")];
-    Server::start(&cfg, ServerOptions::default())
-        .await
-        .expect("daemon starts")
-}
 
 fn mean_dynamic(join: &Join) -> (f32, f32) {
     let v = join.view().unwrap();
@@ -32,57 +27,82 @@ fn mean_dynamic(join: &Join) -> (f32, f32) {
     )
 }
 
-/// Subscribe to poses and events into one channel.
-async fn subscribe(
-    s: &zenoh::Session,
-    keys: &Keys,
-) -> (
-    mpsc::UnboundedReceiver<Received>,
-    Vec<zenoh::pubsub::Subscriber<()>>,
-) {
-    let (tx, rx) = mpsc::unbounded_channel();
-    let etx = tx.clone();
-    let poses = s
-        .declare_subscriber(keys.poses())
-        .callback(move |x| {
-            if let Ok(snap) = decode::<Snapshot>(&x.payload().to_bytes()) {
-                let _ = tx.send(Received::Snapshot(snap));
+/// A daemon on `port` and a session of the clients' own towards it, receiving its poses and
+/// events into one channel, once the first snapshot has come.
+struct Setup {
+    server: Server,
+    keys: Keys,
+    session: zenoh::Session,
+    received: mpsc::UnboundedReceiver<Received>,
+    _subs: Vec<zenoh::pubsub::Subscriber<()>>,
+}
+
+impl Setup {
+    async fn start(port: u16) -> Setup {
+        let server = serve(&daemon_config(port)).await;
+        let keys = server.keys().clone();
+        let session = session::open(&[endpoint(port)]).await.unwrap();
+        let (tx, received) = mpsc::unbounded_channel();
+        let etx = tx.clone();
+        let (mut snapshots, poses) = subscribe::<Snapshot>(&session, keys.poses()).await;
+        let (mut events, events_sub) = subscribe::<Event>(&session, keys.events()).await;
+        tokio::spawn(async move {
+            while let Some(s) = snapshots.recv().await {
+                let _ = tx.send(Received::Snapshot(s));
             }
-        })
-        .await
-        .unwrap();
-    let events = s
-        .declare_subscriber(keys.events())
-        .callback(move |x| {
-            if let Ok(e) = decode::<Event>(&x.payload().to_bytes()) {
+        });
+        tokio::spawn(async move {
+            while let Some(e) = events.recv().await {
                 let _ = etx.send(Received::Event(e));
             }
-        })
-        .await
-        .unwrap();
-    (rx, vec![poses, events])
+        });
+        let mut setup = Setup {
+            server,
+            keys,
+            session,
+            received,
+            _subs: vec![poses, events_sub],
+        };
+        tokio::time::timeout(WAIT, setup.received.recv())
+            .await
+            .expect("a first snapshot");
+        setup
+    }
+
+    /// Wait until a snapshot carries gravity `g`, within `within`.
+    async fn gravity_becomes(&mut self, g: Vector, within: Duration) {
+        let end = Instant::now() + within;
+        loop {
+            assert!(Instant::now() < end, "gravity never became {g:?}");
+            let next = tokio::time::timeout(Duration::from_millis(500), self.received.recv());
+            if let Ok(Some(Received::Snapshot(s))) = next.await {
+                if s.gravity == g {
+                    return;
+                }
+            }
+        }
+    }
+
+    async fn stop(self) {
+        let _ = self.session.close().await;
+        self.server.shutdown().await.unwrap();
+    }
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_sweep_turns_gravity_around_and_the_bricks_follow() {
-    let port = 17480;
-    let server = daemon(port).await;
-    let keys = server.keys().clone();
-    let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
-        .await
-        .unwrap();
-    let (mut rx, _subs) = subscribe(&s, &keys).await;
-    // wait for the first snapshot, then join late through the scene query
-    tokio::time::timeout(Duration::from_secs(5), rx.recv())
-        .await
-        .expect("a first snapshot");
+    let mut setup = Setup::start(17480).await;
+    let (s, keys) = (setup.session.clone(), setup.keys.clone());
+    // after the first snapshot, join late through the scene query
     let mut join = Join::new();
     join.scene(query_scene(&s, keys.scene()).await.unwrap());
 
     // let the bricks settle on the floor under the scene's gravity (down)
     let settle = Instant::now() + Duration::from_millis(1500);
     while Instant::now() < settle {
-        if let Ok(Some(r)) = tokio::time::timeout(Duration::from_millis(100), rx.recv()).await {
+        if let Ok(Some(r)) =
+            tokio::time::timeout(Duration::from_millis(100), setup.received.recv()).await
+        {
             join.receive(r);
         }
     }
@@ -107,7 +127,9 @@ async fn the_sweep_turns_gravity_around_and_the_bricks_follow() {
     let mut left_phase_min_x = x0;
     let end = Instant::now() + Duration::from_secs(5);
     while Instant::now() < end && !(turned > 1.2 * PI && max_y > y0 + 1.5) {
-        let Ok(Some(r)) = tokio::time::timeout(Duration::from_millis(500), rx.recv()).await else {
+        let Ok(Some(r)) =
+            tokio::time::timeout(Duration::from_millis(500), setup.received.recv()).await
+        else {
             continue;
         };
         join.receive(r);
@@ -146,26 +168,17 @@ async fn the_sweep_turns_gravity_around_and_the_bricks_follow() {
         "mean x {x0} -> {left_phase_min_x} while gravity pointed left"
     );
     assert!(max_y > y0 + 1.5, "mean y {y0} -> {max_y}");
-    let _ = s.close().await;
-    server.shutdown().await.unwrap();
+    setup.stop().await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn stdin_readings_reach_the_daemon_and_bad_lines_are_reported_by_number() {
     let port = 17481;
-    let server = daemon(port).await;
-    let keys = server.keys().clone();
-    let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
-        .await
-        .unwrap();
-    let (mut rx, _subs) = subscribe(&s, &keys).await;
-    tokio::time::timeout(Duration::from_secs(5), rx.recv())
-        .await
-        .expect("a first snapshot");
+    let mut setup = Setup::start(port).await;
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_tiltbox-tilt"))
         .args(["--stdin", "--log", "info", "--connect"])
-        .arg(format!("tcp/127.0.0.1:{port}"))
+        .arg(endpoint(port))
         .stdin(Stdio::piped())
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
@@ -180,33 +193,17 @@ async fn stdin_readings_reach_the_daemon_and_bad_lines_are_reported_by_number() 
         )
         .unwrap();
     stdin.flush().unwrap();
-    let end = Instant::now() + Duration::from_secs(8);
-    loop {
-        assert!(Instant::now() < end, "gravity never turned right");
-        if let Ok(Some(Received::Snapshot(snap))) =
-            tokio::time::timeout(Duration::from_millis(500), rx.recv()).await
-        {
-            if snap.gravity == Vector::new(9.81, 0.0) {
-                break;
-            }
-        }
-    }
+    setup
+        .gravity_becomes(Vector::new(9.81, 0.0), Duration::from_secs(8))
+        .await;
     // then a plain line, with a wrong one before it (line 11)
     stdin
         .write_all(b"{\"x\": 1, \"y\": 2}\n{\"x\": 0, \"y\": -9.81, \"z\": 0}\n")
         .unwrap();
     stdin.flush().unwrap();
-    let end = Instant::now() + Duration::from_secs(5);
-    loop {
-        assert!(Instant::now() < end, "gravity never turned up");
-        if let Ok(Some(Received::Snapshot(snap))) =
-            tokio::time::timeout(Duration::from_millis(500), rx.recv()).await
-        {
-            if snap.gravity == Vector::new(0.0, 9.81) {
-                break;
-            }
-        }
-    }
+    setup
+        .gravity_becomes(Vector::new(0.0, 9.81), Duration::from_secs(5))
+        .await;
     drop(stdin); // end of input: the source exits
     let out = tokio::task::spawn_blocking(move || child.wait_with_output())
         .await
@@ -221,6 +218,5 @@ async fn stdin_readings_reach_the_daemon_and_bad_lines_are_reported_by_number() 
         !err.contains('\x1b'),
         "no colour codes when stderr is a pipe"
     );
-    let _ = s.close().await;
-    server.shutdown().await.unwrap();
+    setup.stop().await;
 }

@@ -7,7 +7,7 @@ mod common;
 use common::net::{daemon_config as config, query_scene, serve, subscribe, zenoh_config_as, WAIT};
 use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
-use tiltbox::service::{Server, ServerOptions, POSE_EPSILON};
+use tiltbox::service::{Server, ServerConfig, ServerOptions, POSE_EPSILON};
 use tokio::sync::mpsc::UnboundedReceiver;
 use zenoh::pubsub::Subscriber;
 use zenoh::Session;
@@ -25,6 +25,13 @@ impl Client {
     /// Connect, subscribe to poses, events and stats, and wait for the first snapshot.
     async fn connect(port: u16, keys: &Keys) -> Client {
         Client::connect_as("peer", port, keys).await
+    }
+
+    /// A daemon with `config` listening on `port`, and a client connected to it.
+    async fn with_daemon(config: &ServerConfig, port: u16) -> (Server, Client) {
+        let server = serve(config).await;
+        let client = Client::connect(port, server.keys()).await;
+        (server, client)
     }
 
     /// Connect in Zenoh mode `mode` (`peer` or `client`).
@@ -203,9 +210,7 @@ async fn snapshots_arrive_at_60_hz_with_increasing_frames_and_keyframes() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn sideways_gravity_moves_bricks_sideways() {
-    let cfg = config(17462);
-    let server = serve(&cfg).await;
-    let mut c = Client::connect(17462, server.keys()).await;
+    let (server, mut c) = Client::with_daemon(&config(17462), 17462).await;
     let before = c.scene().await;
     c.put(c.keys.gravity(), &SetGravity { x: 15.0, y: 0.0 })
         .await;
@@ -232,9 +237,7 @@ async fn sideways_gravity_moves_bricks_sideways() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn tilting_upside_down_makes_bricks_fall_towards_the_top() {
-    let cfg = config(17463);
-    let server = serve(&cfg).await;
-    let mut c = Client::connect(17463, server.keys()).await;
+    let (server, mut c) = Client::with_daemon(&config(17463), 17463).await;
     let before = c.scene().await;
     let g = before.gravity.y.abs();
     c.put(
@@ -265,9 +268,7 @@ async fn tilting_upside_down_makes_bricks_fall_towards_the_top() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn spawn_shows_up_in_events_scene_and_snapshots_then_remove_and_reset() {
-    let cfg = config(17464);
-    let server = serve(&cfg).await;
-    let mut c = Client::connect(17464, server.keys()).await;
+    let (server, mut c) = Client::with_daemon(&config(17464), 17464).await;
     let initial = c.scene().await;
     c.put(
         c.keys.spawn(),
@@ -337,8 +338,7 @@ async fn bad_input_is_rejected_on_events_while_frames_keep_increasing() {
     cfg.limits.max_bodies_per_spawn = 4;
     cfg.limits.max_spawns_per_second = 2;
     cfg.limits.max_bodies = 20; // Falling Bricks has 10
-    let server = serve(&cfg).await;
-    let mut c = Client::connect(17465, server.keys()).await;
+    let (server, mut c) = Client::with_daemon(&cfg, 17465).await;
     let k = c.keys.clone();
     let start = c.snapshot_where(|_| true).await.frame;
 
@@ -456,8 +456,7 @@ async fn bad_input_is_rejected_on_events_while_frames_keep_increasing() {
 async fn a_full_command_queue_rejects_instead_of_blocking() {
     let mut cfg = config(17466);
     cfg.command_queue = 1;
-    let server = serve(&cfg).await;
-    let mut c = Client::connect(17466, server.keys()).await;
+    let (server, mut c) = Client::with_daemon(&cfg, 17466).await;
     let k = c.keys.clone();
     for i in 0..200 {
         c.put(
@@ -555,8 +554,7 @@ async fn a_scene_file_is_served_and_reloaded_on_reset() {
     std::fs::write(&path, one("first")).unwrap();
     let mut cfg = config(17468);
     cfg.scene = Some(path.clone());
-    let server = serve(&cfg).await;
-    let mut c = Client::connect(17468, server.keys()).await;
+    let (server, mut c) = Client::with_daemon(&cfg, 17468).await;
     assert_eq!(c.scene().await.scene, "first");
     std::fs::write(&path, one("second")).unwrap();
     c.put(c.keys.reset(), &Reset).await;

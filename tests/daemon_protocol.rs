@@ -174,15 +174,10 @@ fn the_documented_command_and_event_examples_are_exact() {
 fn ball_and_triangle() -> (Spawn, Spawn) {
     let body = |name: Option<&str>, shape, position, restitution, colour| SpawnBody {
         name: name.map(Into::into),
-        shape,
-        position,
-        angle: 0.0,
-        velocity: Vector::new(0.0, 0.0),
-        angular_velocity: 0.0,
-        density: 1.0,
         friction: 0.5,
         restitution,
         colour,
+        ..SpawnBody::at(shape, position)
     };
     let ball = body(
         Some("ball"),
@@ -249,18 +244,23 @@ fn hand_derived_shape_examples() -> (Vec<u8>, Vec<u8>) {
         b'b', b'a', b'l', b'l', // "ball" = 62 61 6c 6c
         0x01, // shape: ShapeSpec variant 1 = Circle
     ];
-    for field in [
+    // angle, velocity.x, velocity.y, angular_velocity: both bodies are at rest, not turned
+    const AT_REST: [[u8; 4]; 4] = [ZERO; 4];
+    let shape_and_position = [
         QUARTER, // radius 0.25
         ZERO,    // position.x 0
         THREE,   // position.y 3
-        ZERO,    // angle
-        ZERO,    // velocity.x
-        ZERO,    // velocity.y
-        ZERO,    // angular_velocity
-        ONE,     // density 1
-        HALF,    // friction 0.5
-        HALF,    // restitution 0.5
-    ] {
+    ];
+    let material = [
+        ONE,  // density 1
+        HALF, // friction 0.5
+        HALF, // restitution 0.5
+    ];
+    for field in shape_and_position
+        .into_iter()
+        .chain(AT_REST)
+        .chain(material)
+    {
         ball.extend(field);
     }
     ball.extend([0x3a, 0x7b, 0xd5]); // colour r, g, b (u8 each)
@@ -274,7 +274,7 @@ fn hand_derived_shape_examples() -> (Vec<u8>, Vec<u8>) {
         0x03, // shape: ShapeSpec variant 3 = Polygon
         0x03, // vertices: varint length 3
     ];
-    for field in [
+    let shape_and_position = [
         ZERO,           // vertices[0].x 0
         ZERO,           // vertices[0].y 0
         ONE_AND_HALF,   // vertices[1].x 1.5
@@ -283,14 +283,17 @@ fn hand_derived_shape_examples() -> (Vec<u8>, Vec<u8>) {
         THREE_QUARTERS, // vertices[2].y 0.75
         MINUS_ONE,      // position.x -1
         TWO,            // position.y 2
-        ZERO,           // angle
-        ZERO,           // velocity.x
-        ZERO,           // velocity.y
-        ZERO,           // angular_velocity
-        ONE,            // density 1
-        HALF,           // friction 0.5
-        ZERO,           // restitution 0
-    ] {
+    ];
+    let material = [
+        ONE,  // density 1
+        HALF, // friction 0.5
+        ZERO, // restitution 0
+    ];
+    for field in shape_and_position
+        .into_iter()
+        .chain(AT_REST)
+        .chain(material)
+    {
         triangle.extend(field);
     }
     triangle.extend([0x2e, 0xcc, 0x71]); // colour

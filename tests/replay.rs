@@ -7,18 +7,17 @@
 mod common;
 
 use common::bodies::random_brick as brick;
-use common::net::{daemon_config, open, subscribe};
+use common::net::{daemon_config, open, spawn_loop, subscribe};
 use common::rng::Rng;
 use common::temp_dir;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::mpsc::sync_channel;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
 use tiltbox::service::journal::{replay, Journal, JournalWriter, Record};
 use tiltbox::service::{
-    parse_command, run_loop, Incoming, Outputs, Recording, SceneSource, ServerConfig, Simulation,
-    TickConfig,
+    parse_command, Incoming, Outputs, Recording, SceneSource, ServerConfig, Simulation, TickConfig,
 };
 
 /// Records the hash of every frame as the live loop computed it.
@@ -86,24 +85,12 @@ fn record(path: &std::path::Path, frames: u64, seed: u64) -> Vec<(u64, u64)> {
         checkpoints: None,
     };
     let (tx, rx) = sync_channel::<Incoming>(64);
-    let stop = Arc::new(AtomicBool::new(false));
-    let handle = {
-        let stop = stop.clone();
-        std::thread::spawn(move || {
-            run_loop(
-                sim,
-                rx,
-                out,
-                stop,
-                TickConfig {
-                    dt: Duration::from_millis(2),
-                    max_catch_up: 1000,
-                    command_capacity: 64,
-                    record: false,
-                },
-            )
-        })
+    let cfg = TickConfig {
+        dt: Duration::from_millis(2),
+        max_catch_up: 1000,
+        ..TickConfig::of(&config, false)
     };
+    let (stop, handle) = spawn_loop(sim, rx, out, cfg);
     // Commands arrive at whatever tick the loop is at: the journal is what pins them down.
     let mut rng = Rng(seed);
     let mut ids: Vec<BodyRef> = Vec::new();

@@ -6,6 +6,19 @@
 mod common;
 
 use common::scene::*;
+
+/// The refusal of a polygon body named `name` with `vertices` (TOML, e.g. `[[0, 0], [1, 0]]`).
+fn polygon_refusal(name: &str, vertices: &str) -> String {
+    refusal(
+        name,
+        &format!("{{ type = \"polygon\", vertices = {vertices} }}"),
+    )
+}
+
+/// `message` starts with `start`.
+fn assert_starts(message: &str, start: &str) {
+    assert!(message.starts_with(start), "{message}");
+}
 use tiltbox::physics::{vec2, MassSpec, Shape, World};
 use tiltbox::scene::{Scene, SceneError};
 
@@ -136,9 +149,9 @@ fn clockwise_polygon_names_the_vertex_and_its_value() {
     )))
     .unwrap_err();
     let s = e.to_string();
-    assert!(
-        s.starts_with(r#"body "wedge" (#1): shape.vertices[1] = [0, 1]: turns clockwise"#),
-        "{s}"
+    assert_starts(
+        &s,
+        r#"body "wedge" (#1): shape.vertices[1] = [0, 1]: turns clockwise"#,
     );
     assert!(s.contains("counter-clockwise"), "{s}");
     match e {
@@ -149,29 +162,19 @@ fn clockwise_polygon_names_the_vertex_and_its_value() {
         other => panic!("expected Invalid, got {other:?}"),
     }
     // A dent (a reflex corner) in an otherwise counter-clockwise list.
-    let s = parse_body(&shaped(
-        "dent",
-        "{ type = \"polygon\", vertices = [[0, 0], [2, 0], [1, 0.5], [2, 2], [0, 2]] }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
-    assert!(
-        s.starts_with(r#"body "dent" (#1): shape.vertices[2] = [1, 0.5]: turns clockwise"#),
-        "{s}"
+    let s = polygon_refusal("dent", "[[0, 0], [2, 0], [1, 0.5], [2, 2], [0, 2]]");
+    assert_starts(
+        &s,
+        r#"body "dent" (#1): shape.vertices[2] = [1, 0.5]: turns clockwise"#,
     );
 }
 
 #[test]
 fn polygon_vertex_count_must_be_3_to_8() {
-    let s = parse_body(&shaped(
-        "stick",
-        "{ type = \"polygon\", vertices = [[0, 0], [1, 0]] }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
-    assert!(
-        s.starts_with(r#"body "stick" (#1): shape.vertices: must hold 3 to 8 points, got 2"#),
-        "{s}"
+    let s = polygon_refusal("stick", "[[0, 0], [1, 0]]");
+    assert_starts(
+        &s,
+        r#"body "stick" (#1): shape.vertices: must hold 3 to 8 points, got 2"#,
     );
     let nine: Vec<String> = (0..9)
         .map(|k| {
@@ -179,23 +182,16 @@ fn polygon_vertex_count_must_be_3_to_8() {
             format!("[{}, {}]", a.cos(), a.sin())
         })
         .collect();
-    let s = parse_body(&shaped(
+    let s = refusal(
         "nonagon",
         &format!("{{ type = \"polygon\", vertices = [{}] }}", nine.join(", ")),
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
-    assert!(
-        s.starts_with(r#"body "nonagon" (#1): shape.vertices: must hold 3 to 8 points, got 9"#),
-        "{s}"
+    );
+    assert_starts(
+        &s,
+        r#"body "nonagon" (#1): shape.vertices: must hold 3 to 8 points, got 9"#,
     );
     // A vertex that is not a pair is named with its index.
-    let s = parse_body(&shaped(
-        "odd",
-        "{ type = \"polygon\", vertices = [[0, 0], [1, 0, 2], [0, 1]] }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
+    let s = polygon_refusal("odd", "[[0, 0], [1, 0, 2], [0, 1]]");
     assert_eq!(
         s,
         r#"body "odd" (#1): shape.vertices[1] = [1, 0, 2]: must be a pair [x, y] (metres)"#
@@ -204,22 +200,12 @@ fn polygon_vertex_count_must_be_3_to_8() {
 
 #[test]
 fn nan_vertex_is_refused_naming_the_vertex() {
-    let s = parse_body(&shaped(
-        "bad",
-        "{ type = \"polygon\", vertices = [[0, 0], [1, nan], [0, 1]] }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
+    let s = polygon_refusal("bad", "[[0, 0], [1, nan], [0, 1]]");
     assert_eq!(
         s,
         r#"body "bad" (#1): shape.vertices[1] = [1, NaN]: coordinates must be finite numbers"#
     );
-    let s = parse_body(&shaped(
-        "far",
-        "{ type = \"polygon\", vertices = [[0, 0], [inf, 0], [0, 1]] }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
+    let s = polygon_refusal("far", "[[0, 0], [inf, 0], [0, 1]]");
     assert!(s.contains("shape.vertices[1] = [inf, 0]"), "{s}");
 }
 
@@ -249,82 +235,37 @@ fn polygon_position_and_angle_errors_show_the_value_written() {
 
 #[test]
 fn capsule_no_longer_than_its_ends_is_refused() {
-    let s = parse_body(&shaped(
-        "pill",
-        "{ type = \"capsule\", length = 1, radius = 0.5 }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
-    assert!(
-        s.starts_with(
-            r#"body "pill" (#1): shape.length = 1: must be more than twice shape.radius = 0.5"#
-        ),
-        "{s}"
+    let s = refusal("pill", "{ type = \"capsule\", length = 1, radius = 0.5 }");
+    assert_starts(
+        &s,
+        r#"body "pill" (#1): shape.length = 1: must be more than twice shape.radius = 0.5"#,
     );
-    let s = parse_body(&shaped(
-        "pill",
-        "{ type = \"capsule\", length = 0.4, radius = 0.5 }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
+    let s = refusal("pill", "{ type = \"capsule\", length = 0.4, radius = 0.5 }");
     assert!(s.contains("shape.length = 0.4"), "{s}");
-    let s = parse_body(&shaped(
-        "pill",
-        "{ type = \"capsule\", length = -2, radius = 0.5 }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
+    let s = refusal("pill", "{ type = \"capsule\", length = -2, radius = 0.5 }");
     assert_eq!(s, r#"body "pill" (#1): shape.length = -2: must be > 0"#);
     // The fields are the capsule's own: a rect's width is unknown there.
-    let s = parse_body(&shaped(
-        "pill",
-        "{ type = \"capsule\", width = 2, radius = 0.5 }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
+    let s = refusal("pill", "{ type = \"capsule\", width = 2, radius = 0.5 }");
     assert!(s.contains("width") && s.contains("length"), "{s}");
 }
 
 #[test]
 fn negative_or_nan_radius_is_refused() {
-    let s = parse_body(&shaped(
-        "ball",
-        "{ type = \"circle\", radius = -0.5 }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
+    let s = refusal("ball", "{ type = \"circle\", radius = -0.5 }");
     assert_eq!(s, r#"body "ball" (#1): shape.radius = -0.5: must be > 0"#);
-    let s = parse_body(&shaped(
-        "ball",
-        "{ type = \"circle\", radius = nan }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
+    let s = refusal("ball", "{ type = \"circle\", radius = nan }");
     assert_eq!(
         s,
         r#"body "ball" (#1): shape.radius = NaN: must be a finite number"#
     );
-    let s = parse_body(&shaped(
-        "pill",
-        "{ type = \"capsule\", length = 2, radius = -0.1 }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
+    let s = refusal("pill", "{ type = \"capsule\", length = 2, radius = -0.1 }");
     assert_eq!(s, r#"body "pill" (#1): shape.radius = -0.1: must be > 0"#);
 }
 
 #[test]
 fn unknown_shape_type_lists_the_known_ones() {
-    let s = parse_body(&shaped(
-        "blob",
-        "{ type = \"ellipse\", radius = 1 }",
-        "position = [0, 1]\ndensity = 1",
-    ))
-    .unwrap_err();
-    assert!(
-        s.starts_with(r#"body "blob" (#1) at line 10: shape"#),
-        "{s}"
-    );
+    let s = refusal("blob", "{ type = \"ellipse\", radius = 1 }");
+    assert_starts(&s, r#"body "blob" (#1) at line 10: shape"#);
     for kind in ["rect", "circle", "capsule", "polygon"] {
         assert!(s.contains(kind), "{s}");
     }

@@ -59,14 +59,7 @@ fn falling_bricks_start_inside_the_box_and_apart() {
             body.name
         );
     }
-    // The first step's contacts are found at the initial poses: none may overlap
-    // (contacts are speculative, so touching-soon pairs appear with separation > 0).
-    world.step(1.0 / 60.0).unwrap();
-    for c in world.contacts() {
-        for p in &c.points[..c.count] {
-            assert!(p.separation > 0.0, "bodies overlap at the start: {c:?}");
-        }
-    }
+    assert_no_overlap_after_one_step(&mut world);
 }
 
 #[test]
@@ -255,12 +248,7 @@ fn shapes_is_a_box_holding_a_varied_pile() {
             body.name
         );
     }
-    world.step(1.0 / 60.0).unwrap();
-    for c in world.contacts() {
-        for p in &c.points[..c.count] {
-            assert!(p.separation > 0.0, "bodies overlap at the start: {c:?}");
-        }
-    }
+    assert_no_overlap_after_one_step(&mut world);
 }
 
 /// What a run of shapes.toml measured.
@@ -437,4 +425,15 @@ fn the_example_in_the_scene_module_docs_loads() {
         vec2(2.0 + 1.0 / 3.0, 3.0 + 1.0 / 3.0)
     ));
     scene.build_world().unwrap();
+}
+
+/// The first step's contacts are found at the initial poses: none may overlap (contacts are
+/// speculative, so touching-soon pairs appear with separation > 0).
+fn assert_no_overlap_after_one_step(world: &mut World) {
+    world.step(1.0 / 60.0).unwrap();
+    for c in world.contacts() {
+        for p in &c.points[..c.count] {
+            assert!(p.separation > 0.0, "bodies overlap at the start: {c:?}");
+        }
+    }
 }

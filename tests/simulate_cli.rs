@@ -17,6 +17,15 @@ fn tiltbox(args: &[&str]) -> Output {
 
 const BRICKS: &str = "config/scenes/falling_bricks.toml";
 
+/// `tiltbox simulate` on Falling Bricks with `flags` (separated by spaces).
+fn simulate_bricks(flags: &str) -> Output {
+    let args: Vec<&str> = ["simulate", BRICKS]
+        .into_iter()
+        .chain(flags.split_whitespace())
+        .collect();
+    tiltbox(&args)
+}
+
 /// A scene file in the temp dir, removed on drop; unique per test and process.
 struct TempScene(PathBuf);
 
@@ -56,16 +65,7 @@ fn assert_refused(o: &Output, needles: &[&str]) {
 
 #[test]
 fn jsonl_prints_every_30th_frame_of_the_six_bricks() {
-    let o = tiltbox(&[
-        "simulate",
-        BRICKS,
-        "--format",
-        "jsonl",
-        "--seconds",
-        "1",
-        "--every",
-        "30",
-    ]);
+    let o = simulate_bricks("--format jsonl --seconds 1 --every 30");
     assert!(o.status.success(), "stderr: {}", stderr(&o));
     let text = String::from_utf8(o.stdout).unwrap();
     let frames: Vec<Value> = text
@@ -138,18 +138,9 @@ fn table_format_is_aligned_and_names_the_bodies() {
 #[test]
 fn solver_flag_changes_the_run() {
     let run = |solver: &str| {
-        let o = tiltbox(&[
-            "simulate",
-            BRICKS,
-            "--format",
-            "jsonl",
-            "--seconds",
-            "1",
-            "--every",
-            "60",
-            "--solver",
-            solver,
-        ]);
+        let o = simulate_bricks(&format!(
+            "--format jsonl --seconds 1 --every 60 --solver {solver}"
+        ));
         assert!(o.status.success(), "stderr: {}", stderr(&o));
         String::from_utf8(o.stdout).unwrap()
     };
@@ -195,39 +186,23 @@ fn closed_pipe_is_a_normal_end() {
 
 #[test]
 fn bad_flags_name_the_flag_and_value() {
-    assert_refused(
-        &tiltbox(&["simulate", BRICKS, "--dt", "-1"]),
-        &["--dt", "-1"],
-    );
-    assert_refused(&tiltbox(&["simulate", BRICKS, "--dt", "0"]), &["--dt", "0"]);
-    assert_refused(
-        &tiltbox(&["simulate", BRICKS, "--dt", "nan"]),
-        &["--dt", "NaN"],
-    );
-    assert_refused(
-        &tiltbox(&["simulate", BRICKS, "--every", "0"]),
-        &["--every", "0"],
-    );
-    assert_refused(
-        &tiltbox(&["simulate", BRICKS, "--seconds", "-2"]),
-        &["--seconds", "-2"],
-    );
-    assert_refused(
-        &tiltbox(&["simulate", BRICKS, "--seconds", "inf"]),
-        &["--seconds", "inf"],
-    );
+    // (flag, value given, how the refusal shows the value)
+    for (flag, value, shown) in [
+        ("--dt", "-1", "-1"),
+        ("--dt", "0", "0"),
+        ("--dt", "nan", "NaN"),
+        ("--every", "0", "0"),
+        ("--seconds", "-2", "-2"),
+        ("--seconds", "inf", "inf"),
+        ("--format", "xml", "xml"),
+        ("--solver", "magic", "magic"),
+    ] {
+        assert_refused(&tiltbox(&["simulate", BRICKS, flag, value]), &[flag, shown]);
+    }
     // 1e9 s at 60 Hz would run for days: refused before any step.
     assert_refused(
         &tiltbox(&["simulate", BRICKS, "--seconds", "1e9"]),
         &["--seconds", "1000000000", "steps"],
-    );
-    assert_refused(
-        &tiltbox(&["simulate", BRICKS, "--format", "xml"]),
-        &["--format", "xml"],
-    );
-    assert_refused(
-        &tiltbox(&["simulate", BRICKS, "--solver", "magic"]),
-        &["--solver", "magic"],
     );
 }
 

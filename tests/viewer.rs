@@ -2,6 +2,9 @@
 //! against an in-process daemon (real Zenoh over TCP loopback, port 17482, scouting off).
 #![cfg(all(feature = "net", feature = "cli", feature = "tui"))]
 
+mod common;
+
+use common::net::{daemon_config, endpoint, next, open, serve, subscribe};
 use ratatui::backend::TestBackend;
 use ratatui::layout::Size;
 use ratatui::style::Color;
@@ -14,7 +17,6 @@ use tiltbox::client::view::plain::parse_line;
 use tiltbox::client::view::render::{render, Status, Viewport};
 use tiltbox::client::view::world::WorldView;
 use tiltbox::protocol::*;
-use tiltbox::service::{Server, ServerConfig, ServerOptions};
 
 const WALL: Colour = Colour {
     r: 90,
@@ -234,30 +236,16 @@ fn waiting_for_server_is_shown_while_none_is_alive() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn plain_output_parses_back_to_the_poses_published() {
     let port = 17482;
-    let mut cfg = ServerConfig::default();
-    cfg.zenoh.listen = vec![format!("tcp/127.0.0.1:{port}")];
-    let server = Server::start(&cfg, ServerOptions::default()).await.unwrap();
+    let server = serve(&daemon_config(port)).await;
     let keys = server.keys().clone();
     // our own record of what was published
-    let session = tiltbox::client::session::open(&[format!("tcp/127.0.0.1:{port}")])
-        .await
-        .unwrap();
-    let (tx, rx) = std::sync::mpsc::channel::<Snapshot>();
-    let _sub = session
-        .declare_subscriber(keys.poses())
-        .callback(move |s| {
-            if let Ok(s) = decode::<Snapshot>(&s.payload().to_bytes()) {
-                let _ = tx.send(s);
-            }
-        })
-        .await
-        .unwrap();
-    rx.recv_timeout(Duration::from_secs(5))
-        .expect("a first snapshot");
+    let session = open(port).await;
+    let (mut snapshots, _sub) = subscribe::<Snapshot>(&session, keys.poses()).await;
+    next(&mut snapshots).await;
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_tiltbox-view"))
         .args(["--plain", "--count", "40", "--connect"])
-        .arg(format!("tcp/127.0.0.1:{port}"))
+        .arg(endpoint(port))
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
@@ -285,7 +273,9 @@ async fn plain_output_parses_back_to_the_poses_published() {
             Instant::now() < end,
             "our subscriber saw frame {last_frame}"
         );
-        if let Ok(s) = rx.recv_timeout(Duration::from_millis(200)) {
+        if let Ok(Some(s)) =
+            tokio::time::timeout(Duration::from_millis(200), snapshots.recv()).await
+        {
             published.insert(s.frame, s);
         }
     }
@@ -323,6 +313,11 @@ fn shaped(index: u32, colour: Colour, pos: (f32, f32), angle: f32, shape: ShapeS
     b.shape = shape;
     b.angle = angle;
     b
+}
+
+/// The walls and one green body of `shape` at `pos`, not turned.
+fn walled_one(pos: (f32, f32), shape: ShapeSpec) -> WorldView {
+    walled(vec![shaped(4, GREEN, pos, 0.0, shape)])
 }
 
 /// The walls of [`scene`] (inner corners (0, 0) and (20, 10)) and `bodies`.
@@ -477,13 +472,7 @@ fn a_circle_is_a_disc_where_a_square_of_its_width_fills_its_corners() {
 fn a_circles_rotation_mark_turns_with_it() {
     // off the dot grid's half-way lines, so that "the nearest dot" is never a tie
     let c = (10.3, 5.2);
-    let mut view = walled(vec![shaped(
-        4,
-        GREEN,
-        c,
-        0.0,
-        ShapeSpec::Circle { radius: 2.0 },
-    )]);
+    let mut view = walled_one(c, ShapeSpec::Circle { radius: 2.0 });
     // local +x is marked: an unlit radius from a little out of the centre to the rim
     let marked = |f: &Frame, angle: f32| -> Vec<bool> {
         [0.0f32, 1.0, 2.0, 3.0]
@@ -559,19 +548,12 @@ fn a_capsule_is_a_stadium_along_its_axis() {
 fn a_triangle_fills_its_half_of_its_bounding_box() {
     // legs of 4.5 m; vertices centred on the centroid, counter-clockwise
     let c = (6.0, 5.0);
-    let mut view = walled(vec![shaped(
-        4,
-        GREEN,
-        c,
-        0.0,
-        ShapeSpec::Polygon {
-            vertices: vec![
-                Vector::new(-1.5, -1.5),
-                Vector::new(3.0, -1.5),
-                Vector::new(-1.5, 3.0),
-            ],
-        },
-    )]);
+    let triangle = vec![
+        Vector::new(-1.5, -1.5),
+        Vector::new(3.0, -1.5),
+        Vector::new(-1.5, 3.0),
+    ];
+    let mut view = walled_one(c, ShapeSpec::Polygon { vertices: triangle });
     let f = Frame::of(&view);
     let p = |f: &Frame, dx: f32, dy: f32| f.lit(c.0 + dx, c.1 + dy);
     for (dx, dy) in [

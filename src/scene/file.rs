@@ -6,7 +6,8 @@
 //! in document order, with its name, index and line at hand for the message.
 
 use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
-use crate::physics::{BodyDef, MassSpec, Polygon, Real, Settings, Shape, Vec2};
+use crate::physics::error::{finite, non_negative, positive, unit_interval};
+use crate::physics::{BodyDef, MassSpec, PhysicsError, Polygon, Real, Settings, Shape, Vec2};
 use serde::Deserialize;
 use toml::{Spanned, Table};
 
@@ -232,8 +233,8 @@ pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
     })?;
 
     let gravity = Vec2::new(file.gravity[0], file.gravity[1]);
-    check_finite("scene", "gravity.x", gravity.x)?;
-    check_finite("scene", "gravity.y", gravity.y)?;
+    check("scene", finite("gravity.x", gravity.x))?;
+    check("scene", finite("gravity.y", gravity.y))?;
     file.settings
         .validate()
         .map_err(|e| SceneError::physics("[settings]", e))?;
@@ -323,59 +324,11 @@ fn reserve(bodies: &[SceneBody], more: u64) -> Result<(), SceneError> {
     Ok(())
 }
 
-fn check_finite(at: &str, field: &str, v: Real) -> Result<(), SceneError> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
-            at,
-            field,
-            Some(v.to_string()),
-            "must be a finite number",
-        ))
-    }
-}
-
-fn check_positive(at: &str, field: &str, v: Real) -> Result<(), SceneError> {
-    check_finite(at, field, v)?;
-    if v > 0.0 {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
-            at,
-            field,
-            Some(v.to_string()),
-            "must be > 0",
-        ))
-    }
-}
-
-fn check_non_negative(at: &str, field: &str, v: Real) -> Result<(), SceneError> {
-    check_finite(at, field, v)?;
-    if v >= 0.0 {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
-            at,
-            field,
-            Some(v.to_string()),
-            "must be >= 0",
-        ))
-    }
-}
-
-fn check_unit(at: &str, field: &str, v: Real) -> Result<(), SceneError> {
-    check_finite(at, field, v)?;
-    if (0.0..=1.0).contains(&v) {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
-            at,
-            field,
-            Some(v.to_string()),
-            "must be within [0, 1]",
-        ))
-    }
+/// The engine's check of a number from the file (`finite`, `positive`, `non_negative` or
+/// `unit_interval` of `physics::error`), its refusal said about `at`: the messages are the
+/// ones the engine gives for the same field and value.
+fn check(at: &str, checked: Result<Real, PhysicsError>) -> Result<(), SceneError> {
+    checked.map(|_| ()).map_err(|e| SceneError::physics(at, e))
 }
 
 /// Parse an optional `"#rrggbb"`, defaulting to [`Colour::GREY`].
@@ -501,12 +454,12 @@ impl Generated<'_> {
     /// Check the numbers (size, x, base_y, density, friction, restitution, in that order),
     /// naming the generator `at`.
     fn check(&self, at: &str) -> Result<(), SceneError> {
-        check_positive(at, "size", self.size)?;
-        check_finite(at, "x", self.x)?;
-        check_finite(at, "base_y", self.base_y)?;
-        check_positive(at, "density", self.density)?;
-        check_non_negative(at, "friction", self.friction)?;
-        check_unit(at, "restitution", self.restitution)
+        check(at, positive("size", self.size))?;
+        check(at, finite("x", self.x))?;
+        check(at, finite("base_y", self.base_y))?;
+        check(at, positive("density", self.density))?;
+        check(at, non_negative("friction", self.friction))?;
+        check(at, unit_interval("restitution", self.restitution))
     }
 
     /// Validate one box at `position` named `name` in `colour`, and add it.
@@ -568,7 +521,7 @@ impl StackEntry {
         at_least_one(at, "count", self.count)?;
         let boxes = generated!(self);
         boxes.check(at)?;
-        check_non_negative(at, "gap", self.gap)?;
+        check(at, non_negative("gap", self.gap))?;
         let colour = parse_colour(at, boxes.colour)?;
         reserve(bodies, self.count as u64)?;
         let prefix = self.name.as_deref().unwrap_or("stack");

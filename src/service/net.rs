@@ -274,12 +274,7 @@ impl Server {
             journal,
             checkpoints,
         };
-        let tick_cfg = TickConfig {
-            dt: Duration::from_secs_f64(config.dt()),
-            max_catch_up: config.max_catch_up,
-            command_capacity: capacity,
-            record: options.record,
-        };
+        let tick_cfg = TickConfig::of(config, options.record);
         let tick = {
             let stop = stop.clone();
             std::thread::Builder::new()

@@ -4,6 +4,7 @@
 
 use super::checkpoint::Checkpointer;
 use super::command::{DroppedCounts, Incoming};
+use super::config::ServerConfig;
 use super::journal::JournalWriter;
 use super::scene_query::SceneQueries;
 use super::sim::Simulation;
@@ -60,27 +61,19 @@ impl<O: Outputs> Outputs for Recording<O> {
     }
     fn command(&mut self, frame: u64, incoming: &Incoming) {
         self.inner.command(frame, incoming);
-        if let Some(j) = self.journal.as_mut() {
-            j.command(frame, incoming);
-        }
+        self.journal
+            .iter_mut()
+            .for_each(|j| j.command(frame, incoming));
     }
     fn stepped(&mut self, sim: &Simulation) {
         self.inner.stepped(sim);
-        if let Some(j) = self.journal.as_mut() {
-            j.stepped(sim);
-        }
-        if let Some(c) = self.checkpoints.as_mut() {
-            c.stepped(sim);
-        }
+        self.journal.iter_mut().for_each(|j| j.stepped(sim));
+        self.checkpoints.iter_mut().for_each(|c| c.stepped(sim));
     }
     fn finished(&mut self, sim: &Simulation) {
         self.inner.finished(sim);
-        if let Some(j) = self.journal.as_mut() {
-            j.finish(sim);
-        }
-        if let Some(c) = self.checkpoints.as_mut() {
-            c.finish(sim);
-        }
+        self.journal.iter_mut().for_each(|j| j.finish(sim));
+        self.checkpoints.iter_mut().for_each(|c| c.finish(sim));
     }
 }
 
@@ -104,6 +97,18 @@ pub struct TickConfig {
     pub command_capacity: u32,
     /// Keep every tick's lateness and step time in the [`RunSummary`] (benchmarks).
     pub record: bool,
+}
+
+impl TickConfig {
+    /// The loop a daemon with `config` runs; `record` keeps every tick's timings.
+    pub fn of(config: &ServerConfig, record: bool) -> TickConfig {
+        TickConfig {
+            dt: Duration::from_secs_f64(config.dt()),
+            max_catch_up: config.max_catch_up,
+            command_capacity: config.command_queue,
+            record,
+        }
+    }
 }
 
 /// What the loop did, returned when it stops.
@@ -272,88 +277,5 @@ fn publish_event<O: Outputs>(out: &mut O, ev: &Event) {
     match encode(ev) {
         Ok(p) => out.event(p),
         Err(e) => tracing::error!("cannot encode event: {e}"),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::protocol::{decode, Snapshot};
-    use crate::service::config::ServerConfig;
-    use crate::service::sim::SceneSource;
-    use std::sync::mpsc::sync_channel;
-    use std::sync::Mutex;
-
-    /// Collects snapshots; stalls the loop once, on `stall_at`.
-    struct Fake {
-        frames: Arc<Mutex<Vec<u64>>>,
-        stall_at: u64,
-    }
-
-    impl Outputs for Fake {
-        fn poses(&mut self, frame: u64, payload: Vec<u8>) {
-            let s: Snapshot = decode(&payload).unwrap();
-            assert_eq!(s.frame, frame);
-            self.frames.lock().unwrap().push(frame);
-            if frame == self.stall_at {
-                std::thread::sleep(Duration::from_millis(150));
-            }
-        }
-        fn event(&mut self, _: Vec<u8>) {}
-        fn stats(&mut self, _: Vec<u8>) {}
-    }
-
-    #[test]
-    fn the_loop_keeps_time_catches_up_a_little_and_drops_the_rest() {
-        let config = ServerConfig {
-            tick_hz: 100.0,
-            max_catch_up: 3,
-            ..Default::default()
-        };
-        let sim = Simulation::new(&config, SceneSource::Embedded).unwrap();
-        let (_tx, rx) = sync_channel(4);
-        let frames = Arc::new(Mutex::new(Vec::new()));
-        let stop = Arc::new(AtomicBool::new(false));
-        let out = Fake {
-            frames: frames.clone(),
-            stall_at: 10,
-        };
-        let handle = {
-            let stop = stop.clone();
-            std::thread::spawn(move || {
-                run(
-                    sim,
-                    rx,
-                    out,
-                    stop,
-                    TickConfig {
-                        dt: Duration::from_millis(10),
-                        max_catch_up: 3,
-                        command_capacity: 4,
-                        record: true,
-                    },
-                )
-            })
-        };
-        let t0 = Instant::now();
-        while frames.lock().unwrap().len() < 40 {
-            assert!(t0.elapsed() < Duration::from_secs(5), "loop too slow");
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        let elapsed = t0.elapsed();
-        stop.store(true, Ordering::Relaxed);
-        let (_, summary) = handle.join().unwrap();
-        let frames = frames.lock().unwrap().clone();
-        // consecutive frames, no gaps: dropped time is not a dropped frame number
-        assert!(frames.windows(2).all(|w| w[1] == w[0] + 1), "{frames:?}");
-        // the 150 ms stall is 15 ticks: 3 are caught up, about 11 are dropped
-        assert!(
-            (9..=13).contains(&summary.steps_dropped),
-            "dropped {}",
-            summary.steps_dropped
-        );
-        // 40 frames at 100 Hz plus the dropped 110 ms: about 0.5 s, not 0.4 s
-        assert!(elapsed > Duration::from_millis(400), "{elapsed:?}");
-        assert_eq!(summary.lateness_us.len() as u64, summary.frames);
     }
 }

@@ -1,9 +1,16 @@
 //! A daemon on a loopback port and Zenoh peers towards it. Every test uses its own port, so
 //! tests in one process never see each other (multicast scouting is off everywhere).
 
+use std::sync::atomic::AtomicBool;
+use std::sync::mpsc::Receiver;
+use std::sync::Arc;
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use tiltbox::protocol::{decode, Keys, Message, SceneState};
-use tiltbox::service::{Server, ServerConfig, ServerOptions};
+use tiltbox::service::{
+    run_loop, Incoming, Outputs, RunSummary, Server, ServerConfig, ServerOptions, Simulation,
+    TickConfig,
+};
 use tokio::sync::mpsc::{unbounded_channel, UnboundedReceiver};
 use zenoh::pubsub::Subscriber;
 use zenoh::Session;
@@ -91,4 +98,20 @@ pub async fn query_scene(session: &Session, keys: &Keys) -> SceneState {
             }
         }
     }
+}
+
+/// The daemon's tick loop, without Zenoh, on a thread of its own: commands from `rx`, every
+/// output to `out`. Set the flag to stop it; joining returns the outputs and the summary.
+pub fn spawn_loop<O: Outputs>(
+    sim: Simulation,
+    rx: Receiver<Incoming>,
+    out: O,
+    cfg: TickConfig,
+) -> (Arc<AtomicBool>, JoinHandle<(O, RunSummary)>) {
+    let stop = Arc::new(AtomicBool::new(false));
+    let handle = {
+        let stop = stop.clone();
+        std::thread::spawn(move || run_loop(sim, rx, out, stop, cfg))
+    };
+    (stop, handle)
 }

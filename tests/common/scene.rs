@@ -61,3 +61,9 @@ pub fn parse_body(body: &str) -> Result<SceneBody, String> {
         .map(|mut s| s.bodies.remove(1))
         .map_err(|e| e.to_string())
 }
+
+/// The message refusing a body named `name` of the inline table `shape`, at (0, 1) with
+/// density 1: what is wrong is the shape.
+pub fn refusal(name: &str, shape: &str) -> String {
+    parse_body(&shaped(name, shape, "position = [0, 1]\ndensity = 1")).unwrap_err()
+}

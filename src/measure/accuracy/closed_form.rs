@@ -278,18 +278,31 @@ fn tilted(theta: Real) -> Vec2 {
     vec2(G * theta.sin(), -G * theta.cos())
 }
 
-/// A box resting on a 20 deg "slope" (tilted gravity), mu = 0.6 > tan 20 deg = 0.364, for 2 s.
-/// Error: drift along the slope (m); expected 0.
-pub fn slope_stick(settings: &Settings, dt: Real) -> Measurement {
-    let theta = (20.0 as Real).to_radians();
-    let mu = 0.6;
+/// A 1 m box of friction `mu` at rest on a floor of friction `mu`, gravity tilted by `theta`
+/// (rad), run `seconds`: the world, the box, and whether the run diverged.
+fn box_on_slope(
+    settings: &Settings,
+    dt: Real,
+    theta: Real,
+    mu: Real,
+    seconds: f64,
+) -> (World, BodyId, bool) {
     let mut w = new_world(settings, tilted(theta));
     floor(&mut w, mu, 0.0);
     let id = w
         .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)).with_friction(mu))
         .unwrap();
-    let n = steps_for(2.0, dt);
+    let n = steps_for(seconds, dt);
     let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e3), |_, _| {});
+    (w, id, diverged)
+}
+
+/// A box resting on a 20 deg "slope" (tilted gravity), mu = 0.6 > tan 20 deg = 0.364, for 2 s.
+/// Error: drift along the slope (m); expected 0.
+pub fn slope_stick(settings: &Settings, dt: Real) -> Measurement {
+    let theta = (20.0 as Real).to_radians();
+    let mu = 0.6;
+    let (w, id, diverged) = box_on_slope(settings, dt, theta, mu, 2.0);
     let p = pos(&w, id);
     finish(
         "slope_stick",
@@ -318,13 +331,7 @@ pub fn slope_slide(settings: &Settings, dt: Real) -> Measurement {
     let mu_mixed = settings.friction_mixing.mix(mu, mu) as f64;
     let (s, c) = ((theta as f64).sin(), (theta as f64).cos());
     let a = G as f64 * (s - mu_mixed * c);
-    let mut w = new_world(settings, tilted(theta));
-    floor(&mut w, mu, 0.0);
-    let id = w
-        .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)).with_friction(mu))
-        .unwrap();
-    let n = steps_for(1.0, dt);
-    let diverged = !run_steps(&mut w, dt, n, Breakdown::BlownUp(1e3), |_, _| {});
+    let (w, id, diverged) = box_on_slope(settings, dt, theta, mu, 1.0);
     let t = w.time();
     let x = pos(&w, id).x as f64;
     let speed = vel(&w, id).x as f64;

@@ -12,6 +12,11 @@ fn at(x: Real, y: Real, angle: Real) -> Transform {
     }
 }
 
+/// Two unit boxes at `a` and `b`, no speculative margin.
+fn boxes(a: Transform, b: Transform) -> Manifold {
+    collide(&unit(), a, &unit(), b, 0.0)
+}
+
 fn unit() -> Shape {
     Shape::rect(1.0, 1.0)
 }
@@ -30,7 +35,7 @@ fn close(a: Vec2, b: Vec2) -> bool {
 fn separated_boxes_have_no_contact_unless_within_the_margin() {
     // Gap of 0.5 m between the right face of A (x = 0.5) and the left face of B (x = 1.0).
     let (a, b) = (at(0.0, 0.0, 0.0), at(1.5, 0.0, 0.0));
-    assert_eq!(collide(&unit(), a, &unit(), b, 0.0).count, 0);
+    assert_eq!(boxes(a, b).count, 0);
     assert_eq!(collide(&unit(), a, &unit(), b, 0.49).count, 0);
     // Within a 0.6 m speculative margin: two points, each 0.5 m apart, halfway between faces.
     let m = collide(&unit(), a, &unit(), b, 0.6);
@@ -46,7 +51,7 @@ fn separated_boxes_have_no_contact_unless_within_the_margin() {
 
 #[test]
 fn touching_boxes_have_zero_separation() {
-    let m = collide(&unit(), at(0.0, 0.0, 0.0), &unit(), at(0.0, 1.0, 0.0), 0.0);
+    let m = boxes(at(0.0, 0.0, 0.0), at(0.0, 1.0, 0.0));
     assert_eq!(m.count, 2);
     assert!(close(m.normal, vec2(0.0, 1.0)));
     let pts = sorted_points(&m);
@@ -61,13 +66,7 @@ fn touching_boxes_have_zero_separation() {
 fn overlapping_boxes_clip_the_incident_edge_to_the_reference_face() {
     // B overlaps A by 0.125 in x and is raised by 0.25: B's left edge spans y in [-0.25, 0.75],
     // clipped to A's right face y in [-0.5, 0.5].
-    let m = collide(
-        &unit(),
-        at(0.0, 0.0, 0.0),
-        &unit(),
-        at(0.875, 0.25, 0.0),
-        0.0,
-    );
+    let m = boxes(at(0.0, 0.0, 0.0), at(0.875, 0.25, 0.0));
     assert_eq!(m.count, 2);
     assert!(close(m.normal, vec2(1.0, 0.0)), "{:?}", m.normal);
     let pts = sorted_points(&m);
@@ -87,7 +86,7 @@ fn rotated_box_corner_into_a_face_gives_one_point_at_the_corner() {
         0.5 + half_diagonal - depth,
         std::f64::consts::FRAC_PI_4 as Real,
     );
-    let m = collide(&unit(), at(0.0, 0.0, 0.0), &unit(), b, 0.0);
+    let m = boxes(at(0.0, 0.0, 0.0), b);
     assert_eq!(m.count, 1, "{m:?}");
     assert!(close(m.normal, vec2(0.0, 1.0)), "{:?}", m.normal);
     let p = m.points[0];
@@ -98,8 +97,8 @@ fn rotated_box_corner_into_a_face_gives_one_point_at_the_corner() {
 #[test]
 fn swapping_the_pair_flips_the_normal_and_keeps_the_points() {
     let (a, b) = (at(0.0, 0.0, 0.1), at(0.3, 0.95, -0.05));
-    let ab = collide(&unit(), a, &unit(), b, 0.0);
-    let ba = collide(&unit(), b, &unit(), a, 0.0);
+    let ab = boxes(a, b);
+    let ba = boxes(b, a);
     assert_eq!(ab.count, 2);
     assert_eq!(ba.count, ab.count);
     assert!(
@@ -142,14 +141,8 @@ fn feature_ids_survive_the_reference_face_switching_sides() {
     // Two stacked boxes, the upper one tilted slightly one way and then the other: the
     // reference face moves from A to B, but the ids of the two corners stay the same.
     let a = at(0.0, 0.0, 0.0);
-    let m1 = collide(&unit(), a, &unit(), at(0.0, 0.995, 0.002), 0.0);
-    let m2 = collide(
-        &unit(),
-        at(0.0, 0.0, 0.002),
-        &unit(),
-        at(0.0, 0.995, 0.0),
-        0.0,
-    );
+    let m1 = boxes(a, at(0.0, 0.995, 0.002));
+    let m2 = boxes(at(0.0, 0.0, 0.002), at(0.0, 0.995, 0.0));
     assert_eq!(m1.count, 2);
     assert_eq!(m2.count, 2);
     let ids = |m: &Manifold| {

@@ -4,21 +4,20 @@
 //! a wrong password does not get in at all.
 #![cfg(feature = "net")]
 
+mod common;
+
+use common::net::{query_scene, subscribe, WAIT};
+use common::{repo_path, temp_dir};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
 use tiltbox::service::{Server, ServerConfig};
 
-const WAIT: Duration = Duration::from_secs(5);
 const PORT: u16 = 17540;
 
-fn manifest(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
-}
-
 fn daemon_config(dir: &Path) -> PathBuf {
-    let text = std::fs::read_to_string(manifest("config/zenoh/acl-daemon.json5")).unwrap();
-    let users = manifest("config/zenoh/users.txt");
+    let text = std::fs::read_to_string(repo_path("config/zenoh/acl-daemon.json5")).unwrap();
+    let users = repo_path("config/zenoh/users.txt");
     let text = text
         .replace("tcp/127.0.0.1:7447", &format!("tcp/127.0.0.1:{PORT}"))
         .replace("config/zenoh/users.txt", users.to_str().unwrap());
@@ -28,7 +27,7 @@ fn daemon_config(dir: &Path) -> PathBuf {
 }
 
 fn client_config(user: &str, password: &str) -> zenoh::Config {
-    let text = std::fs::read_to_string(manifest("config/zenoh/acl-client.json5")).unwrap();
+    let text = std::fs::read_to_string(repo_path("config/zenoh/acl-client.json5")).unwrap();
     let text = text
         .replace("tcp/127.0.0.1:7447", &format!("tcp/127.0.0.1:{PORT}"))
         .replace("\"viewer\"", &format!("\"{user}\""))
@@ -59,8 +58,7 @@ fn spawn(name: &str) -> Vec<u8> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_viewer_watches_but_its_spawn_never_reaches_the_world() {
-    let dir = std::env::temp_dir().join(format!("tiltbox-acl-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = temp_dir("acl");
     let mut config = ServerConfig::default();
     config.zenoh.config_file = Some(daemon_config(&dir));
     let server = Server::start(&config, Default::default()).await.unwrap();
@@ -77,30 +75,13 @@ async fn a_viewer_watches_but_its_spawn_never_reaches_the_world() {
     let viewer = zenoh::open(client_config("viewer", "change-me-viewer"))
         .await
         .unwrap();
-    let (ptx, mut poses) = tokio::sync::mpsc::unbounded_channel();
-    let _p = viewer
-        .declare_subscriber(keys.poses())
-        .callback(move |s| {
-            if let Ok(snap) = decode::<Snapshot>(&s.payload().to_bytes()) {
-                let _ = ptx.send(snap.frame);
-            }
-        })
-        .await
-        .unwrap();
-    let (vtx, mut viewer_events) = tokio::sync::mpsc::unbounded_channel();
-    let _e = viewer
-        .declare_subscriber(keys.events())
-        .callback(move |s| {
-            if let Ok(e) = decode::<Event>(&s.payload().to_bytes()) {
-                let _ = vtx.send(e);
-            }
-        })
-        .await
-        .unwrap();
+    let (mut poses, _p) = subscribe::<Snapshot>(&viewer, keys.poses()).await;
+    let (mut viewer_events, _e) = subscribe::<Event>(&viewer, keys.events()).await;
     let first = tokio::time::timeout(WAIT, poses.recv())
         .await
         .expect("the viewer receives snapshots")
-        .unwrap();
+        .unwrap()
+        .frame;
 
     // The operator.
     let operator = zenoh::open(client_config("operator", "change-me-operator"))
@@ -142,18 +123,13 @@ async fn a_viewer_watches_but_its_spawn_never_reaches_the_world() {
     let mut last = first;
     while last < first + 60 {
         assert!(Instant::now() < end);
-        if let Ok(Some(f)) = tokio::time::timeout(WAIT, poses.recv()).await {
-            last = f;
+        if let Ok(Some(s)) = tokio::time::timeout(WAIT, poses.recv()).await {
+            last = s.frame;
         }
     }
     // The operator may query the scene: "allowed" is there, "intruder" is not, and there was
     // no reset and not even a rejection for the viewer's commands.
-    let replies = operator.get(keys.scene()).await.unwrap();
-    let reply = tokio::time::timeout(WAIT, replies.recv_async())
-        .await
-        .expect("scene reply")
-        .unwrap();
-    let scene: SceneState = decode(&reply.into_result().unwrap().payload().to_bytes()).unwrap();
+    let scene = query_scene(&operator, &keys).await;
     assert!(scene.bodies.iter().any(|b| b.name == "allowed"));
     assert!(!scene.bodies.iter().any(|b| b.name == "intruder"));
     while let Ok(e) = viewer_events.try_recv() {

@@ -6,6 +6,13 @@
 mod common;
 
 use common::scene::*;
+
+/// The refusal of "brick 3" (#1) with `fields` added, checked to start with `start`.
+fn brick_refusal(fields: &str, start: &str) -> String {
+    let (_, s) = error_for(&brick(fields));
+    assert!(s.starts_with(start), "{s}");
+    s
+}
 use std::path::Path;
 use tiltbox::scene::{Scene, SceneError};
 
@@ -36,11 +43,7 @@ fn restitution_above_one_is_refused() {
 
 #[test]
 fn nan_is_refused_wherever_it_appears() {
-    let (_, s) = error_for(&brick("density = nan"));
-    assert!(
-        s.starts_with(r#"body "brick 3" (#1): density = NaN"#),
-        "{s}"
-    );
+    brick_refusal("density = nan", r#"body "brick 3" (#1): density = NaN"#);
     let (_, s) = error_for(&brick("density = 1\nangle = nan"));
     assert_eq!(
         s,
@@ -68,41 +71,35 @@ fn zero_width_is_refused() {
 
 #[test]
 fn density_and_mass_together_are_refused() {
-    let (_, s) = error_for(&brick("density = 1\nmass = 2"));
-    assert!(
-        s.starts_with(r#"body "brick 3" (#1): density = 1: give exactly one of density"#),
-        "{s}"
+    let s = brick_refusal(
+        "density = 1\nmass = 2",
+        r#"body "brick 3" (#1): density = 1: give exactly one of density"#,
     );
     assert!(s.contains("mass = 2"), "{s}");
-    let (_, s) = error_for(&brick(""));
-    assert!(
-        s.starts_with(r#"body "brick 3" (#1): density: missing"#),
-        "{s}"
-    );
+    brick_refusal("", r#"body "brick 3" (#1): density: missing"#);
 }
 
 #[test]
 fn static_bodies_take_no_density_mass_or_velocity() {
-    let (_, s) = error_for(&brick("static = true\ndensity = 1"));
-    assert!(
-        s.starts_with(r#"body "brick 3" (#1): density = 1: a static body has neither"#),
-        "{s}"
+    brick_refusal(
+        "static = true\ndensity = 1",
+        r#"body "brick 3" (#1): density = 1: a static body has neither"#,
     );
-    let (_, s) = error_for(&brick("static = true\nmass = 5"));
-    assert!(s.starts_with(r#"body "brick 3" (#1): mass = 5"#), "{s}");
-    let (_, s) = error_for(&brick("static = true\nvelocity = [1, 0]"));
-    assert!(
-        s.starts_with(r#"body "brick 3" (#1): velocity = [1, 0]: a static body does not move"#),
-        "{s}"
+    brick_refusal(
+        "static = true\nmass = 5",
+        r#"body "brick 3" (#1): mass = 5"#,
+    );
+    brick_refusal(
+        "static = true\nvelocity = [1, 0]",
+        r#"body "brick 3" (#1): velocity = [1, 0]: a static body does not move"#,
     );
 }
 
 #[test]
 fn malformed_colour_names_the_value() {
-    let (_, s) = error_for(&brick("density = 1\ncolour = \"#12345\""));
-    assert!(
-        s.starts_with(r##"body "brick 3" (#1): colour = "#12345": expected "#rrggbb""##),
-        "{s}"
+    brick_refusal(
+        "density = 1\ncolour = \"#12345\"",
+        r##"body "brick 3" (#1): colour = "#12345": expected "#rrggbb""##,
     );
     let (_, s) = error_for(&brick("density = 1\ncolour = \"red\""));
     assert!(s.contains(r#"colour = "red""#), "{s}");
@@ -121,10 +118,9 @@ fn unknown_field_names_the_body_its_line_and_the_field() {
         "{s}"
     );
     // A wrong type is reported the same way.
-    let (_, s) = error_for(&brick("density = \"heavy\""));
-    assert!(
-        s.starts_with(r#"body "brick 3" (#1) at line 10: density: invalid type"#),
-        "{s}"
+    brick_refusal(
+        "density = \"heavy\"",
+        r#"body "brick 3" (#1) at line 10: density: invalid type"#,
     );
     // ... and a field inside the shape.
     let (_, s) = error_for(

@@ -4,13 +4,15 @@
 //! world go away when its daemon stops.
 #![cfg(feature = "net")]
 
+mod common;
+
+use common::net::{query_scene, WAIT};
 use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
 use tiltbox::protocol::*;
 use tiltbox::service::{shutdown_worlds, start_worlds, world_configs, Server, ServerConfig};
 use zenoh::sample::SampleKind;
 
-const WAIT: Duration = Duration::from_secs(5);
 const ROUTER: u16 = 17550;
 
 fn client_mode() -> ServerConfig {
@@ -111,12 +113,7 @@ async fn a_viewer_lists_and_follows_worlds_behind_a_router() {
         .unwrap();
     assert_eq!(key, "tiltbox/tower/poses");
     assert!(decode::<Snapshot>(&payload).is_ok());
-    let replies = viewer.get(keys.scene()).await.unwrap();
-    let reply = tokio::time::timeout(WAIT, replies.recv_async())
-        .await
-        .expect("scene reply")
-        .unwrap();
-    let scene: SceneState = decode(&reply.into_result().unwrap().payload().to_bytes()).unwrap();
+    let scene = query_scene(&viewer, &keys).await;
     assert_eq!(scene.world, "tower");
 
     // A command to one world changes that world only.

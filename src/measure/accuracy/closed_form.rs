@@ -16,6 +16,9 @@
 //!
 //! Coefficients are given to both bodies of a pair, so every mixing rule except `Product`
 //! yields the coefficient itself; the expected values use `Settings::*_mixing` to be exact.
+//!
+//! One concept, the catalogue of closed-form cases (over 600 lines): each case's set-up sits
+//! beside the answer it is measured against.
 
 use super::{
     blown_up, integration_step, max_penetration, new_world, run_steps, steps_for, Breakdown,

@@ -1,0 +1,304 @@
+//! Mass ratios, deep overlap, bullets and a pile of mixed shapes.
+
+use super::*;
+use crate::measure::accuracy::{
+    blown_up, max_penetration, new_world, steps_for, Verdict, DT_60, G,
+};
+use crate::measure::accuracy::{run_steps, Breakdown};
+use crate::measure::cases;
+use crate::physics::{vec2, BodyDef, BodyId, Real, Settings, Shape, SolverKind, Vec2, World};
+
+/// What one mass-ratio set-up measured: deepest overlap at any frame (m), largest speed
+/// (m/s), the heavy body's drift and sinking at the end (m), most total energy gained over
+/// the start (J), and whether it stayed finite.
+struct RatioRun {
+    overlap: f64,
+    speed: f64,
+    drift: f64,
+    sinking: f64,
+    energy_gain: f64,
+    ok: bool,
+}
+
+/// Step `w` for 5 s, tracking overlap, speed and total energy frame by frame; `heavy` is the
+/// body whose drift and sinking are reported, from `start`.
+fn run_ratio(mut w: World, heavy: BodyId, start: Vec2) -> RatioRun {
+    let energy = |w: &World| (w.kinetic_energy() + w.potential_energy()) as f64;
+    let e0 = energy(&w);
+    let mut r = RatioRun {
+        overlap: 0.0,
+        speed: 0.0,
+        drift: 0.0,
+        sinking: 0.0,
+        energy_gain: 0.0,
+        ok: true,
+    };
+    for _ in 0..steps_for(5.0, DT_60) {
+        if w.step(DT_60).is_err() || blown_up(&w, 100.0) {
+            r.ok = false;
+            break;
+        }
+        r.overlap = r.overlap.max(max_penetration(&w));
+        r.speed = r.speed.max(max_speed(&w));
+        r.energy_gain = r.energy_gain.max(energy(&w) - e0);
+    }
+    let p = pos(&w, heavy);
+    r.drift = (p.x - start.x).abs() as f64;
+    r.sinking = (start.y - p.y) as f64;
+    r
+}
+
+/// `ratio`:1 in three set-ups, 5 s each: a 4 m x 1 m box of mass `ratio` on two 1 kg boxes;
+/// a 1 m box of mass `ratio` on a 1 kg box on the ground (heavy on light); and the reverse
+/// (light on heavy). Every frame: overlap <= 10 mm (2 x the default slop), no energy gained.
+fn mass_ratio(settings: &Settings, case: &'static str, ratio: Real) -> Verdict {
+    // The wide box on two small ones.
+    let mut w = new_world(settings, gravity());
+    cases::ground(&mut w, 0.0, 40.0, 2.0).unwrap();
+    for x in [-1.5, 1.5] {
+        w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(x, 0.5)).with_mass(1.0))
+            .unwrap();
+    }
+    let big = w
+        .add_body(&BodyDef::dynamic(Shape::rect(4.0, 1.0), vec2(0.0, 1.5)).with_mass(ratio))
+        .unwrap();
+    let bridge = run_ratio(w, big, vec2(0.0, 1.5));
+    // One on the other, both ways.
+    let pair = |bottom: Real, top: Real| {
+        let mut w = new_world(settings, gravity());
+        cases::ground(&mut w, 0.0, 40.0, 2.0).unwrap();
+        w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)).with_mass(bottom))
+            .unwrap();
+        let t = w
+            .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 1.5)).with_mass(top))
+            .unwrap();
+        run_ratio(w, t, vec2(0.0, 1.5))
+    };
+    let heavy_on_light = pair(1.0, ratio);
+    let light_on_heavy = pair(ratio, 1.0);
+    let runs = [&bridge, &heavy_on_light, &light_on_heavy];
+    let overlap_bound = 0.01;
+    // "No energy gained": never more than lifting the heavy body by 0.1 mm (float rounding of
+    // the potential energy of a 1000 kg body at 1.5 m is about 1e-3 J).
+    let energy_bound = ratio as f64 * G as f64 * 1e-4;
+    let passed = runs.iter().all(|r| {
+        r.ok && r.overlap <= overlap_bound && r.energy_gain <= energy_bound && r.speed < 1.0
+    }) && bridge.drift < 0.05;
+    verdict(
+        case,
+        format!(
+            "{ratio}:1, 5 s each: a 4 m box of {ratio} kg on two 1 kg boxes, a {ratio} kg box on a 1 kg box, and a 1 kg box on a {ratio} kg box: \
+             overlap <= 10 mm at every frame, total energy never above the start (by more than lifting the heavy body 0.1 mm, {} J), \
+             no body faster than 1 m/s, the wide box moves < 5 cm sideways",
+            crate::measure::accuracy::fmt_num(energy_bound)
+        ),
+        passed,
+        vec![
+            ("largest penetration (m)", bridge.overlap),
+            ("heavy box sinking (m)", bridge.sinking),
+            ("largest speed (m/s)", bridge.speed),
+            ("heavy box drift (m)", bridge.drift),
+            ("heavy on light: largest overlap (m)", heavy_on_light.overlap),
+            ("light on heavy: largest overlap (m)", light_on_heavy.overlap),
+            (
+                "most energy gained, any set-up (J)",
+                runs.iter().map(|r| r.energy_gain).fold(0.0, f64::max),
+            ),
+        ],
+        "",
+    )
+}
+
+/// Mass ratio 100:1.
+pub fn mass_ratio_100(settings: &Settings) -> Verdict {
+    mass_ratio(settings, "mass_ratio_100", 100.0)
+}
+
+/// Mass ratio 1000:1.
+pub fn mass_ratio_1000(settings: &Settings) -> Verdict {
+    mass_ratio(settings, "mass_ratio_1000", 1000.0)
+}
+
+/// Inside a closed 10 m x 10 m box: two pairs of 1 m boxes spawned half inside each other
+/// (one side by side, one on top of the other), one box half inside the floor, one half inside
+/// the left wall. Run 3 s.
+pub fn deep_overlap(settings: &Settings) -> Verdict {
+    let mut w = new_world(settings, gravity());
+    cases::closed_box(&mut w, 10.0, 10.0, 0.5).unwrap();
+    let spots = [
+        vec2(-2.5, 0.5),
+        vec2(-2.0, 0.5), // side by side, 0.5 m overlap
+        vec2(2.5, 0.5),
+        vec2(2.5, 1.0),  // on top, 0.5 m overlap
+        vec2(0.0, 0.0),  // half inside the floor
+        vec2(-5.0, 0.5), // half inside the left wall
+    ];
+    let ids: Vec<BodyId> = spots
+        .iter()
+        .map(|&p| {
+            w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), p))
+                .unwrap()
+        })
+        .collect();
+    let mut speed: f64 = 0.0;
+    let mut outside: f64 = 0.0;
+    let ok = run_steps(
+        &mut w,
+        DT_60,
+        steps_for(3.0, DT_60),
+        Breakdown::BlownUp(100.0),
+        |w, _| {
+            speed = speed.max(max_speed(w));
+            for &id in &ids {
+                outside = outside.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
+            }
+        },
+    );
+    let pen = max_penetration(&w);
+    let slop = settings.linear_slop as f64;
+    // At the end every box must be fully inside, give or take the allowed overlap.
+    let still_in_wall = ids
+        .iter()
+        .map(|&id| outside_box(pos(&w, id), 10.0, 10.0, 0.5 - 2.0 * slop))
+        .fold(0.0, f64::max);
+    let cap = settings.max_push_out_speed as f64;
+    let passed =
+        ok && speed <= 1.1 * cap && pen <= 2.0 * slop && outside == 0.0 && still_in_wall == 0.0;
+    verdict(
+        "deep_overlap",
+        format!(
+            "boxes spawned 0.5 m inside each other / the floor / a wall: peak speed <= 1.1 x push-out cap ({cap} m/s), \
+             penetration after 3 s <= 2 x slop = {} m, no box centre ever beyond a wall surface, every box clear of the walls at the end",
+            crate::measure::accuracy::fmt_num(2.0 * slop)
+        ),
+        passed,
+        vec![
+            ("peak speed (m/s)", speed),
+            ("penetration after 3 s (m)", pen),
+            ("worst excursion of a centre beyond a wall (m)", outside),
+            ("overlap with a wall at the end (m)", still_in_wall),
+        ],
+        if settings.solver == SolverKind::Sequential {
+            "the sequential solver has no push-out cap: its Baumgarte bias is 0.2/dt x depth"
+        } else {
+            ""
+        },
+    )
+}
+
+/// A 0.1 m bullet at 200 m/s against a static 0.1 m x 4 m wall, 30 steps at 60 Hz, once per
+/// shape kind: box, disc, capsule (spinning end over end) and triangle.
+pub fn bullet(settings: &Settings) -> Verdict {
+    let triangle =
+        crate::physics::Polygon::new(&[vec2(-0.05, -0.05), vec2(0.05, 0.0), vec2(-0.05, 0.05)])
+            .map(|(p, _)| Shape::from(p))
+            .unwrap_or(Shape::rect(0.1, 0.1));
+    let kinds = [
+        (Shape::rect(0.1, 0.1), 0.0),
+        (Shape::circle(0.05), 0.0),
+        (Shape::capsule(0.1, 0.02), 40.0),
+        (triangle, 0.0),
+    ];
+    let mut ok = true;
+    let mut worst_x = f64::NEG_INFINITY;
+    let mut measured = Vec::new();
+    for (shape, spin) in kinds {
+        let (finite, max_x) = fire_bullet(settings, shape.clone(), spin);
+        ok &= finite;
+        worst_x = worst_x.max(max_x);
+        let name = match shape.kind() {
+            "rect" => "largest x of box centre (m)",
+            "circle" => "largest x of disc centre (m)",
+            "capsule" => "largest x of capsule centre (m)",
+            _ => "largest x of triangle centre (m)",
+        };
+        measured.push((name, max_x));
+    }
+    // The bullet's centre must stay on the near side of the wall's centre line.
+    let passed = ok && worst_x < 0.0;
+    verdict(
+        "bullet",
+        "0.1 m bullets (box, disc, spinning capsule, triangle) at 200 m/s (3.3 m per step) vs a 0.1 m wall centred on x = 0, 30 steps: every bullet's centre stays at x < 0 (near face at x = -0.05)".into(),
+        passed,
+        measured,
+        "",
+    )
+}
+
+/// One bullet of `shape` spinning at `spin` rad/s: (stayed finite, largest x of its centre).
+fn fire_bullet(settings: &Settings, shape: Shape, spin: Real) -> (bool, f64) {
+    let mut w = new_world(settings, gravity());
+    w.add_body(&BodyDef::fixed(Shape::rect(0.1, 4.0), vec2(0.0, 0.0)))
+        .unwrap();
+    let b = w
+        .add_body(
+            &BodyDef::dynamic(shape, vec2(-4.0, 0.0))
+                .with_velocity(vec2(200.0, 0.0))
+                .with_angular_velocity(spin),
+        )
+        .unwrap();
+    let mut max_x = f64::NEG_INFINITY;
+    for _ in 0..30 {
+        if w.step(DT_60).is_err() || !all_finite(&w) {
+            return (false, f64::NAN);
+        }
+        max_x = max_x.max(pos(&w, b).x as f64);
+    }
+    (true, max_x)
+}
+
+/// 60 bodies of five kinds (circles, capsules, triangles, hexagons, boxes; [`cases::mixed_shape`])
+/// dropped in a 10 m x 10 m box with random spins, 10 s at 60 Hz, sleeping off.
+pub fn mixed_pile(settings: &Settings) -> Verdict {
+    let mut w = new_world(settings, gravity());
+    cases::closed_box(&mut w, 10.0, 10.0, 0.5).unwrap();
+    let mut ids = Vec::new();
+    for i in 0..60 {
+        let (col, row) = ((i % 10) as Real, (i / 10) as Real);
+        let x = -4.5 + col + 0.05 * row;
+        let y = 0.6 + 1.1 * row;
+        let spin = 3.0 * (((i * 13) % 7) as Real / 3.0 - 1.0);
+        let def = BodyDef::dynamic(cases::mixed_shape(i), vec2(x, y))
+            .with_angle(0.3 * i as Real)
+            .with_angular_velocity(spin);
+        ids.push(w.add_body(&def).unwrap());
+    }
+    let mut outside: f64 = 0.0;
+    let mut pen_late: f64 = 0.0;
+    let mut speed_late: f64 = 0.0;
+    let mut spin_late: f64 = 0.0;
+    let n = steps_for(10.0, DT_60);
+    let ok = run_steps(&mut w, DT_60, n, Breakdown::NonFinite, |w, k| {
+        for &id in &ids {
+            outside = outside.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
+        }
+        // The last second: the pile should be at rest.
+        if k >= n - steps_for(1.0, DT_60) {
+            pen_late = pen_late.max(max_penetration(w));
+            speed_late = speed_late.max(max_speed(w));
+            spin_late = spin_late.max(
+                w.bodies()
+                    .map(|b| b.angular_velocity().abs() as f64)
+                    .fold(0.0, f64::max),
+            );
+        }
+    });
+    let slop = settings.linear_slop as f64;
+    let passed =
+        ok && outside == 0.0 && speed_late < 0.05 && spin_late < 0.2 && pen_late <= 2.0 * slop;
+    verdict(
+        "mixed_pile",
+        format!(
+            "60 mixed shapes (circles, capsules, triangles, hexagons, boxes) dropped in a 10 m box come to rest within 9 s: over the last second every centre slower than 0.05 m/s, every spin below 0.2 rad/s, overlap at most 2 x slop ({} m), nobody outside the box",
+            crate::measure::accuracy::fmt_num(2.0 * slop)
+        ),
+        passed,
+        vec![
+            ("max speed, last second (m/s)", speed_late),
+            ("max spin, last second (rad/s)", spin_late),
+            ("max overlap, last second (m)", pen_late),
+            ("furthest outside the box (m)", outside),
+        ],
+        "sleeping is off, so resting means the solver holds the pile still, not that it was put to sleep",
+    )
+}

@@ -1,0 +1,144 @@
+//! The stiff and extreme suite. Every case takes the solver configuration, runs at
+//! [`DT_60`] (unless the case is about the step itself) and returns a [`Verdict`] with its
+//! criterion in words, pass/fail and the measured numbers.
+
+//!
+//! - `stacks.rs`: stacks and pyramids, and a stack far from the origin;
+//! - `contacts.rs`: mass ratios, deep overlap, bullets, a pile of mixed shapes;
+//! - `limits.rs`: tiny and large bodies, gravity flips, a huge step, non-finite input.
+
+mod contacts;
+mod limits;
+mod stacks;
+
+pub use contacts::{bullet, deep_overlap, mass_ratio_100, mass_ratio_1000, mixed_pile};
+pub use limits::{gravity_flip, huge_dt, large_bodies, non_finite_refused, tiny_bodies};
+pub use stacks::{
+    far_from_origin, pyramid_100, pyramid_134, pyramid_20, pyramid_30, pyramid_sleeps,
+    real_spacing, stack_20, stack_50,
+};
+
+use super::{Verdict, G};
+use crate::physics::{vec2, BodyId, Settings, Vec2, World};
+
+/// A stiff or extreme case: name, title and runner.
+#[derive(Clone, Copy, Debug)]
+pub struct ExtremeCase {
+    /// Machine name (matches [`Verdict::case`]).
+    pub name: &'static str,
+    /// Human title.
+    pub title: &'static str,
+    /// The runner.
+    pub run: fn(&Settings) -> Verdict,
+    /// Too slow for CI in a debug build; run by the report only.
+    pub report_only: bool,
+}
+
+/// Every case, in report order (`pyramid_100` last, report only).
+pub fn all() -> Vec<ExtremeCase> {
+    let c = |name, title, run: fn(&Settings) -> Verdict| ExtremeCase {
+        name,
+        title,
+        run,
+        report_only: false,
+    };
+    vec![
+        c("stack_20", "Stack of 20, 30 s", stack_20),
+        c("stack_50", "Stack of 50, 10 s", stack_50),
+        c("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
+        c("pyramid_30", "Symmetric pyramid base 30, 20 s", pyramid_30),
+        c(
+            "pyramid_sleeps",
+            "Pyramid base 20 falls asleep",
+            pyramid_sleeps,
+        ),
+        c("mass_ratio_100", "Mass ratio 100:1", mass_ratio_100),
+        c("mass_ratio_1000", "Mass ratio 1000:1", mass_ratio_1000),
+        c("deep_overlap", "Deep overlap at spawn", deep_overlap),
+        c("bullet", "Bullet 200 m/s vs 0.1 m wall", bullet),
+        c("far_from_origin", "Stack at x = 10 km", far_from_origin),
+        c("tiny_bodies", "Tiny bodies (1 cm)", tiny_bodies),
+        c("large_bodies", "Large body (50 m)", large_bodies),
+        c("gravity_flip", "Gravity flipped at 10 g", gravity_flip),
+        c(
+            "mixed_pile",
+            "Pile of mixed shapes comes to rest",
+            mixed_pile,
+        ),
+        c("huge_dt", "Huge dt (0.1 s)", huge_dt),
+        c(
+            "non_finite_refused",
+            "NaN / inf refused",
+            non_finite_refused,
+        ),
+        ExtremeCase {
+            name: "pyramid_134",
+            title: "Pyramid base 134 (9,045 boxes) stands",
+            run: pyramid_134,
+            report_only: true,
+        },
+        ExtremeCase {
+            name: "pyramid_100",
+            title: "Pyramid base 100 (5,050 boxes)",
+            run: pyramid_100,
+            report_only: true,
+        },
+    ]
+}
+
+/// Run every case (`with_report_only` adds the pyramid of base 100) with `settings`.
+pub fn suite(settings: &Settings, with_report_only: bool) -> Vec<Verdict> {
+    all()
+        .into_iter()
+        .filter(|c| with_report_only || !c.report_only)
+        .map(|c| (c.run)(settings))
+        .collect()
+}
+
+pub(super) fn verdict(
+    case: &'static str,
+    criterion: String,
+    passed: bool,
+    measured: Vec<(&'static str, f64)>,
+    note: impl Into<String>,
+) -> Verdict {
+    Verdict {
+        case,
+        criterion,
+        passed,
+        report_only: false,
+        measured,
+        note: note.into(),
+    }
+}
+
+pub(super) fn gravity() -> Vec2 {
+    vec2(0.0, -G)
+}
+
+pub(super) fn pos(w: &World, id: BodyId) -> Vec2 {
+    w.body(id).map(|b| b.position()).unwrap_or(Vec2::NAN)
+}
+
+pub(super) fn all_finite(w: &World) -> bool {
+    w.bodies().all(|b| b.is_finite())
+}
+
+pub(super) fn max_speed(w: &World) -> f64 {
+    w.bodies()
+        .map(|b| b.linear_velocity().length() as f64)
+        .fold(0.0, f64::max)
+}
+
+/// How far a box centre `p` is outside the inner region of a closed box (inner `width` x
+/// `height`, floor at 0), inset by `inset` (half the body's size); 0 if inside.
+pub(super) fn outside_box(p: Vec2, width: f64, height: f64, inset: f64) -> f64 {
+    let (x, y) = (p.x as f64, p.y as f64);
+    if !x.is_finite() || !y.is_finite() {
+        return f64::INFINITY;
+    }
+    let half = 0.5 * width - inset;
+    [x.abs() - half, inset - y, y - (height - inset)]
+        .into_iter()
+        .fold(0.0, f64::max)
+}

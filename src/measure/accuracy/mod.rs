@@ -5,7 +5,7 @@
 //! - [`closed_form`]: cases with an analytic answer (free fall, slide to a stop, slopes, bounce,
 //!   head-on collision, spin under torque, resting stack). Each is a function
 //!   `fn(&Settings, dt) -> Measurement` giving the error against the closed form.
-//! - [`reference`]: cases without a closed form (Falling Bricks, pyramid of base 20), measured
+//! - [`mod@reference`]: cases without a closed form (Falling Bricks, pyramid of base 20), measured
 //!   against a reference run of the same solver at a much finer step ([`reference::reference`]).
 //! - [`extreme`]: the stiff and extreme suite; each case returns a [`Verdict`] with its
 //!   criterion in words, the measured numbers and pass/fail.

@@ -6,7 +6,7 @@
 //! [`Measurement`]: the error is the RMS, over bodies and sample times, of the distance between
 //! the run's and the reference's positions.
 //!
-//! The reference ([`reference`]) is the same solver at dt = 1/960 s (1/60 / 16) with many
+//! The reference ([`reference()`]) is the same solver at dt = 1/960 s (1/60 / 16) with many
 //! iterations (sequential: 100) or substeps (soft step: 16).
 
 use super::{blown_up, energy, max_penetration, new_world, steps_for, Measurement, G};

@@ -8,6 +8,7 @@
 //! merge of the two sorted lists. Passive-passive pairs (static with static, or anything that
 //! sleeps) are never examined, so a world at rest costs almost nothing here.
 
+use super::math::Real;
 use super::shape::Aabb;
 
 /// What the broad phase needs to know about one body slot.
@@ -38,6 +39,41 @@ pub(crate) struct SweepAndPrune {
     /// Static and sleeping bodies, sorted by `aabb.min.x` unless `passive_dirty`.
     passive: Vec<u32>,
     passive_dirty: bool,
+    /// The boxes of `active` and `passive`, in their orders, side by side in memory: the
+    /// sweeps read them in sequence instead of hopping through the proxies by slot.
+    active_boxes: Vec<SortedBox>,
+    passive_boxes: Vec<SortedBox>,
+    /// Scratch for `set_passive`: the moved slots, sorted.
+    moved: Vec<u32>,
+}
+
+/// A body's box in a sweep order, with its slot.
+#[derive(Clone, Copy, Debug)]
+struct SortedBox {
+    min_x: Real,
+    max_x: Real,
+    min_y: Real,
+    max_y: Real,
+    slot: u32,
+}
+
+impl SortedBox {
+    fn new(slot: u32, proxies: &[Proxy]) -> SortedBox {
+        let b = &proxies[slot as usize].aabb;
+        SortedBox {
+            min_x: b.min.x,
+            max_x: b.max.x,
+            min_y: b.min.y,
+            max_y: b.max.y,
+            slot,
+        }
+    }
+
+    /// Whether the two boxes overlap along y (the sweep has settled x).
+    #[inline]
+    fn overlaps_y(&self, other: &SortedBox) -> bool {
+        self.min_y <= other.max_y && other.min_y <= self.max_y
+    }
 }
 
 impl SweepAndPrune {
@@ -67,7 +103,12 @@ impl SweepAndPrune {
         } else {
             (&mut self.passive, &mut self.active)
         };
-        from.retain(|i| !indices.contains(i));
+        // Linear in the list, whatever the number moved (a pyramid falls asleep at once).
+        self.moved.clear();
+        self.moved.extend_from_slice(indices);
+        self.moved.sort_unstable();
+        let moved = &self.moved;
+        from.retain(|i| moved.binary_search(i).is_err());
         to.extend_from_slice(indices);
         if passive {
             self.passive_dirty = true;
@@ -99,18 +140,22 @@ impl SweepAndPrune {
                 .sort_unstable_by(|&a, &b| min_x(a).total_cmp(&min_x(b)).then(a.cmp(&b)));
             self.passive_dirty = false;
         }
-        let overlaps_y = |a: &Aabb, b: &Aabb| a.min.y <= b.max.y && b.min.y <= a.max.y;
+        self.active_boxes.clear();
+        self.active_boxes
+            .extend(self.active.iter().map(|&i| SortedBox::new(i, proxies)));
+        self.passive_boxes.clear();
+        self.passive_boxes
+            .extend(self.passive.iter().map(|&i| SortedBox::new(i, proxies)));
+        let (active, passive) = (&self.active_boxes, &self.passive_boxes);
 
         // Active with active.
-        for (i, &a) in self.active.iter().enumerate() {
-            let pa = &proxies[a as usize].aabb;
-            for &b in &self.active[i + 1..] {
-                let pb = &proxies[b as usize].aabb;
-                if pb.min.x > pa.max.x {
+        for (i, a) in active.iter().enumerate() {
+            for b in &active[i + 1..] {
+                if b.min_x > a.max_x {
                     break;
                 }
-                if overlaps_y(pa, pb) {
-                    out.push(pair_key(a, b));
+                if a.overlaps_y(b) {
+                    out.push(pair_key(a.slot, b.slot));
                 }
             }
         }
@@ -118,31 +163,25 @@ impl SweepAndPrune {
         // Active with passive: a pair overlaps in x exactly when one box's left edge lies within
         // the other's interval. (1) passive left edges within an active box (strictly right of
         // its left edge); (2) active left edges within a passive box (at or right of its left edge).
-        let passive = &self.passive;
-        for &a in &self.active {
-            let pa = &proxies[a as usize].aabb;
-            let start = passive.partition_point(|&p| min_x(p) <= pa.min.x);
-            for &p in &passive[start..] {
-                let pp = &proxies[p as usize].aabb;
-                if pp.min.x > pa.max.x {
+        for a in active {
+            let start = passive.partition_point(|p| p.min_x <= a.min_x);
+            for p in &passive[start..] {
+                if p.min_x > a.max_x {
                     break;
                 }
-                if overlaps_y(pa, pp) {
-                    out.push(pair_key(a, p));
+                if a.overlaps_y(p) {
+                    out.push(pair_key(a.slot, p.slot));
                 }
             }
         }
-        let active = &self.active;
-        for &p in passive {
-            let pp = &proxies[p as usize].aabb;
-            let start = active.partition_point(|&a| min_x(a) < pp.min.x);
-            for &a in &active[start..] {
-                let pa = &proxies[a as usize].aabb;
-                if pa.min.x > pp.max.x {
+        for p in passive {
+            let start = active.partition_point(|a| a.min_x < p.min_x);
+            for a in &active[start..] {
+                if a.min_x > p.max_x {
                     break;
                 }
-                if overlaps_y(pa, pp) {
-                    out.push(pair_key(a, p));
+                if a.overlaps_y(p) {
+                    out.push(pair_key(a.slot, p.slot));
                 }
             }
         }

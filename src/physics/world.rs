@@ -625,21 +625,11 @@ impl World {
         // Islands: union-find over contacts between dynamic awake bodies; an island takes
         // the highest tier of its contacts, and so do all its contacts and bodies.
         let n = self.solver_bodies.len();
-        self.island_parent.clear();
-        self.island_parent.extend(0..n as u32);
         let moving = |i: u32, bodies: &[SolverBody]| bodies[i as usize].inv_mass > 0.0;
-        for c in &self.contacts {
-            if moving(c.a, &self.solver_bodies) && moving(c.b, &self.solver_bodies) {
-                let (ra, rb) = (
-                    find(&mut self.island_parent, c.a),
-                    find(&mut self.island_parent, c.b),
-                );
-                if ra != rb {
-                    let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
-                    self.island_parent[hi as usize] = lo;
-                }
-            }
-        }
+        let bodies = &self.solver_bodies;
+        unite_islands(&mut self.island_parent, n, &self.contacts, |i| {
+            moving(i, bodies)
+        });
         self.body_tier.clear();
         self.body_tier.resize(n, 0);
         for (k, c) in self.contacts.iter().enumerate() {
@@ -714,8 +704,6 @@ impl World {
     fn update_sleep(&mut self, dt: Real) {
         let threshold = self.settings.sleep_threshold;
         let n = self.slots.len();
-        self.island_parent.clear();
-        self.island_parent.extend(0..n as u32);
         for slot in self.slots.iter_mut() {
             if let Some(b) = slot.body.as_mut().filter(|b| b.is_active()) {
                 let speed = b.linear_velocity.length()
@@ -727,22 +715,13 @@ impl World {
                 };
             }
         }
-        // Union-find over contacts between awake dynamic bodies (static bodies join nothing).
+        // Islands of awake dynamic bodies (static bodies join nothing).
         let active =
             |slots: &[Slot], i: u32| slots[i as usize].body.as_ref().is_some_and(Body::is_active);
-        for c in &self.contacts {
-            if active(&self.slots, c.a) && active(&self.slots, c.b) {
-                let (ra, rb) = (
-                    find(&mut self.island_parent, c.a),
-                    find(&mut self.island_parent, c.b),
-                );
-                if ra != rb {
-                    // Deterministic: the lower root wins.
-                    let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
-                    self.island_parent[hi as usize] = lo;
-                }
-            }
-        }
+        let slots = &self.slots;
+        unite_islands(&mut self.island_parent, n, &self.contacts, |i| {
+            active(slots, i)
+        });
         // The island rests as long as its most restless body.
         self.island_rest.clear();
         self.island_rest.resize(n, Real::INFINITY);
@@ -965,6 +944,28 @@ const RELAX_SCALE: [u32; TIERS] = [1, 2, 8];
 /// Adaptive stiffness: how many steps a new touching contact is solved as a loaded one
 /// before its measured load decides (`World::assign_tiers`).
 const NEW_CONTACT_STEPS: u8 = 8;
+
+/// Islands by union-find: `parent` becomes `n` singletons, then the two bodies of every
+/// contact for which `joins` holds on both sides are united. The lower root wins, so the
+/// islands (and everything solved per island) are the same on every run.
+fn unite_islands(
+    parent: &mut Vec<u32>,
+    n: usize,
+    contacts: &[Contact],
+    joins: impl Fn(u32) -> bool,
+) {
+    parent.clear();
+    parent.extend(0..n as u32);
+    for c in contacts {
+        if joins(c.a) && joins(c.b) {
+            let (ra, rb) = (find(parent, c.a), find(parent, c.b));
+            if ra != rb {
+                let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+                parent[hi as usize] = lo;
+            }
+        }
+    }
+}
 
 /// Union-find root of `i`, halving paths as it goes.
 #[inline]

@@ -314,12 +314,7 @@ fn solve_contact(
                 let vn = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
                 let impulse =
                     -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
-                let total = (p.normal_impulse + impulse).max(0.0);
-                let applied = total - p.normal_impulse;
-                p.normal_impulse = total;
-                p.max_normal_impulse = p.max_normal_impulse.max(applied);
-                p.total_normal_impulse += applied;
-                apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, applied);
+                accumulate_normal(a, b, n, p, impulse);
             }
         }
 
@@ -335,6 +330,24 @@ fn solve_contact(
             apply_along(a, b, t, p.arms.rt_a, p.arms.rt_b, applied);
         }
     }
+}
+
+/// Add `impulse` (N s) to a point's accumulated normal impulse, clamped so that the total
+/// stays >= 0 (a contact pushes, never pulls), and apply to A and B only what was added.
+#[inline]
+fn accumulate_normal(
+    a: &mut SolverBody,
+    b: &mut SolverBody,
+    n: Vec2,
+    p: &mut ContactPoint,
+    impulse: Real,
+) {
+    let total = (p.normal_impulse + impulse).max(0.0);
+    let applied = total - p.normal_impulse;
+    p.normal_impulse = total;
+    p.max_normal_impulse = p.max_normal_impulse.max(applied);
+    p.total_normal_impulse += applied;
+    apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, applied);
 }
 
 /// Both normal impulses of a two-point contact at once (see `solve_block_lcp`).
@@ -407,12 +420,7 @@ fn restitution(bodies: &mut [SolverBody], contacts: &mut [Contact], threshold: R
             }
             let vn = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
             let impulse = -p.normal_mass * (vn + e * p.relative_velocity);
-            let total = (p.normal_impulse + impulse).max(0.0);
-            let applied = total - p.normal_impulse;
-            p.normal_impulse = total;
-            p.max_normal_impulse = p.max_normal_impulse.max(applied);
-            p.total_normal_impulse += applied;
-            apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, applied);
+            accumulate_normal(a, b, n, p, impulse);
         }
     }
 }

@@ -1,0 +1,438 @@
+//! The World: bodies, gravity, settings, and `step(dt)`.
+//!
+//! - `mod.rs`: the World and its API (bodies, forces, queries, energy);
+//! - `step.rs`: the step's stages in order, and the soft step's tiers;
+//! - `contacts.rs`: finding contacts (broad phase, narrow phase, matching last step's);
+//! - `islands.rs`: islands, adaptive stiffness tiers, sleep and waking;
+//! - `snapshot.rs`: the full state as plain data (checkpoints).
+
+use super::body::{Body, BodyDef, BodyId};
+use super::broad_phase::{pair_of, Proxy, SweepAndPrune};
+use super::collide::collide;
+use super::contact::{Contact, ContactInfo, ContactPoint, ContactPointInfo};
+use super::error::{finite, positive, PhysicsError};
+use super::math::{cross, Real, Rot, Vec2};
+use super::settings::{Settings, SolverKind};
+use super::solver::soft_step::Softness;
+use super::solver::wide::WideSolver;
+use super::solver::{self, clamp_speed, Limits, Moving, SolverBody};
+
+/// Export and import of the full state (checkpoints); a child module so it reads private fields.
+pub mod snapshot;
+
+mod contacts;
+mod islands;
+mod step;
+#[cfg(test)]
+mod tests;
+
+use islands::TIERS;
+
+/// One entry of the body array: a body, or a free slot remembering its generation.
+#[derive(Clone, Debug)]
+struct Slot {
+    generation: u32,
+    body: Option<Body>,
+}
+
+/// A 2D rigid-body world.
+///
+/// Units throughout: metres, seconds, radians, kilograms. Every method that takes input
+/// validates it and refuses what cannot be simulated, so a World never holds NaN.
+#[derive(Clone, Debug)]
+pub struct World {
+    settings: Settings,
+    gravity: Vec2,
+    slots: Vec<Slot>,
+    free: Vec<u32>,
+    body_count: usize,
+    time: f64,
+    steps: u64,
+    broad_phase: SweepAndPrune,
+    // Buffers reused every step, so a steady step does not allocate.
+    proxies: Vec<Proxy>,
+    pair_keys: Vec<u64>,
+    contacts: Vec<Contact>,
+    previous: Vec<Contact>,
+    /// Contacts between bodies that sleep (or sleep and static): kept for warm starting and to
+    /// wake islands, never solved.
+    sleeping_contacts: Vec<Contact>,
+    solver_bodies: Vec<SolverBody>,
+    wide: WideSolver,
+    split_impulse: solver::sequential::SplitImpulse,
+    // Adaptive stiffness, reused every step: each contact's and each slot's tier, and the
+    // contacts and bodies of the tiers above the base while they are solved apart.
+    contact_tier: Vec<u8>,
+    body_tier: Vec<u8>,
+    tier_contacts: [Vec<Contact>; TIERS],
+    tier_bodies: Vec<u32>,
+    // Sleep bookkeeping, reused every step.
+    wake_queue: Vec<u32>,
+    island_parent: Vec<u32>,
+    island_rest: Vec<Real>,
+    changed: Vec<u32>,
+}
+
+impl Default for World {
+    fn default() -> Self {
+        World::with_settings(Settings::default(), Vec2::new(0.0, -9.81))
+    }
+}
+
+impl World {
+    /// An empty world with validated `settings` and `gravity` (m/s^2).
+    pub fn new(settings: Settings, gravity: Vec2) -> Result<World, PhysicsError> {
+        settings.validate()?;
+        finite("gravity.x", gravity.x)?;
+        finite("gravity.y", gravity.y)?;
+        Ok(World::with_settings(settings, gravity))
+    }
+
+    fn with_settings(settings: Settings, gravity: Vec2) -> World {
+        World {
+            settings,
+            gravity,
+            slots: Vec::new(),
+            free: Vec::new(),
+            body_count: 0,
+            time: 0.0,
+            steps: 0,
+            broad_phase: SweepAndPrune::default(),
+            proxies: Vec::new(),
+            pair_keys: Vec::new(),
+            contacts: Vec::new(),
+            previous: Vec::new(),
+            sleeping_contacts: Vec::new(),
+            solver_bodies: Vec::new(),
+            wide: WideSolver::default(),
+            split_impulse: Default::default(),
+            contact_tier: Vec::new(),
+            body_tier: Vec::new(),
+            tier_contacts: Default::default(),
+            tier_bodies: Vec::new(),
+            wake_queue: Vec::new(),
+            island_parent: Vec::new(),
+            island_rest: Vec::new(),
+            changed: Vec::new(),
+        }
+    }
+
+    /// The current settings.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Replace the settings (validated first; on error nothing changes).
+    pub fn set_settings(&mut self, settings: Settings) -> Result<(), PhysicsError> {
+        settings.validate()?;
+        self.settings = settings;
+        self.wake_all();
+        Ok(())
+    }
+
+    /// Gravity (m/s^2).
+    pub fn gravity(&self) -> Vec2 {
+        self.gravity
+    }
+
+    /// Set gravity (m/s^2), effective from the next step.
+    pub fn set_gravity(&mut self, gravity: Vec2) -> Result<(), PhysicsError> {
+        finite("gravity.x", gravity.x)?;
+        finite("gravity.y", gravity.y)?;
+        if gravity != self.gravity {
+            // A tilt changes what "at rest" means for everything.
+            self.wake_all();
+        }
+        self.gravity = gravity;
+        Ok(())
+    }
+
+    /// Simulated time so far (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken so far.
+    pub fn step_count(&self) -> u64 {
+        self.steps
+    }
+
+    /// Add a body; the definition is validated first and nothing changes on error.
+    pub fn add_body(&mut self, def: &BodyDef) -> Result<BodyId, PhysicsError> {
+        def.validate()?;
+        self.check_speed(
+            def.linear_velocity,
+            def.angular_velocity,
+            def.shape.bounding_radius(),
+        )?;
+        let index = match self.free.pop() {
+            Some(i) => i,
+            None => {
+                let i = u32::try_from(self.slots.len())
+                    .map_err(|_| PhysicsError::Full(self.body_count))?;
+                self.slots.push(Slot {
+                    generation: 0,
+                    body: None,
+                });
+                i
+            }
+        };
+        let slot = &mut self.slots[index as usize];
+        let id = BodyId {
+            index,
+            generation: slot.generation,
+        };
+        let body = Body::from_def(id, def);
+        let passive = body.is_static();
+        slot.body = Some(body);
+        self.body_count += 1;
+        self.broad_phase.insert(index, passive);
+        Ok(id)
+    }
+
+    /// Remove a body and every contact it had; returns the removed body.
+    pub fn remove_body(&mut self, id: BodyId) -> Result<Body, PhysicsError> {
+        self.body(id).ok_or(PhysicsError::UnknownBody(id))?;
+        // Whatever rested on this body must notice it is gone.
+        let i = id.index;
+        for c in self.contacts.iter().chain(&self.sleeping_contacts) {
+            if c.a == i || c.b == i {
+                self.wake_queue.push(if c.a == i { c.b } else { c.a });
+            }
+        }
+        self.wake_queued();
+        self.sleeping_contacts.retain(|c| c.a != i && c.b != i);
+        let slot = &mut self.slots[id.index as usize];
+        let body = slot.body.take().ok_or(PhysicsError::UnknownBody(id))?;
+        slot.generation = slot.generation.wrapping_add(1);
+        self.free.push(id.index);
+        self.body_count -= 1;
+        self.broad_phase.remove(id.index);
+        self.contacts.retain(|c| c.a != id.index && c.b != id.index);
+        Ok(body)
+    }
+
+    /// Refuse speeds beyond the World's speed cap: linear speed, and the rim speed |w| r of a
+    /// body of bounding radius r. (The solver clamps speeds anyway; a velocity given at the
+    /// API beyond the cap is a mistake worth naming.)
+    fn check_speed(&self, v: Vec2, w: Real, radius: Real) -> Result<(), PhysicsError> {
+        let max = self.settings.max_linear_speed;
+        let expected = "must not exceed Settings::max_linear_speed (default 400 m/s)";
+        if v.length() > max {
+            return Err(PhysicsError::OutOfRange {
+                field: "velocity (speed)",
+                value: v.length(),
+                expected,
+            });
+        }
+        if w.abs() * radius > max {
+            return Err(PhysicsError::OutOfRange {
+                field: "angular_velocity (rim speed)",
+                value: w.abs() * radius,
+                expected,
+            });
+        }
+        Ok(())
+    }
+
+    /// Remove every body and contact; settings, gravity and time are kept.
+    pub fn clear(&mut self) {
+        self.slots.clear();
+        self.free.clear();
+        self.body_count = 0;
+        self.broad_phase.clear();
+        self.contacts.clear();
+        self.previous.clear();
+        self.sleeping_contacts.clear();
+    }
+
+    /// The body with this id, if it is still in the world.
+    pub fn body(&self, id: BodyId) -> Option<&Body> {
+        self.slots
+            .get(id.index as usize)
+            .filter(|s| s.generation == id.generation)
+            .and_then(|s| s.body.as_ref())
+    }
+
+    /// A body by id, woken (with its island) first: anything that pushes a body wakes it.
+    fn body_mut(&mut self, id: BodyId) -> Result<&mut Body, PhysicsError> {
+        if self.body(id).is_some_and(|b| !b.awake) {
+            self.wake_queue.push(id.index);
+            self.wake_queued();
+        }
+        self.slots
+            .get_mut(id.index as usize)
+            .filter(|s| s.generation == id.generation)
+            .and_then(|s| s.body.as_mut())
+            .ok_or(PhysicsError::UnknownBody(id))
+    }
+
+    /// Every body, in slot order.
+    pub fn bodies(&self) -> impl Iterator<Item = &Body> + '_ {
+        self.slots.iter().filter_map(|s| s.body.as_ref())
+    }
+
+    /// Number of bodies.
+    pub fn body_count(&self) -> usize {
+        self.body_count
+    }
+
+    /// Number of dynamic bodies that are awake (the ones a step moves).
+    pub fn awake_count(&self) -> usize {
+        self.bodies().filter(|b| b.is_active()).count()
+    }
+
+    /// Wake every sleeping body.
+    pub fn wake_all(&mut self) {
+        let sleeping = self
+            .slots
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.body.as_ref().is_some_and(|b| !b.awake));
+        self.wake_queue.extend(sleeping.map(|(i, _)| i as u32));
+        self.wake_queued();
+    }
+
+    /// Add a force (N) through the centre of mass for the next step.
+    pub fn apply_force(&mut self, id: BodyId, force: Vec2) -> Result<(), PhysicsError> {
+        finite("force.x", force.x)?;
+        finite("force.y", force.y)?;
+        let b = self.body_mut(id)?;
+        b.force += force;
+        Ok(())
+    }
+
+    /// Add a force (N) at a world point (m) for the next step: force plus torque r x F.
+    pub fn apply_force_at(
+        &mut self,
+        id: BodyId,
+        force: Vec2,
+        point: Vec2,
+    ) -> Result<(), PhysicsError> {
+        finite("force.x", force.x)?;
+        finite("force.y", force.y)?;
+        finite("point.x", point.x)?;
+        finite("point.y", point.y)?;
+        let b = self.body_mut(id)?;
+        b.force += force;
+        b.torque += cross(point - b.position, force);
+        Ok(())
+    }
+
+    /// Add a torque (N m) for the next step.
+    pub fn apply_torque(&mut self, id: BodyId, torque: Real) -> Result<(), PhysicsError> {
+        finite("torque", torque)?;
+        let b = self.body_mut(id)?;
+        b.torque += torque;
+        Ok(())
+    }
+
+    /// Apply an impulse (N s) at the centre of mass now: v += P / m.
+    pub fn apply_impulse(&mut self, id: BodyId, impulse: Vec2) -> Result<(), PhysicsError> {
+        let p = self
+            .body(id)
+            .map(|b| b.position)
+            .ok_or(PhysicsError::UnknownBody(id))?;
+        self.apply_impulse_at(id, impulse, p)
+    }
+
+    /// Apply an impulse (N s) at a world point (m) now: v += P / m, w += (r x P) / I.
+    pub fn apply_impulse_at(
+        &mut self,
+        id: BodyId,
+        impulse: Vec2,
+        point: Vec2,
+    ) -> Result<(), PhysicsError> {
+        finite("impulse.x", impulse.x)?;
+        finite("impulse.y", impulse.y)?;
+        finite("point.x", point.x)?;
+        finite("point.y", point.y)?;
+        let max_v = self.settings.max_linear_speed;
+        let max_w = self.settings.max_rotation * 1e3;
+        let b = self.body_mut(id)?;
+        b.linear_velocity = clamp_speed(b.linear_velocity + b.inv_mass * impulse, max_v);
+        let w = b.angular_velocity + b.inv_inertia * cross(point - b.position, impulse);
+        b.angular_velocity = if w.is_finite() {
+            w.clamp(-max_w, max_w)
+        } else {
+            0.0
+        };
+        Ok(())
+    }
+
+    /// Set a body's velocities (m/s, rad/s). Ignored for static bodies.
+    pub fn set_velocity(
+        &mut self,
+        id: BodyId,
+        linear: Vec2,
+        angular: Real,
+    ) -> Result<(), PhysicsError> {
+        finite("velocity.x", linear.x)?;
+        finite("velocity.y", linear.y)?;
+        finite("angular_velocity", angular)?;
+        let radius = self
+            .body(id)
+            .ok_or(PhysicsError::UnknownBody(id))?
+            .shape
+            .bounding_radius();
+        self.check_speed(linear, angular, radius)?;
+        let b = self.body_mut(id)?;
+        if !b.is_static() {
+            b.linear_velocity = linear;
+            b.angular_velocity = angular;
+        }
+        Ok(())
+    }
+
+    /// Number of contacts (touching or speculative pairs), sleeping ones included.
+    pub fn contact_count(&self) -> usize {
+        self.contacts.len() + self.sleeping_contacts.len()
+    }
+
+    /// The contacts found in the last step, with the impulses the solver applied.
+    pub fn contacts(&self) -> impl Iterator<Item = ContactInfo> + '_ {
+        self.contacts
+            .iter()
+            .chain(&self.sleeping_contacts)
+            .map(move |c| {
+                let id = |i: u32| BodyId {
+                    index: i,
+                    generation: self.slots[i as usize].generation,
+                };
+                let mut points = [ContactPointInfo {
+                    point: Vec2::ZERO,
+                    separation: 0.0,
+                    normal_impulse: 0.0,
+                    tangent_impulse: 0.0,
+                }; 2];
+                for (out, p) in points.iter_mut().zip(&c.points[..c.count]) {
+                    *out = ContactPointInfo {
+                        point: p.point,
+                        separation: p.separation,
+                        normal_impulse: p.total_normal_impulse,
+                        tangent_impulse: p.tangent_impulse,
+                    };
+                }
+                ContactInfo {
+                    body_a: id(c.a),
+                    body_b: id(c.b),
+                    normal: c.normal,
+                    points,
+                    count: c.count,
+                }
+            })
+    }
+
+    /// Total kinetic energy (J).
+    pub fn kinetic_energy(&self) -> Real {
+        self.bodies().map(Body::kinetic_energy).sum()
+    }
+
+    /// Total potential energy in the current gravity field, relative to the origin (J).
+    pub fn potential_energy(&self) -> Real {
+        self.bodies()
+            .filter(|b| !b.is_static())
+            .map(|b| -b.mass * self.gravity.dot(b.position))
+            .sum()
+    }
+}

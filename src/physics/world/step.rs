@@ -1,0 +1,195 @@
+//! One step: the stages in order (contacts, solve, store, sleep) and the soft step's tiers.
+
+use super::islands::{RELAX_SCALE, TIERS};
+use super::*;
+
+impl World {
+    /// Advance the world by `dt` seconds.
+    ///
+    /// The pipeline of the appendix: (1) integrate forces and gravity into velocities,
+    /// (2) find contacts, (3) solve contact impulses, (4) integrate positions. Contacts depend
+    /// on positions only, so they are found first (which also wakes whatever an awake body is
+    /// about to touch); the soft-step solver runs (1), (3) and (4) inside each substep. Then
+    /// resting islands fall asleep. Forces and torques are cleared after the step.
+    pub fn step(&mut self, dt: Real) -> Result<(), PhysicsError> {
+        positive("dt", dt)?;
+        if self.broad_phase.active_is_empty() {
+            // Everything is static or asleep (anything pushed would have been woken): nothing
+            // moves, nothing to find or solve.
+            self.time += dt as f64;
+            self.steps += 1;
+            return Ok(());
+        }
+        let limits = Limits {
+            max_linear_speed: self.settings.max_linear_speed,
+            max_rotation: self.settings.max_rotation,
+        };
+        self.find_contacts(dt, self.settings.speculative_distance);
+        self.load_solver_bodies();
+        match self.settings.solver {
+            SolverKind::Sequential => {
+                solver::integrate_velocities(&mut self.solver_bodies, Moving::All, dt, limits);
+                solver::sequential::solve(
+                    &mut self.solver_bodies,
+                    &mut self.contacts,
+                    &self.settings,
+                    dt,
+                );
+                solver::integrate_positions(&mut self.solver_bodies, Moving::All, dt, limits);
+                self.split_impulse.correct(
+                    &mut self.solver_bodies,
+                    &self.contacts,
+                    &self.settings,
+                    dt,
+                );
+            }
+            SolverKind::SoftStep => self.solve_soft_step(dt, limits),
+        }
+        self.store_solver_bodies();
+        if self.settings.enable_sleep {
+            self.update_sleep(dt);
+        }
+        self.time += dt as f64;
+        self.steps += 1;
+        Ok(())
+    }
+
+    /// The soft step, with adaptive stiffness: islands whose load calls for it are solved apart,
+    /// with 2 or 4 times the substeps, relax passes and contact stiffness
+    /// (`Settings::adaptive_stiffness`); the rest, usually everything, in one solve as before.
+    pub(super) fn solve_soft_step(&mut self, dt: Real, limits: Limits) {
+        let top = if self.settings.adaptive_stiffness {
+            self.assign_tiers()
+        } else {
+            0
+        };
+        if top == 0 {
+            solver::soft_step::solve(
+                &mut self.solver_bodies,
+                Moving::All,
+                &mut self.contacts,
+                &mut self.wide,
+                &self.settings,
+                dt,
+                limits,
+            );
+            return;
+        }
+        let mut has_contacts = [false; TIERS];
+        for &t in &self.contact_tier {
+            has_contacts[t as usize] = true;
+        }
+        // Usually every contact is in one tier (a stack, a pyramid, a pile): solve them where
+        // they are. Otherwise each tier's contacts are moved to a list of their own.
+        let split = has_contacts.iter().filter(|&&h| h).count() > 1;
+        if split {
+            for group in &mut self.tier_contacts {
+                group.clear();
+            }
+            for (c, &t) in self.contacts.iter().zip(&self.contact_tier) {
+                self.tier_contacts[t as usize].push(*c);
+            }
+        }
+        let dynamic = self
+            .solver_bodies
+            .iter()
+            .filter(|b| b.inv_mass > 0.0)
+            .count();
+        for tier in 0..=top {
+            self.tier_bodies.clear();
+            let (bodies, body_tier) = (&self.solver_bodies, &self.body_tier);
+            self.tier_bodies.extend(
+                (0..body_tier.len() as u32).filter(|&i| {
+                    body_tier[i as usize] == tier && bodies[i as usize].inv_mass > 0.0
+                }),
+            );
+            if self.tier_bodies.is_empty() {
+                continue;
+            }
+            let settings = if tier == 0 {
+                self.settings.clone()
+            } else {
+                let scale = (1u32 << tier) as Real;
+                Settings {
+                    substeps: self.settings.substeps << tier,
+                    relax_iterations: self.settings.relax_iterations * RELAX_SCALE[tier as usize],
+                    contact_hertz: self.settings.contact_hertz * scale,
+                    ..self.settings.clone()
+                }
+            };
+            let contacts: &mut [Contact] = if split {
+                &mut self.tier_contacts[tier as usize]
+            } else if has_contacts[tier as usize] {
+                &mut self.contacts
+            } else {
+                // Bodies touching nothing: only integrated.
+                &mut []
+            };
+            solver::soft_step::solve(
+                &mut self.solver_bodies,
+                // Every moving body in this tier (a pyramid, a pile): the plain loop.
+                if self.tier_bodies.len() == dynamic {
+                    Moving::All
+                } else {
+                    Moving::Only(&self.tier_bodies)
+                },
+                contacts,
+                &mut self.wide,
+                &settings,
+                dt,
+                limits,
+            );
+        }
+        if split {
+            // Back into one list sorted by key, as the next step's matching expects.
+            self.contacts.clear();
+            for group in &self.tier_contacts {
+                self.contacts.extend_from_slice(group);
+            }
+            self.contacts.sort_unstable_by_key(|c| c.key);
+        }
+    }
+
+    /// Copy what the solver needs into the compact solver array (awake dynamic bodies only;
+    /// everything else is fixed).
+    pub(super) fn load_solver_bodies(&mut self) {
+        let g = self.gravity;
+        self.solver_bodies.clear();
+        self.solver_bodies
+            .extend(self.slots.iter().map(|slot| match &slot.body {
+                Some(b) if b.is_active() => SolverBody {
+                    v: b.linear_velocity,
+                    w: b.angular_velocity,
+                    inv_mass: b.inv_mass,
+                    inv_inertia: b.inv_inertia,
+                    accel: g + b.inv_mass * b.force,
+                    alpha: b.inv_inertia * b.torque,
+                    dp: Vec2::ZERO,
+                    dtheta: 0.0,
+                    dq: Rot::IDENTITY,
+                },
+                _ => SolverBody::FIXED,
+            }));
+        // One more fixed body, last, for the empty lanes of the wide solver's bundles.
+        self.solver_bodies.push(SolverBody::FIXED);
+    }
+
+    /// Write velocities and the step's motion back to the bodies; clear forces.
+    pub(super) fn store_solver_bodies(&mut self) {
+        for (slot, sb) in self.slots.iter_mut().zip(&self.solver_bodies) {
+            let Some(b) = slot.body.as_mut() else {
+                continue;
+            };
+            b.force = Vec2::ZERO;
+            b.torque = 0.0;
+            if !b.is_active() {
+                continue;
+            }
+            b.linear_velocity = sb.v;
+            b.angular_velocity = sb.w;
+            b.position += sb.dp;
+            b.angle += sb.dtheta;
+            b.rot = Rot::from_angle(b.angle);
+        }
+    }
+}

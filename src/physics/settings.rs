@@ -90,17 +90,18 @@ pub struct Settings {
     pub load_aware_stiffness: bool,
     /// Soft step: give each island the work its load calls for ("leave out what a scene does
     /// not need"). An island in which a contact has carried at least `stiff_load_ratio` times
-    /// the weight of the lighter body it touches for two steps running (or joins bodies whose
-    /// masses differ that much) is solved with twice the substeps, relax passes and contact
-    /// stiffness; one that joins masses `extreme_mass_ratio` apart, with four times the
-    /// substeps and stiffness and eight times the relax passes. Every other island keeps the base settings and pays
-    /// nothing. Default **on**: with it the defaults pass every case of the stiff suite (jittered
+    /// the weight of the lighter body it touches for two steps running is solved with 1.5
+    /// times the substeps and contact stiffness and twice the relax passes; from 2.25 times
+    /// that load (a spring's compression goes as load / omega^2), or where it joins bodies
+    /// whose masses differ by `stiff_load_ratio`, with twice the substeps; where it joins
+    /// masses `extreme_mass_ratio` apart, with four times the substeps and stiffness and eight
+    /// times the relax passes. Every other island keeps the base settings and pays nothing. Default **on**: with it the defaults pass every case of the stiff suite (jittered
     /// 20- and 50-box stacks, 100:1 and 1000:1 mass ratios both ways, the symmetric pyramid of
     /// base 30), which fixed settings pass only at 2.2-2.5 times the cost of every step.
     pub adaptive_stiffness: bool,
     /// Soft step, adaptive stiffness: the load ratio (a contact's force over the lighter body's
-    /// weight, or the pair's mass ratio) from which an island gets twice the work. Default 12:
-    /// a stack of 10 boxes stays on the base settings, a stack of 20 does not.
+    /// weight, or the pair's mass ratio) from which an island gets more work. Default 12: a
+    /// stack of 10 boxes stays on the base settings, a stack of 20 does not.
     pub stiff_load_ratio: Real,
     /// Soft step, adaptive stiffness: the mass ratio across a contact from which an island
     /// gets four times the work. Default 100 (a 1 kg box under 100 kg, or on it).

@@ -4,9 +4,11 @@
 use super::*;
 
 impl World {
-    /// Give every awake island a stiffness tier from its contacts: tier 1 where a contact's
-    /// lasting force is `stiff_load_ratio` times the lighter body's weight or more (a tall
-    /// stack or pyramid), or the two bodies' masses differ that much; tier 2 where the masses
+    /// Give every awake island a stiffness tier from its contacts: tier 1 (1.5 times the
+    /// substeps) where a contact's lasting force is `stiff_load_ratio` times the lighter
+    /// body's weight or more (a pyramid); tier 2 (twice) where it is [`LOADED_RANGE`] times
+    /// that (a tall stack), the two bodies' masses differ by `stiff_load_ratio`, or a touching
+    /// contact is too new for its load to be known; tier 3 (four times) where the masses
     /// differ by `extreme_mass_ratio` or more.
     /// Fills `contact_tier` and `body_tier`; returns the highest tier (0: nothing needs more).
     pub(super) fn assign_tiers(&mut self) -> u8 {
@@ -44,9 +46,14 @@ impl World {
                 && c.points[..c.count]
                     .iter()
                     .any(|p| p.separation <= self.settings.linear_slop);
+            // A soft contact's spring compresses by its load over m omega^2, and omega can rise
+            // with the substep rate only: 1.5 times the substeps hold 1.5^2 = 2.25 times the
+            // load at the same compression.
             let tier = if masses >= extreme {
+                3
+            } else if load >= LOADED_RANGE * stiff || masses >= stiff || unmeasured {
                 2
-            } else if load >= stiff || masses >= stiff || unmeasured {
+            } else if load >= stiff {
                 1
             } else {
                 0
@@ -216,13 +223,22 @@ impl World {
     }
 }
 
-/// Adaptive stiffness: the base tier and the two above it (2 and 4 times the work).
-pub(super) const TIERS: usize = 3;
+/// Adaptive stiffness: the base tier and the three above it.
+pub(super) const TIERS: usize = 4;
+
+/// Adaptive stiffness: substeps per tier in halves of `Settings::substeps` (1, 1.5, 2 and 4
+/// times); the contact hertz scales with them, since its ceiling is a quarter of the substep
+/// rate.
+pub(super) const SUBSTEP_HALVES: [u32; TIERS] = [2, 3, 4, 8];
 
 /// Adaptive stiffness: relax passes per tier, as multiples of `Settings::relax_iterations`.
-/// Tier 2 gets 8 (not 4) times: with 4, the 4 m box of 1000 kg on two 1 kg boxes overlapped
+/// Tier 3 gets 8 (not 4) times: with 4, the 4 m box of 1000 kg on two 1 kg boxes overlapped
 /// 9.8 mm (bound 10) and slid 2.3 cm; with 8, 2.5 mm and 0.04 mm. Its islands are small.
-pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 2, 8];
+pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 2, 2, 8];
+
+/// Adaptive stiffness: the loads tier 1 holds, as a multiple of `stiff_load_ratio`: 1.5^2,
+/// the square of its substep factor (the spring's compression is load / (m omega^2)).
+pub(super) const LOADED_RANGE: Real = 2.25;
 
 /// Adaptive stiffness: how many steps a new touching contact is solved as a loaded one
 /// before its measured load decides (`World::assign_tiers`).

@@ -1,6 +1,6 @@
 //! One step: the stages in order (contacts, solve, store, sleep) and the soft step's tiers.
 
-use super::islands::{RELAX_SCALE, TIERS};
+use super::islands::{RELAX_SCALE, SUBSTEP_HALVES, TIERS};
 use super::*;
 
 impl World {
@@ -109,11 +109,11 @@ impl World {
             let settings = if tier == 0 {
                 self.settings.clone()
             } else {
-                let scale = (1u32 << tier) as Real;
+                let t = tier as usize;
                 Settings {
-                    substeps: self.settings.substeps << tier,
-                    relax_iterations: self.settings.relax_iterations * RELAX_SCALE[tier as usize],
-                    contact_hertz: self.settings.contact_hertz * scale,
+                    substeps: self.settings.substeps * SUBSTEP_HALVES[t] / 2,
+                    relax_iterations: self.settings.relax_iterations * RELAX_SCALE[t],
+                    contact_hertz: self.settings.contact_hertz * SUBSTEP_HALVES[t] as Real / 2.0,
                     ..self.settings.clone()
                 }
             };

@@ -6,9 +6,9 @@ use super::*;
 impl World {
     /// Give every awake island a stiffness tier from its contacts: tier 1 (1.5 times the
     /// substeps) where a contact's lasting force is `stiff_load_ratio` times the lighter
-    /// body's weight or more (a pyramid); tier 2 (twice) where it is [`LOADED_RANGE`] times
-    /// that (a tall stack), the two bodies' masses differ by `stiff_load_ratio`, or a touching
-    /// contact is too new for its load to be known; tier 3 (four times) where the masses
+    /// body's weight or more (a pyramid), or a touching contact is too new for its load to be
+    /// known; tier 2 (twice) where the load is [`LOADED_RANGE`] times that (a tall stack) or
+    /// the two bodies' masses differ by `stiff_load_ratio`; tier 3 (four times) where the masses
     /// differ by `extreme_mass_ratio` or more.
     /// Fills `contact_tier` and `body_tier`; returns the highest tier (0: nothing needs more).
     pub(super) fn assign_tiers(&mut self) -> u8 {
@@ -51,9 +51,9 @@ impl World {
             // load at the same compression.
             let tier = if masses >= extreme {
                 3
-            } else if load >= LOADED_RANGE * stiff || masses >= stiff || unmeasured {
+            } else if load >= LOADED_RANGE * stiff || masses >= stiff {
                 2
-            } else if load >= stiff {
+            } else if load >= stiff || unmeasured {
                 1
             } else {
                 0

@@ -7,6 +7,7 @@ pub(crate) mod sequential;
 pub(crate) mod soft_step;
 pub(crate) mod wide;
 
+use super::contact::Contact;
 use super::math::{Real, Rot, Vec2};
 
 /// The per-body data the solver's inner loop reads and writes.
@@ -224,6 +225,16 @@ pub(crate) struct BlockMass {
 }
 
 impl BlockMass {
+    /// The block of a two-point contact `c` (None for one point, or when ill-conditioned).
+    pub fn of_contact(a: &SolverBody, b: &SolverBody, c: &Contact) -> Option<BlockMass> {
+        if c.count != 2 {
+            return None;
+        }
+        let ra = [c.points[0].anchor_a, c.points[1].anchor_a];
+        let rb = [c.points[0].anchor_b, c.points[1].anchor_b];
+        BlockMass::new(a, b, ra, rb, c.normal)
+    }
+
     /// The block for anchors `ra`, `rb` along `n`, or None when it is too ill-conditioned to
     /// invert safely (nearly coincident points): k11^2 < 1000 det, Box2D's bound.
     pub fn new(

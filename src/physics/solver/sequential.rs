@@ -24,6 +24,14 @@ pub(crate) fn effective_mass(a: &SolverBody, b: &SolverBody, ra: Vec2, rb: Vec2,
     }
 }
 
+/// A point's normal and tangent effective masses (eqs. 56-57) from its anchors, for normal
+/// `n` and tangent `t`.
+#[inline]
+pub(crate) fn point_masses(a: &SolverBody, b: &SolverBody, p: &mut ContactPoint, n: Vec2, t: Vec2) {
+    p.normal_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, n);
+    p.tangent_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, t);
+}
+
 /// Prepare, warm start and iterate. Velocities in `bodies` are updated in place.
 pub(crate) fn solve(
     bodies: &mut [SolverBody],
@@ -128,9 +136,8 @@ fn prepare(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
         for p in &mut c.points[..c.count] {
+            point_masses(a, b, p, n, t);
             let (ra, rb) = (p.anchor_a, p.anchor_b);
-            p.normal_mass = effective_mass(a, b, ra, rb, n);
-            p.tangent_mass = effective_mass(a, b, ra, rb, t);
             let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
             let vn = dv.dot(n);
             p.relative_velocity = vn;
@@ -164,13 +171,7 @@ fn prepare(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
                 p.tangent_impulse = 0.0;
             }
         }
-        c.block = if c.count == 2 {
-            let ra = [c.points[0].anchor_a, c.points[1].anchor_a];
-            let rb = [c.points[0].anchor_b, c.points[1].anchor_b];
-            BlockMass::new(a, b, ra, rb, n)
-        } else {
-            None
-        };
+        c.block = BlockMass::of_contact(a, b, c);
     }
 }
 

@@ -8,7 +8,7 @@
 //! push-out speed is capped; and speculative points (separation > 0) only let the bodies
 //! close the gap in one substep, which stops fast bodies at the surface.
 
-use super::sequential::effective_mass;
+use super::sequential::point_masses;
 use super::wide::WideSolver;
 use super::{
     apply_along, integrate_positions, integrate_velocities, pair_mut, relative_velocity,
@@ -227,10 +227,8 @@ fn prepare(
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
         for p in &mut c.points[..c.count] {
-            let (ra, rb) = (p.anchor_a, p.anchor_b);
-            p.arms = Arms::new(ra, rb, n, t);
-            p.normal_mass = effective_mass(a, b, ra, rb, n);
-            p.tangent_mass = effective_mass(a, b, ra, rb, t);
+            p.arms = Arms::new(p.anchor_a, p.anchor_b, n, t);
+            point_masses(a, b, p, n, t);
             p.adjusted_separation = p.separation - (p.arms.rb_n - p.arms.ra_n);
             p.relative_velocity = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
             p.max_normal_impulse = 0.0;
@@ -241,13 +239,7 @@ fn prepare(
             }
         }
         c.softness = stiffness.softness(c);
-        c.block = if c.count == 2 {
-            let ra = [c.points[0].anchor_a, c.points[1].anchor_a];
-            let rb = [c.points[0].anchor_b, c.points[1].anchor_b];
-            BlockMass::new(a, b, ra, rb, n)
-        } else {
-            None
-        };
+        c.block = BlockMass::of_contact(a, b, c);
     }
 }
 

@@ -374,6 +374,16 @@ impl ServerConfig {
         positive("limits.max_speed", l.max_speed)?;
         positive("limits.max_angular_speed", l.max_angular_speed)?;
         positive("limits.max_friction", l.max_friction)?;
+        if l.max_friction > crate::physics::body::MAX_FRICTION as f32 {
+            return Err(invalid(
+                "limits.max_friction",
+                l.max_friction,
+                format!(
+                    "must be <= {} (the engine's largest friction coefficient)",
+                    crate::physics::body::MAX_FRICTION
+                ),
+            ));
+        }
         count("limits.max_name_bytes", l.max_name_bytes, 0, 1 << 20)?;
         if l.min_size > l.max_coordinate || l.min_density > l.max_density {
             return Err(invalid(

@@ -332,6 +332,15 @@ impl ServerConfig {
                 "must be within 0.01..=86400 seconds",
             ));
         }
+        if self.checkpoint.is_none()
+            && self.checkpoint_every != ServerConfig::default().checkpoint_every
+        {
+            return Err(invalid(
+                "checkpoint_every",
+                self.checkpoint_every,
+                "has no effect without a checkpoint file (config key checkpoint, flag --checkpoint)",
+            ));
+        }
         if self.resume && self.checkpoint.is_none() {
             return Err(invalid(
                 "resume",

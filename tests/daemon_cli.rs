@@ -105,7 +105,10 @@ fn sigterm_stops_the_daemon_within_2_s() {
     loop {
         let line = lines.next().expect("daemon log").unwrap();
         // stderr is a pipe here, not a terminal: plain text, no colour codes.
-        assert!(!line.contains('\x1b'), "ANSI escape in a piped log: {line:?}");
+        assert!(
+            !line.contains('\x1b'),
+            "ANSI escape in a piped log: {line:?}"
+        );
         if line.contains("tick loop started") {
             break;
         }

@@ -41,7 +41,7 @@ pub struct SimulateArgs {
 pub enum Format {
     /// An aligned, human-readable table per printed frame.
     Table,
-    /// One JSON object per printed frame: {"frame","time","bodies":[{"id","name","x","y","angle","vx","vy","omega"}]}.
+    /// One JSON object per printed frame: {"frame","time","bodies":[{"id","name","x","y","angle","vx","vy","omega","asleep"}]}.
     Jsonl,
 }
 
@@ -171,8 +171,9 @@ fn simulate(
                 .with_context(|| format!("step {frame}"))?;
         }
         if frame % plan.every == 0 || frame == plan.steps {
-            // frame x dt as asked for, rather than the engine's sum of rounded steps
-            let time = frame as f64 * plan.dt;
+            // frame x dt as asked for, rather than the engine's sum of rounded steps, to the
+            // nanosecond (3 x 0.1 prints 0.3, not 0.30000000000000004)
+            let time = (frame as f64 * plan.dt * 1e9).round() / 1e9;
             let rows = rows(world, tracked);
             match format {
                 Format::Jsonl => {
@@ -215,6 +216,8 @@ struct Row<'a> {
     vx: Real,
     vy: Real,
     omega: Real,
+    /// The body sleeps (with its island): the engine skips it until something wakes it.
+    asleep: bool,
 }
 
 fn rows<'a>(world: &World, tracked: &[(BodyId, &'a str)]) -> Vec<Row<'a>> {
@@ -232,6 +235,7 @@ fn rows<'a>(world: &World, tracked: &[(BodyId, &'a str)]) -> Vec<Row<'a>> {
                 vx: v.x,
                 vy: v.y,
                 omega: b.angular_velocity(),
+                asleep: !b.is_awake(),
             })
         })
         .collect()

@@ -53,10 +53,10 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// Non-zero exit, no panic, and stderr mentions every one of `needles`.
+/// Exit 2 (a bad value), no panic, and stderr mentions every one of `needles`.
 fn assert_refused(o: &Output, needles: &[&str]) {
     let err = stderr(o);
-    assert!(!o.status.success(), "expected failure, stderr: {err}");
+    assert_eq!(o.status.code(), Some(2), "expected exit 2, stderr: {err}");
     assert!(!err.contains("panicked"), "panicked: {err}");
     for n in needles {
         assert!(err.contains(n), "stderr lacks {n:?}: {err}");

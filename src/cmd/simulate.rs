@@ -113,18 +113,23 @@ fn plan(args: &SimulateArgs) -> anyhow::Result<Plan> {
 
 /// Run `tiltbox simulate`.
 pub fn run(args: SimulateArgs) -> Result<ExitCode, Failure> {
-    let plan = plan(&args)?;
-    let mut scene = Scene::load(&args.scene).map_err(|e| match e {
-        // already names the file
-        SceneError::Io { .. } => anyhow::Error::new(e),
-        e => anyhow::Error::new(e).context(format!("scene {}", args.scene.display())),
-    })?;
+    // A bad flag or a scene that cannot be used is a bad value: exit 2, as everywhere.
+    let usage = |e: anyhow::Error| Failure::Usage(format!("{e:#}"));
+    let plan = plan(&args).map_err(usage)?;
+    let mut scene = Scene::load(&args.scene)
+        .map_err(|e| match e {
+            // already names the file
+            SceneError::Io { .. } => anyhow::Error::new(e),
+            e => anyhow::Error::new(e).context(format!("scene {}", args.scene.display())),
+        })
+        .map_err(usage)?;
     if let Some(solver) = args.solver {
         scene.settings.solver = solver.into();
     }
     let (mut world, ids) = scene
         .build_world()
-        .with_context(|| format!("scene {}", args.scene.display()))?;
+        .with_context(|| format!("scene {}", args.scene.display()))
+        .map_err(usage)?;
     let tracked: Vec<(BodyId, &str)> = scene
         .dynamic_bodies()
         .map(|(i, b)| (ids[i], b.name.as_str()))

@@ -383,7 +383,7 @@ impl ServerConfig {
         positive("limits.max_speed", l.max_speed)?;
         positive("limits.max_angular_speed", l.max_angular_speed)?;
         positive("limits.max_friction", l.max_friction)?;
-        if l.max_friction > crate::physics::body::MAX_FRICTION as f32 {
+        if f64::from(l.max_friction) > f64::from(crate::physics::body::MAX_FRICTION) {
             return Err(invalid(
                 "limits.max_friction",
                 l.max_friction,

@@ -1,5 +1,6 @@
-//! The `tiltbox serve` binary: bad config exits 2 naming key and value; SIGTERM stops it
-//! cleanly within 2 s.
+//! The `tiltbox serve` binary: bad config exits 2 naming key and value; a flag that would be
+//! ignored is refused; a port in use exits 2 naming the endpoint and the key that chose it;
+//! logs to a pipe are plain text; SIGTERM stops it cleanly within 2 s.
 #![cfg(all(feature = "net", feature = "cli"))]
 #![cfg(feature = "net")]
 
@@ -51,6 +52,46 @@ fn bad_config_names_key_and_value_and_exits_2() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+#[test]
+fn flags_that_would_be_ignored_are_refused() {
+    let (code, err) = run(&["serve", "--checkpoint-every", "5"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("checkpoint_every = 5") && err.contains("--checkpoint"),
+        "{err}"
+    );
+    let (code, err) = run(&[
+        "serve",
+        "--zenoh-config",
+        "config/zenoh/acl-daemon.json5",
+        "--listen",
+        "tcp/127.0.0.1:17472",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("zenoh.config_file = config/zenoh/acl-daemon.json5")
+            && err.contains("--listen would be ignored"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_port_in_use_exits_2_naming_the_endpoint_and_its_key() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let endpoint = format!("tcp/{}", taken.local_addr().unwrap());
+    let (code, err) = run(&["serve", "--listen", &endpoint, "--log", "error"]);
+    assert_eq!(code, 2, "{err}");
+    let line = err.lines().find(|l| l.starts_with("error:")).expect(&err);
+    assert!(
+        line.contains("zenoh.listen") && line.contains(&endpoint) && line.contains("--listen"),
+        "{line}"
+    );
+    assert!(
+        !line.contains(".cargo") && !line.contains(".rs:"),
+        "no build-machine paths: {line}"
+    );
+}
+
 #[cfg(unix)]
 #[test]
 fn sigterm_stops_the_daemon_within_2_s() {
@@ -63,6 +104,11 @@ fn sigterm_stops_the_daemon_within_2_s() {
     let t0 = Instant::now();
     loop {
         let line = lines.next().expect("daemon log").unwrap();
+        // stderr is a pipe here, not a terminal: plain text, no colour codes.
+        assert!(
+            !line.contains('\x1b'),
+            "ANSI escape in a piped log: {line:?}"
+        );
         if line.contains("tick loop started") {
             break;
         }

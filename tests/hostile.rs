@@ -494,3 +494,51 @@ fn an_engine_failure_resets_the_world_instead_of_killing_the_daemon() {
     assert_eq!(sim.frame(), 400, "frames stay consecutive");
     eprintln!("engine failures recovered from: {resets}");
 }
+
+/// Every refusal of a limited number names the limit a user can change and its real value:
+/// a friction past the daemon's limit is never refused with the engine's wider range (a user
+/// told [0, 1000] would try 500 and be refused again), and gravity and tilt name
+/// `limits.max_gravity` as every other limit names its key.
+#[test]
+fn limit_refusals_name_the_real_limit_and_its_key() {
+    let limits = Limits::default();
+    for friction in [10.5, 500.0, 1000.0, 1001.0, 1e30] {
+        let body = SpawnBody {
+            friction,
+            ..SpawnBody::at(ShapeSpec::Circle { radius: 0.5 }, Vector::new(0.0, 2.0))
+        };
+        let payload = encode(&Spawn { bodies: vec![body] }).unwrap();
+        let e = parse_command(CommandKey::Spawn, &payload, &limits).unwrap_err();
+        assert_eq!(
+            e,
+            format!(
+                "bodies[0]: friction = {friction} is out of range: must be within [0, 10] (limits.max_friction)"
+            )
+        );
+    }
+    let gravity = encode(&SetGravity { x: 0.0, y: -101.0 }).unwrap();
+    let e = parse_command(CommandKey::Gravity, &gravity, &limits).unwrap_err();
+    assert_eq!(
+        e,
+        "|gravity| = 101 is out of range: must be <= 100 m/s^2 (limits.max_gravity)"
+    );
+    let tilt = encode(&Tilt::Accelerometer {
+        x: 0.0,
+        y: -101.0,
+        z: 0.0,
+    })
+    .unwrap();
+    let e = parse_command(CommandKey::Tilt, &tilt, &limits).unwrap_err();
+    assert!(
+        e.ends_with("must be <= 100 m/s^2 (limits.max_gravity)"),
+        "{e}"
+    );
+    // A daemon limit above the engine's own is refused at start, so the two never disagree.
+    let mut config = ServerConfig::default();
+    config.limits.max_friction = 2000.0;
+    let e = config.validate().unwrap_err().to_string();
+    assert!(
+        e.contains("limits.max_friction = 2000") && e.contains("<= 1000"),
+        "{e}"
+    );
+}

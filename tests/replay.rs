@@ -181,7 +181,86 @@ fn a_recorded_run_replays_bit_identically_at_every_frame() {
     assert_eq!(report.mismatches, 0);
     assert!(!report.clean_end);
     assert!(report.frames_checked > 100);
+
+    damage_inside_is_refused(&path, &bytes);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Byte offsets of every record of a journal (the header is record 0), walked with the
+/// documented framing: 12 bytes of magic and version, then per record a u32 length, its
+/// complement, an 8-byte checksum and the payload.
+fn record_offsets(bytes: &[u8]) -> Vec<usize> {
+    let mut offsets = Vec::new();
+    let mut at = 12;
+    while at + 16 <= bytes.len() {
+        let len = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+        offsets.push(at);
+        at += 16 + len;
+    }
+    assert_eq!(at, bytes.len(), "the framing walks to the end of the file");
+    offsets
+}
+
+/// The experiment: one byte set to 0x7f in a record halfway through a cleanly ended
+/// journal. The reader must refuse it naming that record and offset (not call it a torn
+/// tail), and so must `tiltbox replay`, with a non-zero exit; a torn tail still replays.
+fn damage_inside_is_refused(path: &std::path::Path, bytes: &[u8]) {
+    let offsets = record_offsets(bytes);
+    let half = offsets.len() / 2;
+    let at = offsets[half];
+    let named = format!("record {half} at byte offset {at}");
+
+    // The first payload byte.
+    let mut damaged = bytes.to_vec();
+    damaged[at + 16] = if bytes[at + 16] == 0x7f { 0x7e } else { 0x7f };
+    let e = Journal::parse(&damaged).unwrap_err();
+    assert!(e.contains(&named) && e.contains("checksum mismatch"), "{e}");
+
+    // A length byte: caught by its complement, not read as a record running past the end.
+    let mut damaged = bytes.to_vec();
+    damaged[at + 2] ^= 0x40;
+    let e = Journal::parse(&damaged).unwrap_err();
+    assert!(
+        e.contains(&named) && e.contains("length field is damaged"),
+        "{e}"
+    );
+
+    // A checksum byte.
+    let mut damaged = bytes.to_vec();
+    damaged[at + 9] ^= 0x01;
+    let e = Journal::parse(&damaged).unwrap_err();
+    assert!(e.contains(&named), "{e}");
+
+    // A torn tail: the file ends inside the last record (any cut inside it).
+    let last = *offsets.last().unwrap();
+    for cut in [last + 1, last + 7, last + 16, bytes.len() - 1] {
+        let torn = Journal::parse(&bytes[..cut]).unwrap();
+        assert!(torn.truncated, "cut at {cut}");
+        assert_eq!(torn.records.len(), offsets.len() - 2, "cut at {cut}");
+    }
+
+    // The binary: exit 0 on the intact log, non-zero naming the record on the damaged one.
+    let bin = env!("CARGO_BIN_EXE_tiltbox");
+    let run = |file: &std::path::Path| {
+        let out = std::process::Command::new(bin)
+            .arg("replay")
+            .arg(file)
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (code, err) = run(path);
+    assert_eq!(code, Some(0), "{err}");
+    let mut damaged = bytes.to_vec();
+    damaged[at + 16] = if bytes[at + 16] == 0x7f { 0x7e } else { 0x7f };
+    let bad = path.with_extension("damaged");
+    std::fs::write(&bad, &damaged).unwrap();
+    let (code, err) = run(&bad);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains(&named), "{err}");
 }
 
 #[test]
@@ -194,7 +273,21 @@ fn a_damaged_journal_header_is_refused() {
     b.truncate(8);
     b.extend_from_slice(&tiltbox::service::journal::FORMAT_VERSION.to_le_bytes());
     b.extend_from_slice(&1_000_000u32.to_le_bytes());
+    b.extend_from_slice(&0u32.to_le_bytes());
+    let e = Journal::parse(&b).unwrap_err();
+    assert!(
+        e.contains("record 0 (the header)") && e.contains("length"),
+        "{e}"
+    );
+    b.truncate(12);
+    b.extend_from_slice(&1_000u32.to_le_bytes());
+    b.extend_from_slice(&(!1_000u32).to_le_bytes());
     assert!(Journal::parse(&b).unwrap_err().contains("truncated header"));
+    // A journal of the previous format (no per-record checksums) is refused, saying why.
+    let mut old = b"TILTJRNL".to_vec();
+    old.extend_from_slice(&3u32.to_le_bytes());
+    let e = Journal::parse(&old).unwrap_err();
+    assert!(e.contains("version 3") && e.contains("older"), "{e}");
 }
 
 /// Through a real daemon: `record` in the config, commands over Zenoh, clean shutdown, replay.

@@ -197,3 +197,28 @@ fn missing_file_names_the_path_and_the_os_error() {
     }
     assert!(e.to_string().contains("/nonexistent/scene.toml"));
 }
+
+#[test]
+fn the_line_of_a_late_table_is_counted_across_every_table_before_it() {
+    // 300 bodies of 6 lines each (header, name, shape, position, density, blank), a [[stack]]
+    // of 4 lines in the middle, and a typo in body #250: its header is on line
+    // 1 + 150 * 6 + 4 + 100 * 6 = 1505 (the stack expands to 3 bodies, hence #253).
+    let mut text = String::new();
+    for i in 0..300 {
+        if i == 150 {
+            text.push_str("[[stack]]\ncount = 3\nsize = 1\nx = -20\n");
+        }
+        let typo = if i == 250 { "frction = 1\n" } else { "" };
+        text.push_str(&format!(
+            "[[body]]\nname = \"b{i}\"\nshape = {{ type = \"circle\", radius = 0.5 }}\nposition = [{i}, 0]\ndensity = 1\n{typo}"
+        ));
+        if typo.is_empty() {
+            text.push('\n');
+        }
+    }
+    let e = Scene::from_toml_str(&text).unwrap_err().to_string();
+    assert!(
+        e.starts_with(r#"body "b250" (#253) at line 1505: unknown field `frction`"#),
+        "{e}"
+    );
+}

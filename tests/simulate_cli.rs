@@ -53,10 +53,10 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// Non-zero exit, no panic, and stderr mentions every one of `needles`.
+/// Exit 2 (a bad value), no panic, and stderr mentions every one of `needles`.
 fn assert_refused(o: &Output, needles: &[&str]) {
     let err = stderr(o);
-    assert!(!o.status.success(), "expected failure, stderr: {err}");
+    assert_eq!(o.status.code(), Some(2), "expected exit 2, stderr: {err}");
     assert!(!err.contains("panicked"), "panicked: {err}");
     for n in needles {
         assert!(err.contains(n), "stderr lacks {n:?}: {err}");
@@ -93,6 +93,11 @@ fn jsonl_prints_every_30th_frame_of_the_six_bricks() {
             for key in ["x", "y", "angle", "vx", "vy", "omega"] {
                 let v = b[key].as_f64();
                 assert!(v.is_some_and(f64::is_finite), "{key} of {b}");
+            }
+            // Nothing sleeps at frame 0 (every body starts awake).
+            assert!(b["asleep"].is_boolean(), "{b}");
+            if k == 0 {
+                assert_eq!(b["asleep"].as_bool(), Some(false), "{b}");
             }
             if k == 0 {
                 first_y.push(b["y"].as_f64().unwrap());
@@ -266,4 +271,26 @@ fn help_lists_the_flags() {
         assert!(text.contains(flag), "{flag} missing from:\n{text}");
     }
     assert!(Path::new(env!("CARGO_MANIFEST_DIR")).join(BRICKS).exists());
+}
+
+#[test]
+fn jsonl_time_is_frame_times_dt_without_float_noise_and_says_who_sleeps() {
+    // 3 x 0.1 is 0.30000000000000004 in binary floating point; the output says 0.3.
+    let o = simulate_bricks("--format jsonl --dt 0.1 --seconds 0.3 --every 3");
+    assert!(o.status.success(), "stderr: {}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let last = text.lines().last().unwrap();
+    assert!(last.starts_with(r#"{"frame":3,"time":0.3,"#), "{last}");
+    // Bricks resting on the floor for 10 s (sleep on in scenes, 0.5 s to sleep) sleep.
+    let o = simulate_bricks("--format jsonl --seconds 10 --every 600");
+    assert!(o.status.success(), "stderr: {}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let last: Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
+    let asleep = last["bodies"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|b| b["asleep"].as_bool() == Some(true))
+        .count();
+    assert!(asleep > 0, "no brick asleep after 10 s: {last}");
 }

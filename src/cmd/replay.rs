@@ -23,8 +23,10 @@ pub struct ReplayArgs {
     pub hashes: bool,
 }
 
-/// Run `tiltbox replay`: exit 0 when every frame matches, 1 on a mismatch, 2 when the log or
-/// scene cannot be used.
+/// Run `tiltbox replay`: exit 0 when every frame in the log matches (a torn tail, as a crash
+/// leaves, ends the check where the log ends), 1 on a mismatch, 2 when the log is damaged
+/// inside (the message names the record and its byte offset) or the log or scene cannot be
+/// used.
 pub fn run(args: ReplayArgs) -> Result<ExitCode, Failure> {
     init_logging(None, "warn");
     let journal = Journal::read(&args.log).map_err(Failure::usage)?;

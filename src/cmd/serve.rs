@@ -8,7 +8,8 @@ use std::process::ExitCode;
 use std::time::Duration;
 use tiltbox::cli::{init_logging, runtime, wait_for_signal, Failure};
 use tiltbox::service::{
-    bench_net, shutdown_worlds, start_worlds, ServerConfig, ServerOptions, ServiceError,
+    bench_net, shutdown_worlds, start_worlds, ConfigError, ServerConfig, ServerOptions,
+    ServiceError,
 };
 
 /// Arguments of `tiltbox serve`. Every config value has a flag; a flag overrides the file.
@@ -94,7 +95,8 @@ pub struct ServeArgs {
     /// UDP multicast scouting [config: zenoh.multicast_scouting; default false].
     #[arg(long, value_name = "BOOL")]
     pub multicast_scouting: Option<bool>,
-    /// A full Zenoh json5 config, used as it is [config: zenoh.config_file].
+    /// A full Zenoh json5 config, used as it is: --mode, --listen, --connect and
+    /// --multicast-scouting are refused with it [config: zenoh.config_file].
     #[arg(long, value_name = "FILE")]
     pub zenoh_config: Option<PathBuf>,
     /// Write a command journal (commands stamped with their frame, a state hash per frame)
@@ -105,7 +107,7 @@ pub struct ServeArgs {
     /// the previous one is kept as FILE.prev [config: checkpoint].
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
-    /// Seconds between checkpoints [config: checkpoint_every; default 10].
+    /// Seconds between checkpoints; needs --checkpoint [config: checkpoint_every; default 10].
     #[arg(long, value_name = "SECONDS")]
     pub checkpoint_every: Option<f64>,
     /// Start from the checkpoint (or FILE.prev if it is damaged) instead of the scene
@@ -123,7 +125,7 @@ pub struct ServeArgs {
 
 impl ServeArgs {
     /// The config: the file (or the embedded defaults), then every flag given.
-    pub fn config(&self) -> Result<ServerConfig, tiltbox::service::ConfigError> {
+    pub fn config(&self) -> Result<ServerConfig, ConfigError> {
         let mut c = match &self.config {
             Some(path) => ServerConfig::load(path)?,
             None => ServerConfig::default(),
@@ -182,6 +184,30 @@ impl ServeArgs {
         set(&mut z.multicast_scouting, &self.multicast_scouting);
         if self.zenoh_config.is_some() {
             z.config_file = self.zenoh_config.clone();
+        }
+        // A Zenoh config file is used as it is: a flag that would set what it sets is refused
+        // rather than silently dropped.
+        if let Some(file) = &z.config_file {
+            let given: Vec<&str> = [
+                ("--listen", !self.listen.is_empty()),
+                ("--connect", !self.connect.is_empty()),
+                ("--mode", self.mode.is_some()),
+                ("--multicast-scouting", self.multicast_scouting.is_some()),
+            ]
+            .into_iter()
+            .filter_map(|(flag, given)| given.then_some(flag))
+            .collect();
+            if !given.is_empty() {
+                return Err(ConfigError::Invalid {
+                    key: "zenoh.config_file",
+                    value: file.display().to_string(),
+                    expected: format!(
+                        "is used as it is, so {} would be ignored: set it in that file, or drop \
+                         the file",
+                        given.join(", ")
+                    ),
+                });
+            }
         }
         c.validate()?;
         Ok(c)

@@ -41,7 +41,7 @@ pub struct SimulateArgs {
 pub enum Format {
     /// An aligned, human-readable table per printed frame.
     Table,
-    /// One JSON object per printed frame: {"frame","time","bodies":[{"id","name","x","y","angle","vx","vy","omega"}]}.
+    /// One JSON object per printed frame: {"frame","time","bodies":[{"id","name","x","y","angle","vx","vy","omega","asleep"}]}.
     Jsonl,
 }
 
@@ -113,18 +113,23 @@ fn plan(args: &SimulateArgs) -> anyhow::Result<Plan> {
 
 /// Run `tiltbox simulate`.
 pub fn run(args: SimulateArgs) -> Result<ExitCode, Failure> {
-    let plan = plan(&args)?;
-    let mut scene = Scene::load(&args.scene).map_err(|e| match e {
-        // already names the file
-        SceneError::Io { .. } => anyhow::Error::new(e),
-        e => anyhow::Error::new(e).context(format!("scene {}", args.scene.display())),
-    })?;
+    // A bad flag or a scene that cannot be used is a bad value: exit 2, as everywhere.
+    let usage = |e: anyhow::Error| Failure::Usage(format!("{e:#}"));
+    let plan = plan(&args).map_err(usage)?;
+    let mut scene = Scene::load(&args.scene)
+        .map_err(|e| match e {
+            // already names the file
+            SceneError::Io { .. } => anyhow::Error::new(e),
+            e => anyhow::Error::new(e).context(format!("scene {}", args.scene.display())),
+        })
+        .map_err(usage)?;
     if let Some(solver) = args.solver {
         scene.settings.solver = solver.into();
     }
     let (mut world, ids) = scene
         .build_world()
-        .with_context(|| format!("scene {}", args.scene.display()))?;
+        .with_context(|| format!("scene {}", args.scene.display()))
+        .map_err(usage)?;
     let tracked: Vec<(BodyId, &str)> = scene
         .dynamic_bodies()
         .map(|(i, b)| (ids[i], b.name.as_str()))
@@ -171,8 +176,9 @@ fn simulate(
                 .with_context(|| format!("step {frame}"))?;
         }
         if frame % plan.every == 0 || frame == plan.steps {
-            // frame x dt as asked for, rather than the engine's sum of rounded steps
-            let time = frame as f64 * plan.dt;
+            // frame x dt as asked for, rather than the engine's sum of rounded steps, to the
+            // nanosecond (3 x 0.1 prints 0.3, not 0.30000000000000004)
+            let time = (frame as f64 * plan.dt * 1e9).round() / 1e9;
             let rows = rows(world, tracked);
             match format {
                 Format::Jsonl => {
@@ -215,6 +221,8 @@ struct Row<'a> {
     vx: Real,
     vy: Real,
     omega: Real,
+    /// The body sleeps (with its island): the engine skips it until something wakes it.
+    asleep: bool,
 }
 
 fn rows<'a>(world: &World, tracked: &[(BodyId, &'a str)]) -> Vec<Row<'a>> {
@@ -232,6 +240,7 @@ fn rows<'a>(world: &World, tracked: &[(BodyId, &'a str)]) -> Vec<Row<'a>> {
                 vx: v.x,
                 vy: v.y,
                 omega: b.angular_velocity(),
+                asleep: !b.is_awake(),
             })
         })
         .collect()

@@ -1,4 +1,5 @@
-//! Why a scene file was refused.
+//! Why a scene file was refused, and how a refusal names where: the body or table, and the
+//! line it starts on.
 
 use crate::physics::PhysicsError;
 use std::path::PathBuf;
@@ -111,5 +112,55 @@ fn split_value(reason: &str) -> (Option<String>, String) {
     match split {
         Some((value, message)) => (Some(value), message),
         None => (None, reason.to_owned()),
+    }
+}
+
+/// How an error names a body: `body "NAME" (#INDEX)`, or `body #INDEX` when unnamed.
+pub(crate) fn body_label(name: Option<&str>, index: usize) -> String {
+    match name {
+        Some(name) => format!("body {name:?} (#{index})"),
+        None => format!("body #{index}"),
+    }
+}
+
+/// 1-based line numbers of byte offsets in one text, asked in increasing order: each call
+/// counts only the newlines since the previous one, so numbering every table of a file costs
+/// one pass over it, not one pass per table (which made a 5,051-body file take 1.7 s).
+pub(crate) struct LineCounter<'a> {
+    text: &'a str,
+    at: usize,
+    line: usize,
+}
+
+impl<'a> LineCounter<'a> {
+    pub(crate) fn new(text: &'a str) -> LineCounter<'a> {
+        LineCounter {
+            text,
+            at: 0,
+            line: 1,
+        }
+    }
+
+    /// The line of byte offset `at`; `at` must not be less than the previous call's.
+    pub(crate) fn line_of(&mut self, at: usize) -> usize {
+        debug_assert!(at >= self.at, "offsets asked out of order");
+        let at = at.clamp(self.at, self.text.len());
+        self.line += self.text.as_bytes()[self.at..at]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        self.at = at;
+        self.line
+    }
+}
+
+/// toml's message for a table read on its own, with the key path (when there is one) in
+/// front: `density: invalid type: string "heavy", expected f32`.
+pub(crate) fn describe(e: &toml::de::Error) -> String {
+    let text = e.to_string();
+    let text = text.trim_end();
+    match text.rsplit_once("\nin `") {
+        Some((message, keys)) => format!("{}: {message}", keys.trim_end_matches('`')),
+        None => text.to_owned(),
     }
 }

@@ -1,10 +1,12 @@
 //! The TOML schema (what serde reads) and its translation into validated [`Scene`] bodies.
 //!
-//! Reading happens in two layers so that every error can say which body it is about:
-//! the document is parsed once with each `[[body]]`, `[[stack]]` and `[[pyramid]]` table kept
-//! as a loose, spanned TOML table; each table is then read into its typed entry on its own,
-//! in document order, with its name, index and line at hand for the message.
+//! A valid document is read in one typed pass (linear in its size). A document that fails
+//! that pass is read again in two layers so that every error can say which body it is about:
+//! each `[[body]]`, `[[stack]]` and `[[pyramid]]` table kept as a loose, spanned TOML table,
+//! then read into its typed entry on its own, in document order, with its name, index and
+//! line at hand for the message.
 
+use super::error::{body_label, describe, LineCounter};
 use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
 use crate::physics::error::{finite, non_negative, positive, unit_interval};
 use crate::physics::{BodyDef, MassSpec, PhysicsError, Polygon, Real, Settings, Shape, Vec2};
@@ -29,22 +31,36 @@ fn default_name() -> String {
     "untitled".to_owned()
 }
 
-/// The top level of a scene file.
+/// The top level of a scene file, its entry tables read as `B`, `S` and `P`: typed entries
+/// in one pass (quick), or loose tables read one by one (to name the table in an error).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct SceneFile {
+struct SceneFile<B, S, P> {
     #[serde(default = "default_name")]
     name: String,
     #[serde(default = "default_gravity")]
     gravity: [Real; 2],
     #[serde(default)]
     settings: Settings,
-    #[serde(default)]
-    body: Vec<Spanned<Table>>,
-    #[serde(default)]
-    stack: Vec<Spanned<Table>>,
-    #[serde(default)]
-    pyramid: Vec<Spanned<Table>>,
+    #[serde(default = "Vec::new")]
+    body: Vec<Spanned<B>>,
+    #[serde(default = "Vec::new")]
+    stack: Vec<Spanned<S>>,
+    #[serde(default = "Vec::new")]
+    pyramid: Vec<Spanned<P>>,
+}
+
+/// A scene file whose entry tables are typed.
+type TypedFile = SceneFile<BodyEntry, StackEntry, PyramidEntry>;
+/// A scene file whose entry tables are kept as loose TOML tables.
+type LooseFile = SceneFile<Table, Table, Table>;
+
+/// One entry table: read, or still loose (read in its turn, to name it in an error).
+enum Entry {
+    Body(BodyEntry),
+    Stack(StackEntry),
+    Pyramid(PyramidEntry),
+    Loose(Table),
 }
 
 /// The `shape` inline table of a `[[body]]`, tagged by `type`; every length in metres.
@@ -203,14 +219,6 @@ impl Kind {
     }
 }
 
-/// How an error names a body: `body "NAME" (#INDEX)`, or `body #INDEX` when unnamed.
-pub(crate) fn body_label(name: Option<&str>, index: usize) -> String {
-    match name {
-        Some(name) => format!("body {name:?} (#{index})"),
-        None => format!("body #{index}"),
-    }
-}
-
 /// How an error names a generator: `stack "NAME" ([[stack]] #K)`, or `[[stack]] #K`.
 fn generator_label(kind: Kind, name: Option<&str>, k: usize) -> String {
     let table = kind.table_name();
@@ -220,94 +228,121 @@ fn generator_label(kind: Kind, name: Option<&str>, k: usize) -> String {
     }
 }
 
-/// 1-based line of byte offset `at` in `text`.
-fn line_of(text: &str, at: usize) -> usize {
-    text.get(..at).map_or(0, |t| t.matches('\n').count()) + 1
-}
-
 /// Parse and validate a scene document.
+///
+/// The document is first read with every entry table typed, in one pass: a file of 100,000
+/// bodies loads in well under a second. Only if that fails is it read again with each entry
+/// table kept loose and read in its turn, so that the error names the table, its index and
+/// its line, after any refusal of an earlier table, as the file is read top to bottom.
 pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
-    let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
-        entry: None,
-        message: e.to_string().trim_end().to_owned(),
-    })?;
+    let (name, gravity, settings, mut entries) = match toml::from_str::<TypedFile>(text) {
+        Ok(f) => {
+            let mut entries = Vec::with_capacity(f.body.len() + f.stack.len() + f.pyramid.len());
+            push_all(&mut entries, Kind::Body, f.body, Entry::Body);
+            push_all(&mut entries, Kind::Stack, f.stack, Entry::Stack);
+            push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Pyramid);
+            (f.name, f.gravity, f.settings, entries)
+        }
+        Err(_) => {
+            let f: LooseFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+                entry: None,
+                message: e.to_string().trim_end().to_owned(),
+            })?;
+            let mut entries = Vec::with_capacity(f.body.len() + f.stack.len() + f.pyramid.len());
+            push_all(&mut entries, Kind::Body, f.body, Entry::Loose);
+            push_all(&mut entries, Kind::Stack, f.stack, Entry::Loose);
+            push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Loose);
+            (f.name, f.gravity, f.settings, entries)
+        }
+    };
 
-    let gravity = Vec2::new(file.gravity[0], file.gravity[1]);
+    let gravity = Vec2::new(gravity[0], gravity[1]);
     check("scene", finite("gravity.x", gravity.x))?;
     check("scene", finite("gravity.y", gravity.y))?;
-    file.settings
+    settings
         .validate()
         .map_err(|e| SceneError::physics("[settings]", e))?;
 
-    // Every entry table in document order (by where it starts), so bodies keep the order
-    // in which the file lists them whatever kind of table they come from.
-    let mut tables: Vec<(usize, Kind, usize, Table)> = Vec::new();
-    for (kind, list) in [
-        (Kind::Body, file.body),
-        (Kind::Stack, file.stack),
-        (Kind::Pyramid, file.pyramid),
-    ] {
-        for (k, spanned) in list.into_iter().enumerate() {
-            let start = spanned.span().start;
-            tables.push((start, kind, k, spanned.into_inner()));
-        }
-    }
-    tables.sort_by_key(|&(start, kind, k, _)| (start, kind as u8, k));
-
-    let mut bodies: Vec<SceneBody> = Vec::new();
-    for (start, kind, k, table) in tables {
-        let name = table
-            .get("name")
-            .and_then(|v| v.as_str())
-            .map(str::to_owned);
-        let line = line_of(text, start);
-        let next_index = bodies.len();
-        let entry_label = || {
-            let label = match kind {
-                Kind::Body => body_label(name.as_deref(), next_index),
-                _ => generator_label(kind, name.as_deref(), k),
-            };
-            format!("{label} at line {line}")
+    // Document order (by where each table starts), so bodies keep the order in which the
+    // file lists them whatever kind of table they come from.
+    entries.sort_by_key(|&(start, kind, k, _)| (start, kind as u8, k));
+    let mut bodies: Vec<SceneBody> = Vec::with_capacity(entries.len());
+    let mut lines = LineCounter::new(text);
+    for (start, kind, k, entry) in entries {
+        let entry = match entry {
+            Entry::Loose(table) => read_loose(kind, k, table, lines.line_of(start), &bodies)?,
+            entry => entry,
         };
-        let parse_error = |e: toml::de::Error| SceneError::Parse {
-            entry: Some(entry_label()),
-            message: describe(&e),
-        };
-        match kind {
-            Kind::Body => {
-                let entry: BodyEntry = table.try_into().map_err(parse_error)?;
+        match entry {
+            Entry::Body(entry) => {
                 reserve(&bodies, 1)?;
                 let index = bodies.len();
                 bodies.push(entry.into_body(index)?);
             }
-            Kind::Stack => {
-                let entry: StackEntry = table.try_into().map_err(parse_error)?;
-                entry.expand(&generator_label(kind, name.as_deref(), k), &mut bodies)?;
+            Entry::Stack(entry) => {
+                let at = generator_label(kind, entry.name.as_deref(), k);
+                entry.expand(&at, &mut bodies)?;
             }
-            Kind::Pyramid => {
-                let entry: PyramidEntry = table.try_into().map_err(parse_error)?;
-                entry.expand(&generator_label(kind, name.as_deref(), k), &mut bodies)?;
+            Entry::Pyramid(entry) => {
+                let at = generator_label(kind, entry.name.as_deref(), k);
+                entry.expand(&at, &mut bodies)?;
             }
+            Entry::Loose(_) => unreachable!("read above"),
         }
     }
-
     Ok(Scene {
-        name: file.name,
+        name,
         gravity,
-        settings: file.settings,
+        settings,
         bodies,
     })
 }
 
-/// toml's message for a table read on its own, with the key path (when there is one) in
-/// front: `density: invalid type: string "heavy", expected f32`.
-fn describe(e: &toml::de::Error) -> String {
-    let text = e.to_string();
-    let text = text.trim_end();
-    match text.rsplit_once("\nin `") {
-        Some((message, keys)) => format!("{}: {message}", keys.trim_end_matches('`')),
-        None => text.to_owned(),
+/// An entry table with where it starts, its kind and its index among the tables of its kind.
+type Placed = (usize, Kind, usize, Entry);
+
+/// Append the tables of `kind`, each made an [`Entry`] by `entry`.
+fn push_all<T>(
+    out: &mut Vec<Placed>,
+    kind: Kind,
+    tables: Vec<Spanned<T>>,
+    entry: impl Fn(T) -> Entry,
+) {
+    for (k, spanned) in tables.into_iter().enumerate() {
+        let start = spanned.span().start;
+        out.push((start, kind, k, entry(spanned.into_inner())));
     }
+}
+
+/// Read a loose table of `kind` (the `k`-th of its kind, at `line`) into its typed entry; the
+/// error names it as the body it would have been (`bodies` so far) or as the generator.
+fn read_loose(
+    kind: Kind,
+    k: usize,
+    table: Table,
+    line: usize,
+    bodies: &[SceneBody],
+) -> Result<Entry, SceneError> {
+    let name = table
+        .get("name")
+        .and_then(|v| v.as_str())
+        .map(str::to_owned);
+    let entry_label = || {
+        let label = match kind {
+            Kind::Body => body_label(name.as_deref(), bodies.len()),
+            _ => generator_label(kind, name.as_deref(), k),
+        };
+        format!("{label} at line {line}")
+    };
+    let parse_error = |e: toml::de::Error| SceneError::Parse {
+        entry: Some(entry_label()),
+        message: describe(&e),
+    };
+    Ok(match kind {
+        Kind::Body => Entry::Body(table.try_into().map_err(parse_error)?),
+        Kind::Stack => Entry::Stack(table.try_into().map_err(parse_error)?),
+        Kind::Pyramid => Entry::Pyramid(table.try_into().map_err(parse_error)?),
+    })
 }
 
 /// Refuse a scene that would grow past [`MAX_BODIES`].

@@ -129,7 +129,7 @@ impl Scene {
             .map(|(i, body)| {
                 world
                     .add_body(&body.def)
-                    .map_err(|e| SceneError::physics(file::body_label(Some(&body.name), i), e))
+                    .map_err(|e| SceneError::physics(error::body_label(Some(&body.name), i), e))
             })
             .collect::<Result<Vec<BodyId>, SceneError>>()?;
         Ok((world, ids))

@@ -332,6 +332,15 @@ impl ServerConfig {
                 "must be within 0.01..=86400 seconds",
             ));
         }
+        if self.checkpoint.is_none()
+            && self.checkpoint_every != ServerConfig::default().checkpoint_every
+        {
+            return Err(invalid(
+                "checkpoint_every",
+                self.checkpoint_every,
+                "has no effect without a checkpoint file (config key checkpoint, flag --checkpoint)",
+            ));
+        }
         if self.resume && self.checkpoint.is_none() {
             return Err(invalid(
                 "resume",
@@ -374,6 +383,16 @@ impl ServerConfig {
         positive("limits.max_speed", l.max_speed)?;
         positive("limits.max_angular_speed", l.max_angular_speed)?;
         positive("limits.max_friction", l.max_friction)?;
+        if f64::from(l.max_friction) > f64::from(crate::physics::body::MAX_FRICTION) {
+            return Err(invalid(
+                "limits.max_friction",
+                l.max_friction,
+                format!(
+                    "must be <= {} (the engine's largest friction coefficient)",
+                    crate::physics::body::MAX_FRICTION
+                ),
+            ));
+        }
         count("limits.max_name_bytes", l.max_name_bytes, 0, 1 << 20)?;
         if l.min_size > l.max_coordinate || l.min_density > l.max_density {
             return Err(invalid(

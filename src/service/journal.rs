@@ -7,15 +7,29 @@
 //! hash at every frame: on the same build the run is bit-identical (docs/reliability.md says
 //! why and what would break it).
 //!
-//! File layout: magic `TILTJRNL`, format version (u32 LE), then records, each a u32 LE length
-//! followed by that many bytes of postcard: first a [`Header`], then [`Record`]s. A record
-//! cut short by a crash ends the log (reported as `truncated`), it does not poison it.
+//! File layout (all integers little-endian): magic `TILTJRNL`, format version (u32), then
+//! records, each framed as
+//!
+//! | bytes | field |
+//! | --- | --- |
+//! | 4 | payload length n (u32) |
+//! | 4 | `!n`, its bitwise complement: a damaged length is caught, not mistaken for a torn tail |
+//! | 8 | FNV-1a 64 of the payload |
+//! | n | payload: postcard of a [`Header`] (record 0) or a [`Record`] (records 1, 2, ...) |
+//!
+//! Reading tells two kinds of damage apart. A *torn tail* - the file ends inside the last
+//! record, as when the daemon is killed mid-write - ends the log there (`truncated`) and
+//! everything before it replays. Anything else - a length and its complement that disagree, a
+//! checksum that does not match, a payload that does not decode - is damage *inside* the log
+//! and refuses it, naming the record and its byte offset: records after it cannot be trusted
+//! to be the ones written.
 
 use super::checkpoint;
 use super::command::{Command, Incoming};
 use super::config::ServerConfig;
 use super::files::FileError;
 use super::sim::{SceneSource, Simulation, StartError};
+use crate::physics::hash::fnv1a;
 use crate::protocol::CommandKey;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -23,9 +37,14 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Bumped whenever the header or the records change shape.
-pub const FORMAT_VERSION: u32 = 3;
+/// Bumped whenever the header, the records or their framing change shape. Version 4 added
+/// the per-record length check and checksum; older journals are refused (re-record the run).
+pub const FORMAT_VERSION: u32 = 4;
 const MAGIC: &[u8; 8] = b"TILTJRNL";
+/// Bytes before the first record: magic and version.
+const FILE_HEAD: usize = 8 + 4;
+/// Bytes of a record's framing before its payload: length, its complement, checksum.
+const RECORD_HEAD: usize = 4 + 4 + 8;
 /// Largest record accepted when reading (a corrupt length must not allocate gigabytes).
 const MAX_RECORD: u32 = 256 << 20;
 
@@ -98,11 +117,79 @@ pub enum JournalError {
     Start(String),
 }
 
+/// Append `value` to `out` as one framed record (length, complement, checksum, payload).
 fn frame_bytes(out: &mut Vec<u8>, value: &impl Serialize) -> Result<(), String> {
     let bytes = postcard::to_stdvec(value).map_err(|e| e.to_string())?;
-    out.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+    let len = u32::try_from(bytes.len())
+        .ok()
+        .filter(|&n| n <= MAX_RECORD)
+        .ok_or_else(|| format!("a record of {} bytes is too large", bytes.len()))?;
+    out.extend_from_slice(&len.to_le_bytes());
+    out.extend_from_slice(&(!len).to_le_bytes());
+    out.extend_from_slice(&fnv1a(&bytes).to_le_bytes());
     out.extend_from_slice(&bytes);
     Ok(())
+}
+
+/// One record's place in the file, for messages: `record 7 at byte offset 412`.
+fn record_at(index: u64, offset: usize) -> String {
+    if index == 0 {
+        format!("record 0 (the header) at byte offset {offset}")
+    } else {
+        format!("record {index} at byte offset {offset}")
+    }
+}
+
+/// What the reader found at one record's position.
+enum Framed<'a> {
+    /// A whole record whose length and checksum are intact.
+    Whole(&'a [u8]),
+    /// The file ends inside this record (a torn tail).
+    Torn,
+}
+
+/// Read the record at `bytes[*at..]`, advancing `at`; `None` at the end of the file.
+fn next_record<'a>(
+    bytes: &'a [u8],
+    at: &mut usize,
+    index: u64,
+) -> Option<Result<Framed<'a>, String>> {
+    let rest = &bytes[*at..];
+    if rest.is_empty() {
+        return None;
+    }
+    if rest.len() < 8 {
+        return Some(Ok(Framed::Torn));
+    }
+    let word = |i: usize| u32::from_le_bytes([rest[i], rest[i + 1], rest[i + 2], rest[i + 3]]);
+    let (len, check) = (word(0), word(4));
+    let damaged = |what: String| Some(Err(format!("{}: {what}", record_at(index, *at))));
+    if check != !len {
+        return damaged(format!(
+            "the length field is damaged (length {len:#010x}, check {check:#010x}, \
+             which should be its complement {:#010x})",
+            !len
+        ));
+    }
+    if len > MAX_RECORD {
+        return damaged(format!(
+            "length {len} is larger than the largest record, {MAX_RECORD} bytes"
+        ));
+    }
+    if rest.len() < RECORD_HEAD + len as usize {
+        return Some(Ok(Framed::Torn));
+    }
+    let stored = u64::from_le_bytes(rest[8..16].try_into().expect("8 bytes"));
+    let payload = &rest[RECORD_HEAD..RECORD_HEAD + len as usize];
+    let computed = fnv1a(payload);
+    if stored != computed {
+        return damaged(format!(
+            "checksum mismatch (stored {stored:016x}, computed {computed:016x} over its {len} \
+             payload bytes): the record is damaged"
+        ));
+    }
+    *at += RECORD_HEAD + len as usize;
+    Some(Ok(Framed::Whole(payload)))
 }
 
 /// Writes the journal from the tick thread. Buffered; flushed once per frame, so a SIGKILL
@@ -225,58 +312,65 @@ pub struct Journal {
     pub header: Header,
     /// Every complete record.
     pub records: Vec<Record>,
-    /// The last record was cut short (a crash while writing).
+    /// The file ends inside its last record (a crash while writing): a torn tail.
     pub truncated: bool,
 }
 
 impl Journal {
-    /// Read a journal file. A damaged header is an error; a damaged tail ends the records.
+    /// Read a journal file. A torn tail ends the records; any other damage is an error.
     pub fn read(path: &Path) -> Result<Journal, JournalError> {
         let bytes = std::fs::read(path).map_err(FileError::io(path))?;
         Ok(Journal::parse(&bytes).map_err(FileError::invalid(path))?)
     }
 
-    /// Parse a journal's bytes.
+    /// Parse a journal's bytes: the header and every whole record. A torn tail ends the
+    /// records (`truncated`); damage anywhere else is an error naming the record (0 is the
+    /// header) and its byte offset.
     pub fn parse(bytes: &[u8]) -> Result<Journal, String> {
-        if bytes.len() < 12 || &bytes[..8] != MAGIC {
+        if bytes.len() < FILE_HEAD || &bytes[..8] != MAGIC {
             return Err("not a tiltbox journal (bad magic)".into());
         }
         let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
         if version != FORMAT_VERSION {
+            let hint = if version < FORMAT_VERSION {
+                " (written by an older tiltbox, without per-record checksums: record the run again)"
+            } else {
+                " (written by a newer tiltbox)"
+            };
             return Err(format!(
-                "journal format version {version}, this build reads {FORMAT_VERSION}"
+                "journal format version {version}, this build reads {FORMAT_VERSION}{hint}"
             ));
         }
-        let mut rest = &bytes[12..];
-        let next = |rest: &mut &[u8]| -> Option<Result<Vec<u8>, ()>> {
-            if rest.is_empty() {
-                return None;
-            }
-            if rest.len() < 4 {
-                return Some(Err(()));
-            }
-            let len = u32::from_le_bytes([rest[0], rest[1], rest[2], rest[3]]);
-            if len > MAX_RECORD || rest.len() - 4 < len as usize {
-                return Some(Err(()));
-            }
-            let body = rest[4..4 + len as usize].to_vec();
-            *rest = &rest[4 + len as usize..];
-            Some(Ok(body))
-        };
-        let header: Header = match next(&mut rest) {
-            Some(Ok(b)) => postcard::from_bytes(&b).map_err(|e| format!("bad header: {e}"))?,
-            _ => return Err("truncated header".into()),
+        let mut at = FILE_HEAD;
+        let header: Header = match next_record(bytes, &mut at, 0) {
+            Some(Ok(Framed::Whole(b))) => postcard::from_bytes(b)
+                .map_err(|e| format!("{}: bad header: {e}", record_at(0, FILE_HEAD)))?,
+            Some(Err(e)) => return Err(e),
+            _ => return Err("truncated header: the file ends inside record 0".into()),
         };
         let mut records = Vec::new();
         let mut truncated = false;
-        while let Some(r) = next(&mut rest) {
-            match r.ok().and_then(|b| postcard::from_bytes::<Record>(&b).ok()) {
-                Some(rec) => records.push(rec),
-                None => {
+        let mut index = 1;
+        loop {
+            let offset = at;
+            match next_record(bytes, &mut at, index) {
+                None => break,
+                Some(Err(e)) => return Err(e),
+                Some(Ok(Framed::Torn)) => {
                     truncated = true;
                     break;
                 }
+                Some(Ok(Framed::Whole(b))) => {
+                    let record = postcard::from_bytes::<Record>(b).map_err(|e| {
+                        format!(
+                            "{}: its checksum matches but it does not decode: {e}",
+                            record_at(index, offset)
+                        )
+                    })?;
+                    records.push(record);
+                }
             }
+            index += 1;
         }
         Ok(Journal {
             header,

@@ -40,7 +40,60 @@ pub enum ServiceError {
 }
 
 fn zerr(what: &str) -> impl FnOnce(zenoh::Error) -> ServiceError + '_ {
-    move |e| ServiceError::Zenoh(format!("{what}: {e}"))
+    move |e| ServiceError::Zenoh(format!("{what}: {}", without_source_paths(&e.to_string())))
+}
+
+/// Zenoh's message without the ` at /path/to/file.rs:LINE.` locations it appends (paths of
+/// the machine that built the binary, meaningless to its user).
+fn without_source_paths(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(i) = rest.find(" at /") {
+        out.push_str(&rest[..i]);
+        let after = &rest[i + 4..];
+        let end = after.find(".rs:").map(|j| {
+            let digits = after[j + 4..]
+                .bytes()
+                .take_while(u8::is_ascii_digit)
+                .count();
+            let dot = usize::from(after[j + 4 + digits..].starts_with('.'));
+            j + 4 + digits + dot
+        });
+        match end {
+            Some(end) => rest = &after[end..],
+            None => {
+                out.push_str(" at ");
+                rest = after;
+            }
+        }
+    }
+    out.push_str(rest);
+    out.trim_end().to_owned()
+}
+
+/// Why the session could not be opened: a listen endpoint that cannot be bound is a bad
+/// value (exit 2) named with the config key or flag that chose it; anything else is Zenoh's.
+fn open_error(config: &ServerConfig, e: zenoh::Error) -> ServiceError {
+    let reason = without_source_paths(&e.to_string());
+    if !reason.contains("listener") {
+        return ServiceError::Zenoh(format!("cannot open session: {reason}"));
+    }
+    let z = &config.zenoh;
+    ServiceError::Config(match &z.config_file {
+        Some(path) => ConfigError::Invalid {
+            key: "zenoh.config_file",
+            value: path.display().to_string(),
+            expected: format!("its listen endpoint cannot be used: {reason}"),
+        },
+        None => ConfigError::Invalid {
+            key: "zenoh.listen",
+            value: format!("{:?}", z.listen),
+            expected: format!(
+                "cannot listen there (flag --listen or config key zenoh.listen chose it; \
+                 another process may hold the port): {reason}"
+            ),
+        },
+    })
 }
 
 /// A hook called with the frame number just before each snapshot is put (benchmarks).
@@ -163,7 +216,7 @@ impl Server {
             Some(s) => s,
             None => zenoh::open(config.zenoh_config()?)
                 .await
-                .map_err(zerr("cannot open session"))?,
+                .map_err(|e| open_error(config, e))?,
         };
 
         let poses = session
@@ -386,7 +439,7 @@ pub async fn start_worlds(
     }
     let session = zenoh::open(config.zenoh_config()?)
         .await
-        .map_err(zerr("cannot open session"))?;
+        .map_err(|e| open_error(config, e))?;
     let mut servers: Vec<Server> = Vec::new();
     for c in world_configs(config) {
         match Server::start_on(&session, &c, options.clone()).await {

@@ -94,13 +94,13 @@ pub(crate) fn finite(field: &str, v: f32) -> Result<(), String> {
     }
 }
 
-/// An acceleration as sent must be at most `max` m/s^2.
+/// An acceleration as sent must be at most `max` m/s^2 (`limits.max_gravity`).
 fn magnitude(field: &str, v: f32, max: f32) -> Result<(), String> {
     if v <= max {
         Ok(())
     } else {
         Err(format!(
-            "{field} = {v} is out of range: must be <= {max} m/s^2"
+            "{field} = {v} is out of range: must be <= {max} m/s^2 (limits.max_gravity)"
         ))
     }
 }

@@ -241,6 +241,15 @@ pub(crate) fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, Strin
         .with_density(b.density as Real)
         .with_friction(b.friction as Real)
         .with_restitution(b.restitution as Real);
+    // The daemon's friction limit before the engine's own check: the limit a user can act on
+    // is the smaller one (config refuses limits.max_friction above the engine's), so a
+    // friction above it is always refused in these words, never with the engine's range.
+    if b.friction > limits.max_friction {
+        return Err(format!(
+            "friction = {} is out of range: must be within [0, {}] (limits.max_friction)",
+            b.friction, limits.max_friction
+        ));
+    }
     def.validate().map_err(|e| e.to_string())?;
     if !(limits.min_density..=limits.max_density).contains(&b.density) {
         return Err(format!(
@@ -259,12 +268,6 @@ pub(crate) fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, Strin
         return Err(format!(
             "angular_velocity = {} is out of range: must be within +-{} rad/s (limits.max_angular_speed)",
             b.angular_velocity, limits.max_angular_speed
-        ));
-    }
-    if b.friction > limits.max_friction {
-        return Err(format!(
-            "friction = {} is out of range: must be <= {} (limits.max_friction)",
-            b.friction, limits.max_friction
         ));
     }
     let name = b.name.unwrap_or_default();

@@ -1,0 +1,180 @@
+//! docs/protocol.md's byte examples for the command messages and the events are the
+//! encoder's: each hex block is compared with the encoding of the message its prose
+//! describes (built here from the prose, not from the block), the stated sizes are the
+//! blocks' sizes, and the worked `Rejected` example's reason is what the daemon really says
+//! for that payload. A client written in another language from these examples gets the real
+//! bytes.
+#![cfg(feature = "net")]
+
+mod common;
+
+use common::read_repo_file;
+use tiltbox::protocol::*;
+use tiltbox::service::{parse_command, Limits};
+
+/// The bytes of one line of a hex block: its leading two-digit hex tokens (a comment may
+/// follow them).
+fn line_bytes(line: &str) -> Vec<u8> {
+    line.split_whitespace()
+        .map_while(|t| {
+            (t.len() == 2)
+                .then(|| u8::from_str_radix(t, 16).ok())
+                .flatten()
+        })
+        .collect()
+}
+
+/// The first ```text block after `marker` in docs/protocol.md, line by line, and the prose
+/// between the marker and the block.
+fn block_after(marker: &str) -> (Vec<Vec<u8>>, String) {
+    let doc = read_repo_file("docs/protocol.md");
+    let at = doc
+        .find(marker)
+        .unwrap_or_else(|| panic!("docs/protocol.md has no {marker:?}"));
+    let rest = &doc[at..];
+    let open = rest
+        .find("```text\n")
+        .expect("a text block after the marker");
+    let body = &rest[open + 8..];
+    let body = &body[..body.find("```").expect("the block's end")];
+    let lines = body.lines().map(line_bytes).collect();
+    (lines, rest[..open].to_owned())
+}
+
+/// All the lines of the block after `marker` as one payload.
+fn payload_after(marker: &str) -> (Vec<u8>, String) {
+    let (lines, prose) = block_after(marker);
+    (lines.concat(), prose)
+}
+
+/// The "(N bytes)" the prose states.
+fn stated_size(prose: &str) -> usize {
+    let end = prose.rfind(" bytes)").expect("a stated size");
+    let start = prose[..end].rfind('(').expect("a stated size") + 1;
+    prose[start..end].parse().expect("a number of bytes")
+}
+
+fn colour(hex: &str) -> Colour {
+    hex.parse().expect("a colour")
+}
+
+#[test]
+fn set_gravity_tilt_remove_and_reset_examples_are_the_encoded_bytes() {
+    let (bytes, _) = payload_after("### SetGravity");
+    assert_eq!(bytes, encode(&SetGravity { x: 0.0, y: -9.81 }).unwrap());
+
+    let (lines, _) = block_after("send `(-9.81·x, -9.81·y, -9.81·z)`");
+    assert_eq!(
+        lines[0],
+        encode(&Tilt::Orientation(Orientation::PortraitUpsideDown)).unwrap()
+    );
+    assert_eq!(
+        lines[1],
+        encode(&Tilt::Accelerometer {
+            x: 0.0,
+            y: 9.81,
+            z: 0.0
+        })
+        .unwrap()
+    );
+
+    let (bytes, _) = payload_after("### Remove");
+    let ids = vec![BodyRef {
+        index: 3,
+        generation: 0,
+    }];
+    assert_eq!(bytes, encode(&Remove { ids }).unwrap());
+
+    let (bytes, _) = payload_after("### Reset");
+    assert_eq!(bytes, encode(&Reset).unwrap());
+}
+
+#[test]
+fn spawn_examples_are_the_encoded_bytes_of_the_bodies_described() {
+    let (bytes, prose) = payload_after("A 0.5 m crate named \"crate\"");
+    let crate_body = SpawnBody {
+        name: Some("crate".into()),
+        friction: 0.5,
+        colour: colour("#d64541"),
+        ..SpawnBody::at(
+            ShapeSpec::Rect {
+                width: 0.5,
+                height: 0.5,
+            },
+            Vector::new(0.0, 2.0),
+        )
+    };
+    let spawn = Spawn {
+        bodies: vec![crate_body],
+    };
+    assert_eq!(bytes, encode(&spawn).unwrap());
+    assert_eq!(bytes.len(), stated_size(&prose));
+
+    let (bytes, prose) = payload_after("A ball named \"ball\"");
+    let ball = SpawnBody {
+        name: Some("ball".into()),
+        friction: 0.5,
+        restitution: 0.5,
+        colour: colour("#3a7bd5"),
+        ..SpawnBody::at(ShapeSpec::Circle { radius: 0.25 }, Vector::new(0.0, 3.0))
+    };
+    assert_eq!(bytes, encode(&Spawn { bodies: vec![ball] }).unwrap());
+    assert_eq!(bytes.len(), stated_size(&prose));
+
+    let (bytes, prose) = payload_after("An unnamed right triangle");
+    let vertices = vec![
+        Vector::new(0.0, 0.0),
+        Vector::new(1.5, 0.0),
+        Vector::new(0.0, 0.75),
+    ];
+    let triangle = SpawnBody {
+        friction: 0.5,
+        colour: colour("#2ecc71"),
+        ..SpawnBody::at(ShapeSpec::Polygon { vertices }, Vector::new(-1.0, 2.0))
+    };
+    let spawn = Spawn {
+        bodies: vec![triangle],
+    };
+    assert_eq!(bytes, encode(&spawn).unwrap());
+    assert_eq!(bytes.len(), stated_size(&prose));
+}
+
+#[test]
+fn the_event_examples_decode_to_what_their_prose_says() {
+    // Rejected: the reason is the daemon's own for a gravity payload of one version byte.
+    let (bytes, _) = payload_after("**Worked example (Rejected).**");
+    let reason = parse_command(CommandKey::Gravity, &[VERSION], &Limits::default())
+        .expect_err("a bare version byte is refused");
+    let event = Event {
+        frame: 1,
+        kind: EventKind::Rejected {
+            key: "tiltbox/bricks/gravity".into(),
+            reason,
+        },
+    };
+    assert_eq!(bytes, encode(&event).unwrap());
+
+    // Added: the crate spawned above, as the daemon reports it (mass 0.5 x 0.5 x 1).
+    let (bytes, prose) = payload_after("**Worked example (Added).**");
+    let event: Event = decode(&bytes).expect("the Added example decodes");
+    assert_eq!(encode(&event).unwrap(), bytes, "and is canonical");
+    assert_eq!(bytes.len(), stated_size(&prose));
+    let EventKind::Added { bodies } = event.kind else {
+        panic!("not an Added event: {event:?}")
+    };
+    let b = &bodies[0];
+    assert_eq!(
+        (b.id, b.name.as_str(), b.mass, b.friction, b.colour),
+        (
+            BodyRef {
+                index: 3,
+                generation: 0
+            },
+            "crate",
+            0.25,
+            0.5,
+            colour("#d64541")
+        )
+    );
+    assert_eq!(b.position, Vector::new(0.0, 2.0));
+}

@@ -32,7 +32,7 @@ use {
     super::session::watch_server,
     super::ClientError,
     crate::cli::wait_for_signal,
-    crate::protocol::{Event, Keys, Snapshot},
+    crate::protocol::{decode_frame, Event, Keys, SnapshotFrame},
     std::io::Write,
     std::sync::mpsc::sync_channel,
     std::time::{Instant, SystemTime},
@@ -69,7 +69,9 @@ impl ViewArgs {
 /// What the loops receive: from Zenoh's callbacks, the scene query, the keyboard and signals.
 #[cfg(feature = "tui")]
 enum Msg {
-    Snapshot(Snapshot, Instant, Option<Duration>),
+    /// A `…/poses` payload, decoded without state: the loop's [`crate::protocol::SnapshotDecoder`]
+    /// applies it, so a payload dropped on a full channel is a lost sample, nothing worse.
+    Snapshot(SnapshotFrame, Instant, Option<Duration>),
     Event(Event),
     Alive(bool),
     Scene(Result<SceneState, String>),
@@ -105,7 +107,7 @@ pub fn run(
                         .duration_since(ts.get_time().to_system_time())
                         .ok()
                 });
-                match decode::<Snapshot>(&sample.payload().to_bytes()) {
+                match decode_frame(&sample.payload().to_bytes()) {
                     Ok(s) => {
                         let _ = stx.try_send(Msg::Snapshot(s, now, latency));
                     }

@@ -6,7 +6,8 @@ use super::render::{render, Status};
 use super::world::{Applied, Join, Received};
 use super::{query_scene, Msg};
 use crate::client::ClientError;
-use crate::protocol::{Keys, Snapshot};
+use crate::protocol::snapshot::Decoded;
+use crate::protocol::{Keys, Snapshot, SnapshotDecoder};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender};
@@ -115,6 +116,7 @@ pub(super) fn show(
             })?
     };
     let mut join = Join::new();
+    let mut decoder = SnapshotDecoder::new();
     let mut status = Status {
         world: keys.prefix().to_owned(),
         endpoint: endpoint.to_owned(),
@@ -143,7 +145,10 @@ pub(super) fn show(
             .chain(std::iter::from_fn(|| rx.try_recv().ok()))
         {
             match msg {
-                Msg::Snapshot(s, at, stamped) => {
+                Msg::Snapshot(frame, at, stamped) => {
+                    let Decoded::Snapshot(s) = decoder.apply(&frame) else {
+                        continue; // a delta without its keyframe: wait for the next one
+                    };
                     meter.snapshot(&s, at, stamped, origin);
                     if join.receive(Received::Snapshot(s)) == Applied::Restarted {
                         join.restart();

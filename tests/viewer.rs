@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::net::{daemon_config, endpoint, next, open, serve, subscribe};
+use common::net::{daemon_config, endpoint, next, open, serve, subscribe_snapshots};
 use ratatui::backend::TestBackend;
 use ratatui::layout::Size;
 use ratatui::style::Color;
@@ -240,7 +240,7 @@ async fn plain_output_parses_back_to_the_poses_published() {
     let keys = server.keys().clone();
     // our own record of what was published
     let session = open(port).await;
-    let (mut snapshots, _sub) = subscribe::<Snapshot>(&session, keys.poses()).await;
+    let (mut snapshots, _sub) = subscribe_snapshots(&session, keys.poses()).await;
     next(&mut snapshots).await;
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_tiltbox-view"))

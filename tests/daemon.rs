@@ -508,7 +508,13 @@ async fn a_client_matches_the_scene_within_half_a_grid_step_even_with_lost_sampl
     let mut spawned: Vec<_> = (0..4)
         .map(|i| brick(&format!("late-{i}"), -2.0 + i as f32, 5.0))
         .collect();
-    spawned.push(shaped("ball", ShapeSpec::Circle { radius: 0.3 }, 0.5, 7.0, 0.0));
+    spawned.push(shaped(
+        "ball",
+        ShapeSpec::Circle { radius: 0.3 },
+        0.5,
+        7.0,
+        0.0,
+    ));
     let capsule = ShapeSpec::Capsule {
         length: 1.0,
         radius: 0.2,
@@ -545,7 +551,10 @@ async fn a_client_matches_the_scene_within_half_a_grid_step_even_with_lost_sampl
         let truth = a.scene().await;
         // decode until the truth's frame
         while last < truth.frame {
-            let bytes = tokio::time::timeout(WAIT, raw.recv()).await.unwrap().unwrap();
+            let bytes = tokio::time::timeout(WAIT, raw.recv())
+                .await
+                .unwrap()
+                .unwrap();
             let frame = decode_frame(&bytes).unwrap();
             last = frame.frame;
             if let Some(s) = all.decode(&bytes).unwrap() {
@@ -562,7 +571,10 @@ async fn a_client_matches_the_scene_within_half_a_grid_step_even_with_lost_sampl
         }
         let (dp, da) = pose_error(&seen, &truth);
         assert!(dp <= step / 2.0, "frame {last}: position off by {dp}");
-        assert!(da <= Grid::angle_step() / 2.0 + 1e-6, "frame {last}: angle off by {da}");
+        assert!(
+            da <= Grid::angle_step() / 2.0 + 1e-6,
+            "frame {last}: angle off by {da}"
+        );
         compared += 1;
         if last % 3 != 1 && !seen_lossy.is_empty() {
             assert_eq!(seen_lossy, seen, "frame {last}: the lossy view differs");

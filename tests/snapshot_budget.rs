@@ -112,7 +112,10 @@ fn a_settling_mixed_pile_fits_the_byte_budget() {
     let b = measure("shapes.toml", 600);
     let (per_key, per_moving) = report("shapes", &b);
     assert!(per_key <= 8.0, "{per_key} bytes a body in keyframes");
-    assert!(per_moving <= 6.0, "{per_moving} bytes per moving body in deltas");
+    assert!(
+        per_moving <= 6.0,
+        "{per_moving} bytes per moving body in deltas"
+    );
     assert!(b.listed > 1000, "the pile moved: {b:?}");
 }
 
@@ -123,10 +126,19 @@ fn a_settling_pyramid_fits_the_byte_budget_and_rest_costs_nothing() {
     let (per_key, per_moving) = report("pyramid", &b);
     assert!(per_key <= 8.0, "{per_key} bytes a body in keyframes");
     let whole = b.keyframe_bytes as f64 / b.keyframe_bodies as f64;
-    assert!(whole <= 8.0, "{whole} bytes a body in keyframes, header included");
-    assert!(per_moving <= 6.0, "{per_moving} bytes per moving body in deltas");
+    assert!(
+        whole <= 8.0,
+        "{whole} bytes a body in keyframes, header included"
+    );
+    assert!(
+        per_moving <= 6.0,
+        "{per_moving} bytes per moving body in deltas"
+    );
     // at rest a delta is its header: version, frame (2 bytes past 127), time, gravity,
     // reference, grid, no pose, no body gone
     assert!(!b.quiet_delta_bytes.is_empty(), "the pyramid came to rest");
-    assert!(b.quiet_delta_bytes.iter().all(|&n| n <= 1 + 2 + 8 + 8 + 1 + 1 + 1 + 1));
+    assert!(b
+        .quiet_delta_bytes
+        .iter()
+        .all(|&n| n <= 1 + 2 + 8 + 8 + 1 + 1 + 1 + 1));
 }

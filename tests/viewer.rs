@@ -143,7 +143,20 @@ fn bricks_are_drawn_where_the_snapshot_puts_them_in_their_colours() {
         alive: true,
         rate_hz: 60.0,
         latency: Some(Duration::from_micros(250)),
+        keys: tiltbox::client::view::control::KEY_HELP,
     };
+    // the status line says what each key does (--control, and always in the demo)
+    let line = tiltbox::client::view::render::status_text(Some(&view), &status);
+    for what in [
+        "roll",
+        "lean",
+        "landscape",
+        "space brick",
+        "R reset",
+        "q quit",
+    ] {
+        assert!(line.contains(what), "{what}: {line}");
+    }
     let t = draw(&view, &status, 72, 21);
     let walls = cells(&t, WALL);
     assert!(walls.len() > 100, "walls drawn: {}", walls.len());

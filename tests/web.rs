@@ -764,7 +764,8 @@ async fn the_page_decodes_every_documented_example() {
         .collect();
     assert_eq!(snaps.len(), 2, "a keyframe and a delta");
     let mut rust = SnapshotDecoder::new();
-    page.eval("window.decoder = new tiltbox.SnapshotDecoder(), 0").await;
+    page.eval("window.decoder = new tiltbox.SnapshotDecoder(), 0")
+        .await;
     for bytes in snaps {
         let want = serde_json::to_value(rust.decode(bytes).unwrap().unwrap()).unwrap();
         let got = page

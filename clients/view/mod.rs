@@ -4,7 +4,8 @@
 //! - [`world`]: the viewer's copy of the world, rebuilt from `…/scene`, snapshots and events;
 //! - `render` (feature `tui`): the drawing, a pure function from that copy to cells;
 //! - `terminal` (feature `tui`): the terminal loop, redrawing at most 30 times a second;
-//! - [`plain`]: the `--plain` line per snapshot, its parser, and the loop that prints them.
+//! - [`plain`]: the `--plain` line per snapshot, its parser, and the loop that prints them;
+//! - `control` (feature `tui`): `--control`, the keys that tilt, spawn and reset.
 //!
 //! Zenoh callbacks only decode and `try_send` into one bounded channel; the loop on the
 //! caller's thread applies what arrives, and asks `…/scene` (on a tokio task) when a daemon
@@ -17,6 +18,8 @@
 //! value over the last seconds, i.e. how much later than the quickest recent snapshot this one
 //! came (the daemon publishes on absolute tick deadlines).
 
+#[cfg(feature = "tui")]
+pub mod control;
 pub mod plain;
 #[cfg(feature = "tui")]
 pub mod render;
@@ -52,6 +55,11 @@ pub struct ViewArgs {
     /// With --plain: stop after N lines.
     #[arg(long, value_name = "N", requires = "plain")]
     pub count: Option<u64>,
+    /// Drive the world from the keyboard, as tiltbox-tilt does: arrows and p/u/l/r/f/d tilt,
+    /// space drops a brick, R resets (the daemon's ACL decides whether this session may).
+    /// Always on in `tiltbox demo`.
+    #[arg(long, conflicts_with = "plain")]
+    pub control: bool,
 }
 
 impl ViewArgs {
@@ -146,7 +154,7 @@ pub fn run(
     let result = if args.plain {
         plain::run(&rx, args, endpoint, out)
     } else {
-        terminal::show(rt, session, keys, &tx, &rx, endpoint)
+        terminal::show(rt, session, keys, &tx, &rx, endpoint, args.control)
     };
     drop(subs);
     result

@@ -2,9 +2,11 @@
 //! 30 times a second, a status line with rate and latency, keys to quit. The terminal is put
 //! back on `q`, Esc, Ctrl-C, SIGTERM and on panic (ratatui's hook).
 
+use super::control::{key_command, Control, Key, Put, KEY_HELP};
 use super::render::{render, Status};
 use super::world::{Applied, Join, Received};
 use super::{query_scene, Msg};
+use crate::client::tilt::keyboard::KeyCommand;
 use crate::client::ClientError;
 use crate::protocol::snapshot::Decoded;
 use crate::protocol::{Keys, Snapshot, SnapshotDecoder};
@@ -81,7 +83,27 @@ impl Drop for TerminalGuard {
     }
 }
 
-/// Draw the world until q, Esc, Ctrl-C or a signal.
+/// Put a command's payload from a task (Block for spawn and reset).
+fn send(rt: &tokio::runtime::Handle, session: &Session, put: Put) {
+    let session = session.clone();
+    rt.spawn(async move {
+        use zenoh::qos::CongestionControl;
+        let cc = if put.block {
+            CongestionControl::Block
+        } else {
+            CongestionControl::Drop
+        };
+        if let Err(e) = session
+            .put(put.key, put.payload)
+            .congestion_control(cc)
+            .await
+        {
+            tracing::warn!("put refused: {e}");
+        }
+    });
+}
+
+/// Draw the world until q, Esc, Ctrl-C or a signal; with `control`, the keys drive it.
 pub(super) fn show(
     rt: &tokio::runtime::Handle,
     session: &Session,
@@ -89,6 +111,7 @@ pub(super) fn show(
     tx: &SyncSender<Msg>,
     rx: &Receiver<Msg>,
     endpoint: &str,
+    control: bool,
 ) -> Result<(), ClientError> {
     let mut terminal = ratatui::try_init()?;
     let _guard = TerminalGuard;
@@ -120,8 +143,10 @@ pub(super) fn show(
     let mut status = Status {
         world: keys.prefix().to_owned(),
         endpoint: endpoint.to_owned(),
+        keys: if control { KEY_HELP } else { "q quits" },
         ..Status::default()
     };
+    let mut driver = Control::default();
     let mut meter = Meter::default();
     let origin = Instant::now();
     let mut asking = false;
@@ -179,13 +204,14 @@ pub(super) fn show(
                     retry_at = Instant::now() + Duration::from_secs(1);
                 }
                 Msg::Input(crossterm::event::Event::Key(k)) => {
-                    use crossterm::event::{KeyCode, KeyEventKind, KeyModifiers};
-                    if k.kind != KeyEventKind::Release {
-                        let ctrl_c = k.code == KeyCode::Char('c')
-                            && k.modifiers.contains(KeyModifiers::CONTROL);
-                        if ctrl_c || matches!(k.code, KeyCode::Char('q') | KeyCode::Esc) {
-                            quit = true;
+                    match Key::from_crossterm(k).and_then(key_command) {
+                        Some(KeyCommand::Quit) => quit = true,
+                        Some(command) if control => {
+                            if let Some(put) = driver.put(command, keys, join.view()) {
+                                send(rt, session, put);
+                            }
                         }
+                        _ => {}
                     }
                 }
                 Msg::Input(_) => dirty = true, // resize and the like: redraw

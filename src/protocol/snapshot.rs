@@ -232,7 +232,9 @@ impl Reader<'_> {
         Ok((v >> 1) as i64 ^ -((v & 1) as i64))
     }
     fn f32(&mut self) -> Result<f32, DecodeError> {
-        Ok(f32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+        Ok(f32::from_le_bytes(
+            self.take(4)?.try_into().expect("4 bytes"),
+        ))
     }
     fn id(&mut self, next: &mut u64) -> Result<BodyRef, DecodeError> {
         let head = self.varint(6)?;
@@ -638,8 +640,8 @@ mod tests {
                 let r = self.rand();
                 let p = self.bodies.get_mut(id).unwrap();
                 match k % 4 {
-                    0 => {}                                      // asleep
-                    1 => p[0] += (r - 0.5) * 2e-3,               // creeping
+                    0 => {}                                       // asleep
+                    1 => p[0] += (r - 0.5) * 2e-3,                // creeping
                     2 => (p[1], p[2]) = (p[1] - 0.1, p[2] + 0.2), // falling, spinning
                     _ => p[2] -= r * 1e-3,
                 }
@@ -685,7 +687,9 @@ mod tests {
         let grid = Grid::default();
         let mut walk = Walk {
             seed: 7,
-            bodies: (0..40).map(|i| (id(i, 0), [i as f64 * 0.51, 0.3, 0.0])).collect(),
+            bodies: (0..40)
+                .map(|i| (id(i, 0), [i as f64 * 0.51, 0.3, 0.0]))
+                .collect(),
             next_index: 40,
         };
         let mut enc = SnapshotEncoder::new(grid);
@@ -701,7 +705,12 @@ mod tests {
             }
             let keyframe = frame % 30 == 0;
             let bodies: Vec<_> = walk.bodies.iter().map(|(id, p)| (*id, *p)).collect();
-            enc.encode((frame, frame as f64 / 60.0, Vector::default()), keyframe, bodies, &mut out);
+            enc.encode(
+                (frame, frame as f64 / 60.0, Vector::default()),
+                keyframe,
+                bodies,
+                &mut out,
+            );
             if drop(frame) {
                 continue;
             }
@@ -713,7 +722,9 @@ mod tests {
             since_key_held |= s.keyframe;
             let truth = walk.quantized(grid);
             // spawned bodies exist in a client once their Added event came: compare those
-            let same = truth.iter().all(|(id, p)| view.get(id).is_none_or(|v| v == p))
+            let same = truth
+                .iter()
+                .all(|(id, p)| view.get(id).is_none_or(|v| v == p))
                 && view.keys().all(|id| truth.contains_key(id));
             if same {
                 exact += 1;
@@ -751,7 +762,10 @@ mod tests {
     fn bad_payloads_are_errors_never_panics_or_garbage() {
         let mut enc = SnapshotEncoder::new(Grid::default());
         let mut out = Vec::new();
-        let bodies = [(id(0, 0), [1.0, 2.0, 0.5]), (id(300, 2), [-3.0, 0.25, -1.0])];
+        let bodies = [
+            (id(0, 0), [1.0, 2.0, 0.5]),
+            (id(300, 2), [-3.0, 0.25, -1.0]),
+        ];
         enc.encode((9, 0.15, Vector::new(0.0, -9.81)), true, bodies, &mut out);
         let key = out.clone();
         enc.forget(id(0, 0));

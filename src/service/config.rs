@@ -326,7 +326,12 @@ impl ServerConfig {
         };
         count("keyframe_every", self.keyframe_every, 1, 1_000_000)?;
         let max_grid = crate::protocol::snapshot::MAX_GRID_BITS;
-        count("snapshot_grid_bits", self.snapshot_grid_bits, 0, max_grid as u32)?;
+        count(
+            "snapshot_grid_bits",
+            self.snapshot_grid_bits,
+            0,
+            max_grid as u32,
+        )?;
         count("max_catch_up", self.max_catch_up, 0, 1000)?;
         count("command_queue", self.command_queue, 1, 1_000_000)?;
         if !(self.checkpoint_every.is_finite()

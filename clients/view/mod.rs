@@ -21,6 +21,7 @@
 #[cfg(feature = "tui")]
 pub mod control;
 pub mod plain;
+pub mod playout;
 #[cfg(feature = "tui")]
 pub mod render;
 #[cfg(feature = "tui")]
@@ -60,6 +61,24 @@ pub struct ViewArgs {
     /// Always on in `tiltbox demo`.
     #[arg(long, conflicts_with = "plain")]
     pub control: bool,
+    /// Draw this many snapshot intervals behind the newest snapshot, interpolating between
+    /// snapshots (at most one interval of extrapolation when one is late); 0 draws each
+    /// snapshot as it arrives.
+    #[arg(long, value_name = "INTERVALS", default_value_t = 2.0,
+          value_parser = playout_intervals)]
+    pub playout: f64,
+}
+
+/// `--playout`: a finite number of intervals within 0..=30.
+fn playout_intervals(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .parse()
+        .map_err(|e| format!("{s:?} is not a number: {e}"))?;
+    if v.is_finite() && (0.0..=30.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{v} is not within 0..=30 snapshot intervals"))
+    }
 }
 
 impl ViewArgs {
@@ -154,7 +173,7 @@ pub fn run(
     let result = if args.plain {
         plain::run(&rx, args, endpoint, out)
     } else {
-        terminal::show(rt, session, keys, &tx, &rx, endpoint, args.control)
+        terminal::show(rt, session, keys, &tx, &rx, endpoint, args)
     };
     drop(subs);
     result

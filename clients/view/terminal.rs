@@ -1,14 +1,17 @@
 //! The viewer's terminal: a full-screen braille drawing ([`super::render`]) redrawn at most
-//! 30 times a second, a status line with rate and latency, keys to quit. The terminal is put
+//! 30 times a second (continuously, through the playout buffer, while bodies move), a status
+//! line with rate and latency, keys to quit (and with `--control` to drive the world). The terminal is put
 //! back on `q`, Esc, Ctrl-C, SIGTERM and on panic (ratatui's hook).
 
 use super::control::{key_command, Control, Key, Put, KEY_HELP};
+use super::playout::{Playout, Xya};
 use super::render::{render, Status};
-use super::world::{Applied, Join, Received};
+use super::world::{Applied, Join, Received, WorldView};
 use super::{query_scene, Msg};
 use crate::client::tilt::keyboard::KeyCommand;
 use crate::client::ClientError;
 use crate::protocol::snapshot::Decoded;
+use crate::protocol::BodyRef;
 use crate::protocol::{Keys, Snapshot, SnapshotDecoder};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -83,6 +86,27 @@ impl Drop for TerminalGuard {
     }
 }
 
+/// The dynamic bodies' poses of `view`.
+fn dynamic(view: &WorldView) -> impl Iterator<Item = (BodyRef, Xya)> + '_ {
+    view.bodies
+        .iter()
+        .filter(|(_, b)| !b.info.is_static)
+        .map(|(id, b)| (*id, [b.x, b.y, b.angle]))
+}
+
+/// `view` with its dynamic bodies where the playout buffer draws them at `now` (s since the
+/// loop's origin); `None` before the buffer's first sample.
+fn drawn(view: &WorldView, playout: &Playout, now: f64) -> Option<WorldView> {
+    let poses = playout.poses_at(now)?;
+    let mut v = view.clone();
+    for (id, [x, y, angle]) in poses {
+        if let Some(b) = v.bodies.get_mut(&id) {
+            (b.x, b.y, b.angle) = (x, y, angle);
+        }
+    }
+    Some(v)
+}
+
 /// Put a command's payload from a task (Block for spawn and reset).
 fn send(rt: &tokio::runtime::Handle, session: &Session, put: Put) {
     let session = session.clone();
@@ -111,8 +135,11 @@ pub(super) fn show(
     tx: &SyncSender<Msg>,
     rx: &Receiver<Msg>,
     endpoint: &str,
-    control: bool,
+    args: &super::ViewArgs,
 ) -> Result<(), ClientError> {
+    let control = args.control;
+    let mut playout = Playout::new(args.playout);
+    let mut snap_next = false;
     let mut terminal = ratatui::try_init()?;
     let _guard = TerminalGuard;
     let stop = Arc::new(AtomicBool::new(false));
@@ -175,13 +202,28 @@ pub(super) fn show(
                         continue; // a delta without its keyframe: wait for the next one
                     };
                     meter.snapshot(&s, at, stamped, origin);
-                    if join.receive(Received::Snapshot(s)) == Applied::Restarted {
-                        join.restart();
-                        meter.reset();
+                    let (frame, time, keyframe) = (s.frame, s.time, s.keyframe);
+                    match join.receive(Received::Snapshot(s)) {
+                        Applied::Restarted => {
+                            join.restart();
+                            meter.reset();
+                            playout.clear();
+                        }
+                        Applied::Applied => {
+                            if let Some(v) = join.view() {
+                                let arrival = at.duration_since(origin).as_secs_f64();
+                                playout.push(frame, time, arrival, dynamic(v), keyframe);
+                                if std::mem::take(&mut snap_next) {
+                                    playout.snap_newest();
+                                }
+                            }
+                        }
+                        Applied::Stale => {}
                     }
                     dirty = true;
                 }
                 Msg::Event(e) => {
+                    snap_next |= matches!(e.kind, crate::protocol::EventKind::Reset { .. });
                     join.receive(Received::Event(e));
                     dirty = true;
                 }
@@ -196,6 +238,7 @@ pub(super) fn show(
                 Msg::Scene(Ok(state)) => {
                     asking = false;
                     join.scene(state);
+                    playout.clear();
                     dirty = true;
                 }
                 Msg::Scene(Err(e)) => {
@@ -231,12 +274,18 @@ pub(super) fn show(
         if dirty && last_draw.elapsed() >= FRAME {
             status.rate_hz = meter.rate(Instant::now());
             status.latency = meter.latency;
-            let view = join.view();
+            let now = origin.elapsed().as_secs_f64();
+            let smooth = match join.view() {
+                Some(v) if args.playout > 0.0 => drawn(v, &playout, now),
+                _ => None,
+            };
+            let view = smooth.as_ref().or(join.view());
             if let Err(e) = terminal.draw(|f| render(view, &status, f.area(), f.buffer_mut())) {
                 break Err(e.into());
             }
             last_draw = Instant::now();
-            dirty = false;
+            // with a playout buffer, motion goes on between snapshots
+            dirty = args.playout > 0.0 && smooth.is_some();
         }
     };
     stop.store(true, Ordering::Relaxed);

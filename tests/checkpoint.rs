@@ -5,7 +5,9 @@
 
 mod common;
 
-use common::net::{query_scene as scene, subscribe, zenoh_config as client_config, WAIT};
+use common::net::{
+    query_scene as scene, subscribe, subscribe_snapshots, zenoh_config as client_config, WAIT,
+};
 use common::temp_dir;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -335,7 +337,7 @@ async fn sigkill_loses_at_most_one_checkpoint_interval() {
         .await
         .expect("connected in time")
         .unwrap();
-    let (mut snapshots, _sub) = subscribe::<Snapshot>(&session, keys.poses()).await;
+    let (mut snapshots, _sub) = subscribe_snapshots(&session, keys.poses()).await;
     let end = Instant::now() + Duration::from_secs(10);
     let mut last = 0;
     while last < 80 {

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::net::{daemon_config, endpoint, serve, subscribe, WAIT};
+use common::net::{daemon_config, endpoint, serve, subscribe, subscribe_snapshots, WAIT};
 use std::io::Write;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -44,7 +44,7 @@ impl Setup {
         let session = session::open(&[endpoint(port)]).await.unwrap();
         let (tx, received) = mpsc::unbounded_channel();
         let etx = tx.clone();
-        let (mut snapshots, poses) = subscribe::<Snapshot>(&session, keys.poses()).await;
+        let (mut snapshots, poses) = subscribe_snapshots(&session, keys.poses()).await;
         let (mut events, events_sub) = subscribe::<Event>(&session, keys.events()).await;
         tokio::spawn(async move {
             while let Some(s) = snapshots.recv().await {

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::net::{query_scene, subscribe, WAIT};
+use common::net::{query_scene, subscribe, subscribe_snapshots, WAIT};
 use common::{repo_path, temp_dir};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -75,7 +75,7 @@ async fn a_viewer_watches_but_its_spawn_never_reaches_the_world() {
     let viewer = zenoh::open(client_config("viewer", "change-me-viewer"))
         .await
         .unwrap();
-    let (mut poses, _p) = subscribe::<Snapshot>(&viewer, keys.poses()).await;
+    let (mut poses, _p) = subscribe_snapshots(&viewer, keys.poses()).await;
     let (mut viewer_events, _e) = subscribe::<Event>(&viewer, keys.events()).await;
     let first = tokio::time::timeout(WAIT, poses.recv())
         .await

@@ -61,15 +61,14 @@ fn example_sim() -> Simulation {
 #[test]
 fn the_documented_snapshots_are_real_and_exact() {
     let mut sim = example_sim();
+    let (mut key_bytes, mut delta_bytes) = (Vec::new(), Vec::new());
     sim.step().unwrap();
-    let key = sim.poses().clone();
-    assert!(key.keyframe && key.frame == 1 && key.poses.len() == 2);
-    let key_bytes = encode(&key).unwrap();
+    let key = sim.snapshot_into(&mut key_bytes).clone();
+    assert!(key.is_keyframe() && key.frame == 1 && key.poses.len() == 2);
     sim.step().unwrap();
-    let delta = sim.poses().clone();
-    assert!(!delta.keyframe && delta.frame == 2);
+    let delta = sim.snapshot_into(&mut delta_bytes).clone();
+    assert!(!delta.is_keyframe() && delta.frame == 2 && delta.reference == 1);
     assert_eq!(delta.poses.len(), 1, "only the moving body: {delta:?}");
-    let delta_bytes = encode(&delta).unwrap();
 
     let doc = doc();
     let (kh, dh) = (hex(&key_bytes), hex(&delta_bytes));
@@ -81,9 +80,20 @@ fn the_documented_snapshots_are_real_and_exact() {
         doc.contains(&dh),
         "docs/protocol.md must contain the delta bytes:\n{dh}\n{delta:#?}"
     );
-    // and they decode back
-    assert_eq!(decode::<Snapshot>(&key_bytes).unwrap(), key);
-    assert_eq!(key_bytes.len(), 1 + 1 + 8 + 8 + 1 + 1 + 2 * 14);
+    // they decode back, and a client reconstructs the documented poses
+    assert_eq!(decode_frame(&key_bytes).unwrap(), key);
+    assert_eq!(decode_frame(&delta_bytes).unwrap(), delta);
+    // version, frame, time, gravity, reference, grid, count (21), then 7 bytes for "still"
+    // and 6 for "moving" (its y is the same as the body before it: one byte)
+    assert_eq!(key_bytes.len(), 21 + 7 + 6);
+    let mut client = SnapshotDecoder::new();
+    let k = client.decode(&key_bytes).unwrap().unwrap();
+    let d = client.decode(&delta_bytes).unwrap().unwrap();
+    let xy = |p: &Pose| (p.x, p.y, p.angle);
+    assert_eq!(xy(&k.poses[0]), (-1.0, 1.0, 0.0));
+    assert_eq!(xy(&k.poses[1]), (1058.0 / 1024.0, 1.0, 0.0));
+    assert_eq!(d.poses.len(), 1);
+    assert_eq!(xy(&d.poses[0]), (1092.0 / 1024.0, 1.0, 0.0));
 }
 
 #[test]

@@ -10,7 +10,7 @@ use std::sync::atomic::Ordering;
 use std::sync::mpsc::sync_channel;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-use tiltbox::protocol::{decode, Snapshot};
+use tiltbox::protocol::decode_frame;
 use tiltbox::service::{Outputs, SceneSource, ServerConfig, Simulation, TickConfig};
 
 /// Collects snapshots; stalls the loop once, on `stall_at`.
@@ -21,7 +21,7 @@ struct Fake {
 
 impl Outputs for Fake {
     fn poses(&mut self, frame: u64, payload: Vec<u8>) {
-        let s: Snapshot = decode(&payload).unwrap();
+        let s = decode_frame(&payload).unwrap();
         assert_eq!(s.frame, frame);
         self.frames.lock().unwrap().push(frame);
         if frame == self.stall_at {

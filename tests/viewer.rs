@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::net::{daemon_config, endpoint, next, open, serve, subscribe};
+use common::net::{daemon_config, endpoint, next, open, serve, subscribe_snapshots};
 use ratatui::backend::TestBackend;
 use ratatui::layout::Size;
 use ratatui::style::Color;
@@ -143,7 +143,20 @@ fn bricks_are_drawn_where_the_snapshot_puts_them_in_their_colours() {
         alive: true,
         rate_hz: 60.0,
         latency: Some(Duration::from_micros(250)),
+        keys: tiltbox::client::view::control::KEY_HELP,
     };
+    // the status line says what each key does (--control, and always in the demo)
+    let line = tiltbox::client::view::render::status_text(Some(&view), &status);
+    for what in [
+        "roll",
+        "lean",
+        "landscape",
+        "space brick",
+        "R reset",
+        "q quit",
+    ] {
+        assert!(line.contains(what), "{what}: {line}");
+    }
     let t = draw(&view, &status, 72, 21);
     let walls = cells(&t, WALL);
     assert!(walls.len() > 100, "walls drawn: {}", walls.len());
@@ -240,7 +253,7 @@ async fn plain_output_parses_back_to_the_poses_published() {
     let keys = server.keys().clone();
     // our own record of what was published
     let session = open(port).await;
-    let (mut snapshots, _sub) = subscribe::<Snapshot>(&session, keys.poses()).await;
+    let (mut snapshots, _sub) = subscribe_snapshots(&session, keys.poses()).await;
     next(&mut snapshots).await;
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_tiltbox-view"))

@@ -112,7 +112,7 @@ async fn a_viewer_lists_and_follows_worlds_behind_a_router() {
         .expect("snapshots of the followed world")
         .unwrap();
     assert_eq!(key, "tiltbox/tower/poses");
-    assert!(decode::<Snapshot>(&payload).is_ok());
+    assert!(decode_frame(&payload).is_ok());
     let scene = query_scene(&viewer, &keys).await;
     assert_eq!(scene.world, "tower");
 
@@ -128,7 +128,7 @@ async fn a_viewer_lists_and_follows_worlds_behind_a_router() {
             .await
             .unwrap()
             .unwrap();
-        if decode::<Snapshot>(&payload).unwrap().gravity.x == 7.0 {
+        if decode_frame(&payload).unwrap().gravity.x == 7.0 {
             break;
         }
         assert!(Instant::now() < end, "gravity never changed");

@@ -1,6 +1,7 @@
 //! The keyboard source: a virtual device turned by the arrow keys or put in a discrete
 //! orientation ([`KeyboardTilt`]), and, with the `tui` feature, the terminal it runs in
-//! (raw mode, a status line).
+//! (raw mode, a status line). [`key_command`] is the one mapping from keys to commands that
+//! `tiltbox-tilt`, `tiltbox-view --control` and `tiltbox demo` share.
 
 use super::STANDARD_GRAVITY;
 use crate::protocol::{Orientation, Tilt};
@@ -25,7 +26,7 @@ impl TiltKey {
     /// landscape right, `f` face up (flat), `d` face down; also `1`..`6` in that order.
     pub fn from_char(c: char) -> Option<TiltKey> {
         use Orientation::*;
-        let o = match c.to_ascii_lowercase() {
+        let o = match c {
             'p' | '1' => Portrait,
             'u' | '2' => PortraitUpsideDown,
             'l' | '3' => LandscapeLeft,
@@ -35,6 +36,80 @@ impl TiltKey {
             _ => return None,
         };
         Some(TiltKey::Orientation(o))
+    }
+}
+
+/// A key press, as any terminal library reports it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Key {
+    /// Left arrow.
+    Left,
+    /// Right arrow.
+    Right,
+    /// Up arrow.
+    Up,
+    /// Down arrow.
+    Down,
+    /// Escape.
+    Esc,
+    /// A character key (space is `' '`), as typed (shift gives capitals).
+    Char(char),
+    /// A character key with Control held.
+    Ctrl(char),
+}
+
+/// What a key asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KeyCommand {
+    /// Turn the virtual device (then publish its tilt on `…/tilt`).
+    Tilt(TiltKey),
+    /// Drop a brick into the world (`…/spawn`).
+    Spawn,
+    /// Reload the scene (`…/reset`).
+    Reset,
+    /// Leave.
+    Quit,
+}
+
+/// The keys, as a status line lists them.
+pub const KEY_HELP: &str = "←→ roll ↑↓ lean, p/u/l/r/f/d portrait/upside down/landscape \
+left/right/face up/down, space brick, R reset, q quit";
+
+/// The command a key gives, if any: arrows and `p u l r f d` (or `1`-`6`) tilt as
+/// [`TiltKey`] says, space spawns a brick, `R` (shift-r: lower-case `r` is landscape right)
+/// resets, `q`, Esc and Ctrl-C quit. A front end that cannot spawn or reset ignores those.
+pub fn key_command(key: Key) -> Option<KeyCommand> {
+    Some(match key {
+        Key::Left => KeyCommand::Tilt(TiltKey::Left),
+        Key::Right => KeyCommand::Tilt(TiltKey::Right),
+        Key::Up => KeyCommand::Tilt(TiltKey::Up),
+        Key::Down => KeyCommand::Tilt(TiltKey::Down),
+        Key::Esc | Key::Char('q') | Key::Ctrl('c') => KeyCommand::Quit,
+        Key::Char(' ') => KeyCommand::Spawn,
+        Key::Char('R') => KeyCommand::Reset,
+        Key::Char(c) => KeyCommand::Tilt(TiltKey::from_char(c)?),
+        Key::Ctrl(_) => return None,
+    })
+}
+
+#[cfg(feature = "tui")]
+impl Key {
+    /// A crossterm key event as a [`Key`]; `None` for releases and keys no command uses.
+    pub fn from_crossterm(k: crossterm::event::KeyEvent) -> Option<Key> {
+        use crossterm::event::{KeyCode, KeyEventKind, KeyModifiers};
+        if k.kind == KeyEventKind::Release {
+            return None;
+        }
+        Some(match k.code {
+            KeyCode::Left => Key::Left,
+            KeyCode::Right => Key::Right,
+            KeyCode::Up => Key::Up,
+            KeyCode::Down => Key::Down,
+            KeyCode::Esc => Key::Esc,
+            KeyCode::Char(c) if k.modifiers.contains(KeyModifiers::CONTROL) => Key::Ctrl(c),
+            KeyCode::Char(c) => Key::Char(c),
+            _ => return None,
+        })
     }
 }
 
@@ -135,5 +210,47 @@ mod tests {
             TiltKey::from_char('u'),
             Some(TiltKey::Orientation(Orientation::PortraitUpsideDown))
         );
+    }
+
+    #[test]
+    fn one_mapping_gives_every_key_its_command() {
+        use Orientation::*;
+        let tilt = |k| Some(KeyCommand::Tilt(k));
+        let table = [
+            (Key::Left, tilt(TiltKey::Left)),
+            (Key::Right, tilt(TiltKey::Right)),
+            (Key::Up, tilt(TiltKey::Up)),
+            (Key::Down, tilt(TiltKey::Down)),
+            (Key::Char('p'), tilt(TiltKey::Orientation(Portrait))),
+            (
+                Key::Char('u'),
+                tilt(TiltKey::Orientation(PortraitUpsideDown)),
+            ),
+            (Key::Char('l'), tilt(TiltKey::Orientation(LandscapeLeft))),
+            (Key::Char('r'), tilt(TiltKey::Orientation(LandscapeRight))),
+            (Key::Char('f'), tilt(TiltKey::Orientation(FaceUp))),
+            (Key::Char('d'), tilt(TiltKey::Orientation(FaceDown))),
+            (Key::Char('4'), tilt(TiltKey::Orientation(LandscapeRight))),
+            (Key::Char(' '), Some(KeyCommand::Spawn)),
+            (Key::Char('R'), Some(KeyCommand::Reset)),
+            (Key::Char('q'), Some(KeyCommand::Quit)),
+            (Key::Esc, Some(KeyCommand::Quit)),
+            (Key::Ctrl('c'), Some(KeyCommand::Quit)),
+            (Key::Ctrl('r'), None),
+            (Key::Char('x'), None),
+        ];
+        for (key, want) in table {
+            assert_eq!(key_command(key), want, "{key:?}");
+        }
+        // every key the help names does something
+        for c in ['p', 'u', 'l', 'r', 'f', 'd', ' ', 'R', 'q'] {
+            assert!(key_command(Key::Char(c)).is_some(), "{c:?}");
+        }
+        // the right arrow then landscape right: gravity to the right either way round
+        let mut device = KeyboardTilt::default();
+        let Some(KeyCommand::Tilt(k)) = key_command(Key::Char('r')) else {
+            panic!()
+        };
+        assert!(close(g(device.key(k)), 9.81, 0.0));
     }
 }

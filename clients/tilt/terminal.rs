@@ -2,11 +2,11 @@
 //! a status line with the device's angles, the reading, the gravity it gives and whether a
 //! daemon is up.
 
-use super::keyboard::{KeyboardTilt, TiltKey};
+use super::keyboard::{key_command, Key, KeyCommand, KeyboardTilt, TiltKey};
 use super::publish::{describe, TiltPublisher};
 use crate::client::session::ServerWatch;
 use crate::client::ClientError;
-use crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
+use crossterm::event::{self, Event};
 use crossterm::{cursor, terminal, QueueableCommand};
 use std::io::Write;
 use std::process::ExitCode;
@@ -104,20 +104,10 @@ fn read_keys(tx: mpsc::Sender<Input>) {
             }
         };
         let Event::Key(k) = ev else { continue };
-        if k.kind == KeyEventKind::Release {
-            continue;
-        }
-        let input = match k.code {
-            KeyCode::Char('c') if k.modifiers.contains(KeyModifiers::CONTROL) => Input::Quit,
-            KeyCode::Char('q') | KeyCode::Esc => Input::Quit,
-            KeyCode::Left => Input::Key(TiltKey::Left),
-            KeyCode::Right => Input::Key(TiltKey::Right),
-            KeyCode::Up => Input::Key(TiltKey::Up),
-            KeyCode::Down => Input::Key(TiltKey::Down),
-            KeyCode::Char(c) => match TiltKey::from_char(c) {
-                Some(k) => Input::Key(k),
-                None => continue,
-            },
+        // tiltbox-tilt publishes tilts only: spawn and reset keys do nothing here
+        let input = match Key::from_crossterm(k).and_then(key_command) {
+            Some(KeyCommand::Quit) => Input::Quit,
+            Some(KeyCommand::Tilt(k)) => Input::Key(k),
             _ => continue,
         };
         let quit = matches!(input, Input::Quit);

@@ -4,7 +4,8 @@
 //! - [`world`]: the viewer's copy of the world, rebuilt from `…/scene`, snapshots and events;
 //! - `render` (feature `tui`): the drawing, a pure function from that copy to cells;
 //! - `terminal` (feature `tui`): the terminal loop, redrawing at most 30 times a second;
-//! - [`plain`]: the `--plain` line per snapshot, its parser, and the loop that prints them.
+//! - [`plain`]: the `--plain` line per snapshot, its parser, and the loop that prints them;
+//! - `control` (feature `tui`): `--control`, the keys that tilt, spawn and reset.
 //!
 //! Zenoh callbacks only decode and `try_send` into one bounded channel; the loop on the
 //! caller's thread applies what arrives, and asks `…/scene` (on a tokio task) when a daemon
@@ -17,7 +18,10 @@
 //! value over the last seconds, i.e. how much later than the quickest recent snapshot this one
 //! came (the daemon publishes on absolute tick deadlines).
 
+#[cfg(feature = "tui")]
+pub mod control;
 pub mod plain;
+pub mod playout;
 #[cfg(feature = "tui")]
 pub mod render;
 #[cfg(feature = "tui")]
@@ -32,7 +36,7 @@ use {
     super::session::watch_server,
     super::ClientError,
     crate::cli::wait_for_signal,
-    crate::protocol::{Event, Keys, Snapshot},
+    crate::protocol::{decode_frame, Event, Keys, SnapshotFrame},
     std::io::Write,
     std::sync::mpsc::sync_channel,
     std::time::{Instant, SystemTime},
@@ -52,6 +56,29 @@ pub struct ViewArgs {
     /// With --plain: stop after N lines.
     #[arg(long, value_name = "N", requires = "plain")]
     pub count: Option<u64>,
+    /// Drive the world from the keyboard, as tiltbox-tilt does: arrows and p/u/l/r/f/d tilt,
+    /// space drops a brick, R resets (the daemon's ACL decides whether this session may).
+    /// Always on in `tiltbox demo`.
+    #[arg(long, conflicts_with = "plain")]
+    pub control: bool,
+    /// Draw this many snapshot intervals behind the newest snapshot, interpolating between
+    /// snapshots (at most one interval of extrapolation when one is late); 0 draws each
+    /// snapshot as it arrives.
+    #[arg(long, value_name = "INTERVALS", default_value_t = 2.0,
+          value_parser = playout_intervals)]
+    pub playout: f64,
+}
+
+/// `--playout`: a finite number of intervals within 0..=30.
+fn playout_intervals(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .parse()
+        .map_err(|e| format!("{s:?} is not a number: {e}"))?;
+    if v.is_finite() && (0.0..=30.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{v} is not within 0..=30 snapshot intervals"))
+    }
 }
 
 impl ViewArgs {
@@ -69,7 +96,9 @@ impl ViewArgs {
 /// What the loops receive: from Zenoh's callbacks, the scene query, the keyboard and signals.
 #[cfg(feature = "tui")]
 enum Msg {
-    Snapshot(Snapshot, Instant, Option<Duration>),
+    /// A `…/poses` payload, decoded without state: the loop's [`crate::protocol::SnapshotDecoder`]
+    /// applies it, so a payload dropped on a full channel is a lost sample, nothing worse.
+    Snapshot(SnapshotFrame, Instant, Option<Duration>),
     Event(Event),
     Alive(bool),
     Scene(Result<SceneState, String>),
@@ -105,7 +134,7 @@ pub fn run(
                         .duration_since(ts.get_time().to_system_time())
                         .ok()
                 });
-                match decode::<Snapshot>(&sample.payload().to_bytes()) {
+                match decode_frame(&sample.payload().to_bytes()) {
                     Ok(s) => {
                         let _ = stx.try_send(Msg::Snapshot(s, now, latency));
                     }
@@ -144,7 +173,7 @@ pub fn run(
     let result = if args.plain {
         plain::run(&rx, args, endpoint, out)
     } else {
-        terminal::show(rt, session, keys, &tx, &rx, endpoint)
+        terminal::show(rt, session, keys, &tx, &rx, endpoint, args)
     };
     drop(subs);
     result

@@ -5,9 +5,11 @@
 //! ```
 //!
 //! The frame, the simulated time (s), then `id:x,y,angle` (m, m, rad) for each body in the
-//! snapshot (a delta lists the bodies that moved, a keyframe every dynamic body). Numbers are
+//! snapshot (a delta lists the bodies whose pose changed, a keyframe every dynamic body),
+//! as the snapshot decoder reconstructs them from the quantized wire form; lines start with
+//! the first keyframe received. Numbers are
 //! printed in Rust's shortest round-trip form, so parsing a line gives back exactly the `f32`s
-//! published. With `--every N` a line is printed for every N-th snapshot received and lists
+//! decoded. With `--every N` a line is printed for every N-th snapshot received and lists
 //! each body that moved since the previous line, with its newest pose. No colour, no cursor
 //! movement: nothing but ASCII and spaces.
 
@@ -124,6 +126,7 @@ pub(super) fn run(
     out: &mut dyn Write,
 ) -> Result<(), ClientError> {
     let mut printer = PlainPrinter::new(args.every);
+    let mut decoder = crate::protocol::SnapshotDecoder::new();
     let mut printed = 0u64;
     let mut alive = false;
     let started = Instant::now();
@@ -141,7 +144,10 @@ pub(super) fn run(
             Err(RecvTimeoutError::Disconnected) => return Ok(()),
         };
         match msg {
-            Msg::Snapshot(s, _, _) => {
+            Msg::Snapshot(frame, _, _) => {
+                let crate::protocol::snapshot::Decoded::Snapshot(s) = decoder.apply(&frame) else {
+                    continue; // a delta without its keyframe: wait for the next one
+                };
                 if let Some(line) = printer.snapshot(&s) {
                     if writeln!(out, "{line}").and_then(|_| out.flush()).is_err() {
                         return Ok(()); // the pipe closed

@@ -36,6 +36,8 @@ pub struct Status {
     pub rate_hz: f64,
     /// Latency of the latest snapshot, when it could be measured.
     pub latency: Option<Duration>,
+    /// What the keys do, last on the line (`q quits` when empty).
+    pub keys: &'static str,
 }
 
 /// The world-to-canvas mapping for an area: the canvas bounds, in metres.
@@ -299,14 +301,19 @@ pub fn gravity_arrow(g: Vector) -> char {
 /// The status line's text.
 pub fn status_text(view: Option<&WorldView>, status: &Status) -> String {
     let world = view.map_or(status.world.as_str(), |v| v.world.as_str());
+    let keys = if status.keys.is_empty() {
+        "q quits"
+    } else {
+        status.keys
+    };
     if !status.alive {
         return format!(
-            " {world} │ waiting for server at {} │ q quits",
+            " {world} │ waiting for server at {} │ {keys}",
             status.endpoint
         );
     }
     let Some(v) = view else {
-        return format!(" {world} │ joining (asking …/scene) │ q quits");
+        return format!(" {world} │ joining (asking …/scene) │ {keys}");
     };
     let g = v.gravity;
     let latency = match status.latency {
@@ -315,7 +322,7 @@ pub fn status_text(view: Option<&WorldView>, status: &Status) -> String {
     };
     // most useful first: a narrow terminal cuts the end
     format!(
-        " {world} │ frame {} │ {} bodies │ g {} {:.2} │ {:.0} Hz │ latency {latency} │ {} │ q quits",
+        " {world} │ frame {} │ {} bodies │ g {} {:.2} │ {:.0} Hz │ latency {latency} │ {} │ {keys}",
         v.frame,
         v.bodies.len(),
         gravity_arrow(g),

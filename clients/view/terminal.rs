@@ -1,12 +1,18 @@
 //! The viewer's terminal: a full-screen braille drawing ([`super::render`]) redrawn at most
-//! 30 times a second, a status line with rate and latency, keys to quit. The terminal is put
+//! 30 times a second (continuously, through the playout buffer, while bodies move), a status
+//! line with rate and latency, keys to quit (and with `--control` to drive the world). The terminal is put
 //! back on `q`, Esc, Ctrl-C, SIGTERM and on panic (ratatui's hook).
 
+use super::control::{key_command, Control, Key, Put, KEY_HELP};
+use super::playout::{Playout, Xya};
 use super::render::{render, Status};
-use super::world::{Applied, Join, Received};
+use super::world::{Applied, Join, Received, WorldView};
 use super::{query_scene, Msg};
+use crate::client::tilt::keyboard::KeyCommand;
 use crate::client::ClientError;
-use crate::protocol::{Keys, Snapshot};
+use crate::protocol::snapshot::Decoded;
+use crate::protocol::BodyRef;
+use crate::protocol::{Keys, Snapshot, SnapshotDecoder};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender};
@@ -80,7 +86,48 @@ impl Drop for TerminalGuard {
     }
 }
 
-/// Draw the world until q, Esc, Ctrl-C or a signal.
+/// The dynamic bodies' poses of `view`.
+fn dynamic(view: &WorldView) -> impl Iterator<Item = (BodyRef, Xya)> + '_ {
+    view.bodies
+        .iter()
+        .filter(|(_, b)| !b.info.is_static)
+        .map(|(id, b)| (*id, [b.x, b.y, b.angle]))
+}
+
+/// `view` with its dynamic bodies where the playout buffer draws them at `now` (s since the
+/// loop's origin); `None` before the buffer's first sample.
+fn drawn(view: &WorldView, playout: &Playout, now: f64) -> Option<WorldView> {
+    let poses = playout.poses_at(now)?;
+    let mut v = view.clone();
+    for (id, [x, y, angle]) in poses {
+        if let Some(b) = v.bodies.get_mut(&id) {
+            (b.x, b.y, b.angle) = (x, y, angle);
+        }
+    }
+    Some(v)
+}
+
+/// Put a command's payload from a task (Block for spawn and reset).
+fn send(rt: &tokio::runtime::Handle, session: &Session, put: Put) {
+    let session = session.clone();
+    rt.spawn(async move {
+        use zenoh::qos::CongestionControl;
+        let cc = if put.block {
+            CongestionControl::Block
+        } else {
+            CongestionControl::Drop
+        };
+        if let Err(e) = session
+            .put(put.key, put.payload)
+            .congestion_control(cc)
+            .await
+        {
+            tracing::warn!("put refused: {e}");
+        }
+    });
+}
+
+/// Draw the world until q, Esc, Ctrl-C or a signal; with `control`, the keys drive it.
 pub(super) fn show(
     rt: &tokio::runtime::Handle,
     session: &Session,
@@ -88,7 +135,11 @@ pub(super) fn show(
     tx: &SyncSender<Msg>,
     rx: &Receiver<Msg>,
     endpoint: &str,
+    args: &super::ViewArgs,
 ) -> Result<(), ClientError> {
+    let control = args.control;
+    let mut playout = Playout::new(args.playout);
+    let mut snap_next = false;
     let mut terminal = ratatui::try_init()?;
     let _guard = TerminalGuard;
     let stop = Arc::new(AtomicBool::new(false));
@@ -115,11 +166,14 @@ pub(super) fn show(
             })?
     };
     let mut join = Join::new();
+    let mut decoder = SnapshotDecoder::new();
     let mut status = Status {
         world: keys.prefix().to_owned(),
         endpoint: endpoint.to_owned(),
+        keys: if control { KEY_HELP } else { "q quits" },
         ..Status::default()
     };
+    let mut driver = Control::default();
     let mut meter = Meter::default();
     let origin = Instant::now();
     let mut asking = false;
@@ -143,15 +197,33 @@ pub(super) fn show(
             .chain(std::iter::from_fn(|| rx.try_recv().ok()))
         {
             match msg {
-                Msg::Snapshot(s, at, stamped) => {
+                Msg::Snapshot(frame, at, stamped) => {
+                    let Decoded::Snapshot(s) = decoder.apply(&frame) else {
+                        continue; // a delta without its keyframe: wait for the next one
+                    };
                     meter.snapshot(&s, at, stamped, origin);
-                    if join.receive(Received::Snapshot(s)) == Applied::Restarted {
-                        join.restart();
-                        meter.reset();
+                    let (frame, time, keyframe) = (s.frame, s.time, s.keyframe);
+                    match join.receive(Received::Snapshot(s)) {
+                        Applied::Restarted => {
+                            join.restart();
+                            meter.reset();
+                            playout.clear();
+                        }
+                        Applied::Applied => {
+                            if let Some(v) = join.view() {
+                                let arrival = at.duration_since(origin).as_secs_f64();
+                                playout.push(frame, time, arrival, dynamic(v), keyframe);
+                                if std::mem::take(&mut snap_next) {
+                                    playout.snap_newest();
+                                }
+                            }
+                        }
+                        Applied::Stale => {}
                     }
                     dirty = true;
                 }
                 Msg::Event(e) => {
+                    snap_next |= matches!(e.kind, crate::protocol::EventKind::Reset { .. });
                     join.receive(Received::Event(e));
                     dirty = true;
                 }
@@ -166,6 +238,7 @@ pub(super) fn show(
                 Msg::Scene(Ok(state)) => {
                     asking = false;
                     join.scene(state);
+                    playout.clear();
                     dirty = true;
                 }
                 Msg::Scene(Err(e)) => {
@@ -174,13 +247,14 @@ pub(super) fn show(
                     retry_at = Instant::now() + Duration::from_secs(1);
                 }
                 Msg::Input(crossterm::event::Event::Key(k)) => {
-                    use crossterm::event::{KeyCode, KeyEventKind, KeyModifiers};
-                    if k.kind != KeyEventKind::Release {
-                        let ctrl_c = k.code == KeyCode::Char('c')
-                            && k.modifiers.contains(KeyModifiers::CONTROL);
-                        if ctrl_c || matches!(k.code, KeyCode::Char('q') | KeyCode::Esc) {
-                            quit = true;
+                    match Key::from_crossterm(k).and_then(key_command) {
+                        Some(KeyCommand::Quit) => quit = true,
+                        Some(command) if control => {
+                            if let Some(put) = driver.put(command, keys, join.view()) {
+                                send(rt, session, put);
+                            }
                         }
+                        _ => {}
                     }
                 }
                 Msg::Input(_) => dirty = true, // resize and the like: redraw
@@ -200,12 +274,18 @@ pub(super) fn show(
         if dirty && last_draw.elapsed() >= FRAME {
             status.rate_hz = meter.rate(Instant::now());
             status.latency = meter.latency;
-            let view = join.view();
+            let now = origin.elapsed().as_secs_f64();
+            let smooth = match join.view() {
+                Some(v) if args.playout > 0.0 => drawn(v, &playout, now),
+                _ => None,
+            };
+            let view = smooth.as_ref().or(join.view());
             if let Err(e) = terminal.draw(|f| render(view, &status, f.area(), f.buffer_mut())) {
                 break Err(e.into());
             }
             last_draw = Instant::now();
-            dirty = false;
+            // with a playout buffer, motion goes on between snapshots
+            dirty = args.playout > 0.0 && smooth.is_some();
         }
     };
     stop.store(true, Ordering::Relaxed);

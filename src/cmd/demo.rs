@@ -1,6 +1,8 @@
 //! `tiltbox demo`: the daemon and the viewer in one process, so that a newcomer sees bricks
-//! fall at once. Tilt it from another terminal with `tiltbox-tilt`. The front end is the
-//! viewer's own (`tiltbox::client::view`), with the same flags as `tiltbox-view`.
+//! fall at once. Its keys drive the world as `tiltbox-view --control` does (arrows and
+//! p/u/l/r/f/d tilt as in `tiltbox-tilt`, space drops a brick, R resets); `tiltbox-tilt` from
+//! another terminal works too. The front end is the viewer's own (`tiltbox::client::view`),
+//! with the same flags as `tiltbox-view`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -46,12 +48,17 @@ pub fn run(args: DemoArgs) -> Result<ExitCode, Failure> {
         .map_err(|e| Failure::Usage(format!("cannot start the daemon: {e}")))?;
     let keys = server.keys().clone();
     let endpoints = vec![args.listen.clone()];
+    // the demo's keys always drive the world (it is the demo's own daemon)
+    let view_args = ViewArgs {
+        control: !args.view.plain,
+        ..args.view.clone()
+    };
     let result = rt.block_on(session::open(&endpoints)).and_then(|session| {
         let shown = view::run(
             rt.handle(),
             &session,
             &keys,
-            &args.view,
+            &view_args,
             &args.listen,
             &mut std::io::stdout(),
         );

@@ -37,6 +37,10 @@ pub struct ServeArgs {
     /// Keyframe interval in frames [config: keyframe_every; default 60].
     #[arg(long, value_name = "FRAMES")]
     pub keyframe_every: Option<u32>,
+    /// Snapshot positions on a grid of 2^-BITS m, 0..=24 [config: snapshot_grid_bits;
+    /// default 10, 1/1024 m].
+    #[arg(long, value_name = "BITS")]
+    pub snapshot_grid_bits: Option<u32>,
     /// Late steps run back to back before time is dropped [config: max_catch_up; default 4].
     #[arg(long, value_name = "STEPS")]
     pub max_catch_up: Option<u32>,
@@ -147,6 +151,7 @@ impl ServeArgs {
             c.scene = self.scene.clone();
         }
         set(&mut c.keyframe_every, &self.keyframe_every);
+        set(&mut c.snapshot_grid_bits, &self.snapshot_grid_bits);
         set(&mut c.max_catch_up, &self.max_catch_up);
         set(&mut c.command_queue, &self.command_queue);
         if self.record.is_some() {

@@ -85,7 +85,8 @@ pub enum ShapeSpec {
     },
 }
 
-/// One body's pose in a [`Snapshot`]. 14 bytes for a body with index < 128 and generation 0.
+/// One body's pose in a [`Snapshot`], as a client reconstructs it from the quantized wire
+/// form ([`super::snapshot`]): within half a grid step of the daemon's.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Pose {
     /// The body.
@@ -94,11 +95,12 @@ pub struct Pose {
     pub x: f32,
     /// Centre of mass y (m).
     pub y: f32,
-    /// Orientation (rad, counter-clockwise), accumulated: not wrapped to (-pi, pi].
+    /// Orientation (rad, counter-clockwise), within [-pi, pi): whole turns are not sent.
     pub angle: f32,
 }
 
-/// `…/poses`: published after every step.
+/// `…/poses`, decoded: what a [`super::SnapshotDecoder`] makes of each payload (the wire form
+/// is [`super::SnapshotFrame`], quantized and delta-coded).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot {
     /// Frame number: steps since the daemon started (1 for the first step; never reset).
@@ -108,7 +110,8 @@ pub struct Snapshot {
     /// Gravity in force during this step (m/s^2, world frame).
     pub gravity: Vector,
     /// True when `poses` holds every dynamic body (every `keyframe_every` frames and after a
-    /// reset); false when it holds only the bodies that moved since the last snapshot.
+    /// reset); false when it holds only the bodies whose pose changed since the previous
+    /// snapshot the decoder gave out.
     pub keyframe: bool,
     /// Poses of dynamic bodies, in slot order. Static bodies never appear here.
     pub poses: Vec<Pose>,

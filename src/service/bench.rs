@@ -4,7 +4,7 @@
 
 use super::config::{ServerConfig, ZenohSettings};
 use super::net::{Server, ServerOptions, ServiceError};
-use crate::protocol::{decode, Snapshot};
+use crate::protocol::decode_frame;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
@@ -149,7 +149,7 @@ pub async fn bench_net(config: &ServerConfig, seconds: f64) -> Result<BenchRepor
             .callback(move |sample| {
                 let now = epoch.elapsed().as_nanos() as u64;
                 let bytes = sample.payload().to_bytes();
-                if let Ok(s) = decode::<Snapshot>(&bytes) {
+                if let Ok(s) = decode_frame(&bytes) {
                     let sent = published[s.frame as usize % SLOTS].load(Ordering::Relaxed);
                     let latency_us = (now.saturating_sub(sent) / 1000).min(u32::MAX as u64) as u32;
                     if let Ok(mut v) = samples.lock() {
@@ -157,7 +157,7 @@ pub async fn bench_net(config: &ServerConfig, seconds: f64) -> Result<BenchRepor
                             latency_us,
                             bytes: bytes.len(),
                             poses: s.poses.len(),
-                            keyframe: s.keyframe,
+                            keyframe: s.is_keyframe(),
                         });
                     }
                 }

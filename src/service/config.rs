@@ -25,6 +25,9 @@ pub struct ServerConfig {
     pub scene: Option<PathBuf>,
     /// Every this many frames the snapshot is a keyframe with every dynamic body. Default 60.
     pub keyframe_every: u32,
+    /// Snapshot positions are sent on a grid of `2^-snapshot_grid_bits` m (0..=24). Default
+    /// 10: 1/1024 m.
+    pub snapshot_grid_bits: u32,
     /// How many late steps the loop runs back to back before it drops time. Default 4.
     pub max_catch_up: u32,
     /// Capacity of the command channel between Zenoh callbacks and the tick thread; a
@@ -110,6 +113,7 @@ impl Default for ServerConfig {
             tick_hz: 60.0,
             scene: None,
             keyframe_every: 60,
+            snapshot_grid_bits: crate::protocol::snapshot::DEFAULT_GRID_BITS as u32,
             max_catch_up: 4,
             command_queue: 256,
             record: None,
@@ -321,6 +325,13 @@ impl ServerConfig {
             }
         };
         count("keyframe_every", self.keyframe_every, 1, 1_000_000)?;
+        let max_grid = crate::protocol::snapshot::MAX_GRID_BITS;
+        count(
+            "snapshot_grid_bits",
+            self.snapshot_grid_bits,
+            0,
+            max_grid as u32,
+        )?;
         count("max_catch_up", self.max_catch_up, 0, 1000)?;
         count("command_queue", self.command_queue, 1, 1_000_000)?;
         if !(self.checkpoint_every.is_finite()

@@ -35,6 +35,6 @@ pub use files::FileError;
 pub use net::{
     shutdown_worlds, start_worlds, world_configs, PublishHook, Server, ServerOptions, ServiceError,
 };
-pub use sim::{SceneSource, SimState, Simulation, StartError, POSE_EPSILON};
+pub use sim::{SceneSource, SimState, Simulation, StartError};
 pub use tick::{run as run_loop, Outputs, Recording, RunSummary, TickConfig};
 pub use wire::{parse_command, BodyMeta};

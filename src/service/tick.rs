@@ -8,7 +8,7 @@ use super::config::ServerConfig;
 use super::journal::JournalWriter;
 use super::scene_query::SceneQueries;
 use super::sim::Simulation;
-use crate::protocol::{encode, encode_into, CommandKey, Event, Stats};
+use crate::protocol::{encode, CommandKey, Event, Stats};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Receiver;
 use std::sync::Arc;
@@ -225,13 +225,9 @@ pub(crate) fn run_shared<O: Outputs>(
         // 3. Snapshot out, encoded once into a buffer of last frame's size and handed over.
         let frame = sim.frame();
         let mut payload = Vec::with_capacity(last_payload);
-        match encode_into(sim.poses(), &mut payload) {
-            Ok(()) => {
-                last_payload = payload.len();
-                out.poses(frame, payload);
-            }
-            Err(e) => tracing::error!(frame, "cannot encode snapshot: {e}"),
-        }
+        sim.snapshot_into(&mut payload);
+        last_payload = payload.len();
+        out.poses(frame, payload);
         out.stepped(&sim);
 
         // 4. Bookkeeping and stats once a second.

@@ -6,7 +6,7 @@ use std::sync::mpsc::Receiver;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use tiltbox::protocol::{decode, Keys, Message, SceneState};
+use tiltbox::protocol::{decode, Keys, Message, SceneState, Snapshot, SnapshotDecoder};
 use tiltbox::service::{
     run_loop, Incoming, Outputs, RunSummary, Server, ServerConfig, ServerOptions, Simulation,
     TickConfig,
@@ -70,6 +70,27 @@ pub async fn subscribe<M: Message + Send + 'static>(
         .declare_subscriber(key)
         .callback(move |s| {
             if let Ok(m) = decode::<M>(&s.payload().to_bytes()) {
+                let _ = tx.send(m);
+            }
+        })
+        .await
+        .unwrap();
+    (rx, sub)
+}
+
+/// Every `…/poses` payload on `key` as a client decodes it ([`SnapshotDecoder`]): nothing
+/// before the first keyframe, then keyframes and what changed since the previous snapshot.
+pub async fn subscribe_snapshots(
+    session: &Session,
+    key: String,
+) -> (UnboundedReceiver<Snapshot>, Subscriber<()>) {
+    let (tx, rx) = unbounded_channel();
+    let decoder = std::sync::Mutex::new(SnapshotDecoder::new());
+    let sub = session
+        .declare_subscriber(key)
+        .callback(move |s| {
+            let mut d = decoder.lock().unwrap();
+            if let Ok(Some(m)) = d.decode(&s.payload().to_bytes()) {
                 let _ = tx.send(m);
             }
         })

@@ -9,6 +9,8 @@
 // messages have the shape serde gives the Rust types in JSON (externally tagged enums).
 
 const VERSION = 1;
+const SNAPSHOT_VERSION = 2;  // …/poses: quantized, delta-coded against the latest keyframe
+const ANGLE_STEPS = 65536;
 const ORIENTATIONS = ['Portrait', 'PortraitUpsideDown', 'LandscapeLeft', 'LandscapeRight',
   'FaceUp', 'FaceDown'];
 const utf8 = new TextDecoder('utf-8', { fatal: true });
@@ -40,6 +42,9 @@ class Reader {
     throw new DecodeError('a varint is longer than its type allows');
   }
   u32() { return this.varint(5); }
+  // zigzag: n >= 0 as 2n, n < 0 as -2n - 1 (exact within +-2^53)
+  signed() { const v = this.varint(10); return v % 2 === 0 ? v / 2 : -(v + 1) / 2; }
+  u16le() { this.need(2); const v = this.dv.getUint16(this.i, true); this.i += 2; return v; }
   u64() { return this.varint(10); }
   bool() {
     const b = this.u8();
@@ -88,7 +93,38 @@ function shapeSpec(r) {
     default: return { Polygon: { vertices: r.seq(vector) } };
   }
 }
-const pose = r => ({ id: bodyRef(r), x: r.f32(), y: r.f32(), angle: r.f32() });
+// An id in a list sorted by slot: 2 (index - next) + (generation != 0), then the generation.
+function listId(r, at) {
+  const head = r.varint(6);
+  const generation = head % 2 === 1 ? r.u32() : 0;
+  const index = at.next + Math.floor(head / 2);
+  if (index > 0xffffffff) throw new DecodeError('a body index beyond u32');
+  at.next = index + 1;
+  return { index, generation };
+}
+// A snapshot as the wire carries it (docs/protocol.md, "Snapshot", encoding version 2).
+function snapshotFrame(r) {
+  const frame = r.u64(), time = r.f64(), gravity = vector(r), reference = r.u64(), grid = r.u8();
+  if (grid > 24) throw new DecodeError('the grid is finer than 2^-24 m');
+  const key = reference === 0;
+  const n = r.u32();
+  if (n * (key ? 5 : 4) > r.b.length - r.i) throw new DecodeError('truncated: a sequence is longer than the payload');
+  const poses = [], at = { next: 0 };
+  let px = 0, py = 0;
+  for (let k = 0; k < n; k++) {
+    const id = listId(r, at), dx = r.signed(), dy = r.signed();
+    if (key) { px += dx; py += dy; poses.push({ id, x: px, y: py, angle: r.u16le() }); }
+    else poses.push({ id, x: dx, y: dy, angle: r.signed() });
+  }
+  const gone = [];
+  if (!key) {
+    const m = r.u32();
+    if (m > r.b.length - r.i) throw new DecodeError('truncated: a sequence is longer than the payload');
+    const g = { next: 0 };
+    for (let k = 0; k < m; k++) gone.push(listId(r, g));
+  }
+  return { frame, time, gravity, reference, grid, poses, gone };
+}
 const bodyInfo = r => ({
   id: bodyRef(r), name: r.string(), shape: shapeSpec(r), is_static: r.bool(),
   colour: colour(r), position: vector(r), angle: r.f32(), velocity: vector(r),
@@ -101,7 +137,7 @@ const spawnBody = r => ({
 });
 
 const MESSAGES = {
-  Snapshot: r => ({ frame: r.u64(), time: r.f64(), gravity: vector(r), keyframe: r.bool(), poses: r.seq(pose) }),
+  Snapshot: snapshotFrame,
   Event: r => {
     const frame = r.u64();
     let kind;
@@ -140,7 +176,8 @@ function decodeMessage(type, bytes) {
   const f = MESSAGES[type];
   if (!f) throw new DecodeError('no message ' + type);
   if (bytes.length === 0) throw new DecodeError('empty payload');
-  if (bytes[0] !== VERSION) throw new DecodeError('unsupported protocol version ' + bytes[0]);
+  const version = type === 'Snapshot' ? SNAPSHOT_VERSION : VERSION;
+  if (bytes[0] !== version) throw new DecodeError('unsupported protocol version ' + bytes[0] + ' (this page reads ' + version + ')');
   const r = new Reader(bytes.subarray(1));
   const m = f(r);
   if (r.i !== r.b.length) throw new DecodeError((r.b.length - r.i) + ' unexpected byte(s) after the end of a ' + type);
@@ -205,6 +242,48 @@ function encodeFrame(type, m) {
   f.set(p, 1);
   return f;
 }
+
+// The snapshot decoder: keeps the latest keyframe and the poses last given out. A delta is
+// applied only against the keyframe it names (lost keyframe: skipped until the next one), so
+// a lost sample never leaves a wrong pose. Gives out {frame, time, gravity, keyframe, poses}
+// with poses in metres and radians: every dynamic body for a keyframe, the changed ones for a
+// delta.
+class SnapshotDecoder {
+  constructor() { this.skipped = 0; this.reset(); }
+  reset() { this.key = null; this.changed = new Map(); this.last = 0; }
+  apply(f) {
+    const step = Math.pow(2, -f.grid), out = [];
+    const pose = (id, q) => {
+      const a = q[2] >= ANGLE_STEPS / 2 ? q[2] - ANGLE_STEPS : q[2];
+      return { id, x: Math.fround(q[0] * step), y: Math.fround(q[1] * step), angle: Math.fround(a * (2 * Math.PI / ANGLE_STEPS)) };
+    };
+    if (f.reference === 0) {
+      const poses = new Map();
+      for (const p of f.poses) { const q = [p.x, p.y, p.angle]; poses.set(idKey(p.id), q); out.push(pose(p.id, q)); }
+      this.key = { frame: f.frame, grid: f.grid, poses };
+      this.changed = new Map();
+    } else {
+      const k = this.key;
+      if (!k || k.frame !== f.frame - f.reference || k.grid !== f.grid || f.frame <= this.last) { this.skipped++; return null; }
+      const now = new Map();
+      for (const p of f.poses) {
+        const key = idKey(p.id), kq = k.poses.get(key), base = kq || [0, 0, 0];
+        const q = [base[0] + p.x, base[1] + p.y, (((base[2] + p.angle) % ANGLE_STEPS) + ANGLE_STEPS) % ANGLE_STEPS];
+        now.set(key, { id: p.id, q });
+        const was = this.changed.has(key) ? this.changed.get(key).q : kq;
+        if (!was || was[0] !== q[0] || was[1] !== q[1] || was[2] !== q[2]) out.push(pose(p.id, q));
+      }
+      const gone = new Set(f.gone.map(idKey));
+      for (const [key, c] of this.changed) {
+        if (!now.has(key) && !gone.has(key) && k.poses.has(key)) out.push(pose(c.id, k.poses.get(key)));
+      }
+      this.changed = now;
+    }
+    this.last = f.frame;
+    return { frame: f.frame, time: f.time, gravity: f.gravity, keyframe: f.reference === 0, poses: out };
+  }
+}
+const snapshots = new SnapshotDecoder();
 
 // ---------------------------------------------------------------------------------------
 // The world as the page knows it: the scene reply, then snapshots and events (the late join
@@ -315,6 +394,7 @@ const params = new URLSearchParams(location.hash.slice(1));
 function connect(world) {
   if (ws) { ws.onclose = null; ws.close(); }
   state.joined = false; state.buffer = []; state.frame = 0; state.alive = false; resetWorld();
+  snapshots.reset();
   const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
   const q = world ? '?world=' + encodeURIComponent(world) : '';
   const sock = new WebSocket(proto + '//' + location.host + '/ws' + q);
@@ -327,6 +407,10 @@ function connect(world) {
     let f;
     try { f = decodeFrame(bytes); } catch (e) { metrics.errors.push(String(e.message)); return; }
     const item = { type: f.type, message: f.message, at: performance.now() };
+    if (f.type === 'Snapshot') {
+      item.message = snapshots.apply(f.message);
+      if (!item.message) return;  // a delta without its keyframe: wait for the next one
+    }
     if (f.type === 'SceneState') { state.world = f.message.world; applyScene(f.message); }
     else if (f.type === 'Stats') state.stats = f.message;
     else if (!state.joined) state.buffer.push(item);
@@ -483,7 +567,9 @@ function sample(now) {
   const poses = new Map();
   for (const [k, pb] of b.poses) {
     const pa = a.poses.get(k);
-    poses.set(k, pa ? [pa[0] + (pb[0] - pa[0]) * u, pa[1] + (pb[1] - pa[1]) * u, pa[2] + (pb[2] - pa[2]) * u] : pb);
+    // angles come within [-pi, pi): turn the short way round
+    const da = pa ? pb[2] - pa[2] - 2 * Math.PI * Math.round((pb[2] - pa[2]) / (2 * Math.PI)) : 0;
+    poses.set(k, pa ? [pa[0] + (pb[0] - pa[0]) * u, pa[1] + (pb[1] - pa[1]) * u, pa[2] + da * u] : pb);
   }
   return { poses, t, delay };
 }
@@ -653,7 +739,8 @@ canvas.addEventListener('pointerdown', e => {
 
 // Everything a test or a curious user may look at, from the console.
 window.tiltbox = {
-  state, metrics, decodeFrame, decodeMessage, encodeMessage, encodeFrame, toPixel, toWorld,
+  state, metrics, snapshots, SnapshotDecoder, decodeFrame, decodeMessage, encodeMessage, encodeFrame, toPixel,
+  toWorld,
   view: () => lastView,
   motionSeen: () => motionSeen,
   pixel(x, y) {

@@ -17,14 +17,13 @@ mod poses;
 mod source;
 mod state;
 
-pub use poses::POSE_EPSILON;
 pub use source::SceneSource;
 pub use state::{SimState, StartError};
 
 use super::config::{Limits, ServerConfig};
 use super::wire::{body_info, vector};
 use crate::physics::{PhysicsError, Real, World};
-use crate::protocol::{BodyInfo, Event, Keys, SceneState, Snapshot};
+use crate::protocol::{BodyInfo, Event, Grid, Keys, SceneState, SnapshotFrame};
 use bodies::BodyRegistry;
 use poses::PoseDeltas;
 use std::collections::VecDeque;
@@ -77,7 +76,10 @@ impl Simulation {
             dt_secs: config.dt(),
             frame: 0,
             bodies: BodyRegistry::default(),
-            poses: PoseDeltas::new(config.keyframe_every as u64),
+            poses: PoseDeltas::new(
+                config.keyframe_every as u64,
+                Grid::new(config.snapshot_grid_bits.min(255) as u8).unwrap_or_default(),
+            ),
             spawn_frames: VecDeque::new(),
             spawn_window: config.tick_hz.round().max(1.0) as u64,
             applied: 0,
@@ -266,12 +268,13 @@ impl Simulation {
         Ok(took)
     }
 
-    /// The `…/poses` message of the frame just stepped: a keyframe every `keyframe_every`
-    /// frames and after a reset, otherwise the dynamic bodies that moved more than
-    /// [`POSE_EPSILON`] since they were last sent. Call once per step.
-    pub fn poses(&mut self) -> &Snapshot {
+    /// The `…/poses` payload of the frame just stepped, written into `out` (cleared first): a
+    /// keyframe every `keyframe_every` frames and after a reset, otherwise a delta against
+    /// the latest keyframe (`docs/protocol.md`). Returns the frame as encoded. Call once per
+    /// step.
+    pub fn snapshot_into(&mut self, out: &mut Vec<u8>) -> &SnapshotFrame {
         let time = self.time();
-        self.poses.message(&self.world, self.frame, time)
+        self.poses.message(&self.world, self.frame, time, out)
     }
 
     /// The full state after the last step, every body included: the `…/scene` reply. Built

@@ -418,7 +418,7 @@ impl World {
     /// Total potential energy in the current gravity field, relative to the origin (J).
     pub fn potential_energy(&self) -> Real {
         self.bodies()
-            .filter(|b| !b.is_static())
+            .filter(|b| b.inv_mass > 0.0)
             .map(|b| -b.mass * self.gravity.dot(b.position))
             .sum()
     }
@@ -465,6 +465,7 @@ impl World {
             SolverKind::SoftStep => self.solve_soft_step(dt, limits),
         }
         self.store_solver_bodies();
+        self.move_kinematic(dt);
         if self.settings.enable_sleep {
             self.update_sleep(dt);
         }
@@ -684,6 +685,12 @@ impl World {
                     dtheta: 0.0,
                     dq: Rot::IDENTITY,
                 },
+                // Infinite mass that moves: contacts see its velocity, nothing changes it.
+                Some(b) if b.kinematic => SolverBody {
+                    v: b.linear_velocity,
+                    w: b.angular_velocity,
+                    ..SolverBody::FIXED
+                },
                 _ => SolverBody::FIXED,
             }));
         // One more fixed body, last, for the empty lanes of the wide solver's bundles.
@@ -706,6 +713,18 @@ impl World {
             b.position += sb.dp;
             b.angle += sb.dtheta;
             b.rot = Rot::from_angle(b.angle);
+        }
+    }
+
+    /// Kinematic bodies move by their own velocity over the step (they are fixed bodies to the
+    /// solver, which only reads their velocity).
+    fn move_kinematic(&mut self, dt: Real) {
+        for b in self.slots.iter_mut().filter_map(|s| s.body.as_mut()) {
+            if b.is_moving_kinematic() {
+                b.position += dt * b.linear_velocity;
+                b.angle += dt * b.angular_velocity;
+                b.rot = Rot::from_angle(b.angle);
+            }
         }
     }
 
@@ -783,7 +802,11 @@ impl World {
         for k in 0..self.contacts.len() {
             let c = self.contacts[k];
             if !active(slots, c.a) && !active(slots, c.b) {
-                self.sleeping_contacts.push(c);
+                // Not kept with a kinematic body: it finds the sleeper again when it moves.
+                let kinematic = |i: u32| slots[i as usize].body.as_ref().is_some_and(|b| b.kinematic);
+                if !kinematic(c.a) && !kinematic(c.b) {
+                    self.sleeping_contacts.push(c);
+                }
             } else {
                 self.contacts[kept] = c;
                 kept += 1;
@@ -857,7 +880,11 @@ impl World {
         self.proxies
             .extend(self.slots.iter().map(|slot| match &slot.body {
                 Some(b) => {
-                    let reach = if b.is_active() { travel(b, g, dt) } else { 0.0 };
+                    let reach = if b.is_active() || b.kinematic {
+                        travel(b, g, dt)
+                    } else {
+                        0.0
+                    };
                     Proxy {
                         aabb: b
                             .shape
@@ -886,6 +913,10 @@ impl World {
             else {
                 continue;
             };
+            if a.inv_mass == 0.0 && b.inv_mass == 0.0 {
+                // A kinematic body meets static and kinematic ones without a contact.
+                continue;
+            }
             let reach = closing_reach(a, b, g, dt);
             let manifold = collide(
                 &a.shape,
@@ -905,12 +936,23 @@ impl World {
                 .iter()
                 .map(|p| p.separation)
                 .fold(Real::INFINITY, Real::min);
-            if nearest <= reach + self.settings.linear_slop {
+            // A kinematic body at rest wakes nothing (it is ground until it moves).
+            let resting_kinematic = |x: &Body| x.kinematic && !x.is_moving_kinematic();
+            let mut woken = false;
+            if nearest <= reach + self.settings.linear_slop
+                && !resting_kinematic(a)
+                && !resting_kinematic(b)
+            {
                 for (i, body) in [(ia, a), (ib, b)] {
                     if !body.awake {
                         self.wake_queue.push(i);
+                        woken = true;
                     }
                 }
+            }
+            if !(a.is_active() || b.is_active() || woken) {
+                // A sleeper beside a kinematic body at rest: nothing to solve.
+                continue;
             }
             // Both lists are sorted by key: advance the cursor in the old one.
             while old < self.previous.len() && self.previous[old].key < key {
@@ -924,7 +966,7 @@ impl World {
                 normal: manifold.normal,
                 friction: fm.mix(a.friction, b.friction),
                 restitution: rm.mix(a.restitution, b.restitution),
-                touches_static: a.is_static() || b.is_static(),
+                touches_static: a.inv_mass == 0.0 || b.inv_mass == 0.0,
                 points: [ContactPoint::default(); 2],
                 count: manifold.count,
                 softness: Softness::RIGID,
@@ -983,7 +1025,13 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
 #[inline]
 fn closing_reach(a: &Body, b: &Body, g: Vec2, dt: Real) -> Real {
     let motion = |x: &Body| {
-        if x.is_active() {
+        if x.kinematic {
+            (
+                x.linear_velocity,
+                x.angular_velocity.abs() * x.shape.bounding_radius(),
+                Vec2::ZERO,
+            )
+        } else if x.is_active() {
             (
                 x.linear_velocity,
                 x.angular_velocity.abs() * x.shape.bounding_radius(),

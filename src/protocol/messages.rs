@@ -83,6 +83,25 @@ pub enum ShapeSpec {
         /// Vertices, counter-clockwise, metres.
         vertices: Vec<Vector>,
     },
+    /// Variant 4: a line segment from `a` to `b` (m, body frame) grown by `radius` (m, may be
+    /// 0), for static and kinematic bodies only; a piece of a chain carries the chain's
+    /// vertex before `a` (`prev`) and after `b` (`next`) so bodies slide over its joints, and
+    /// `one_sided` pushes only to the left of a -> b. A scene's `chain` arrives as one body
+    /// per piece.
+    Segment {
+        /// First end, metres.
+        a: Vector,
+        /// Second end, metres.
+        b: Vector,
+        /// Thickness on each side of the line, metres.
+        radius: f32,
+        /// The chain's vertex before `a`, metres.
+        prev: Option<Vector>,
+        /// The chain's vertex after `b`, metres.
+        next: Option<Vector>,
+        /// Push only to the left of a -> b.
+        one_sided: bool,
+    },
 }
 
 /// One body's pose in a [`Snapshot`]. 14 bytes for a body with index < 128 and generation 0.

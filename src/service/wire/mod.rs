@@ -135,6 +135,14 @@ pub(crate) fn shape_spec(shape: &Shape) -> ShapeSpec {
         Shape::Polygon(ref p) => ShapeSpec::Polygon {
             vertices: p.vertices().iter().map(|&v| vector(v)).collect(),
         },
+        Shape::Segment(ref s) => ShapeSpec::Segment {
+            a: vector(s.a),
+            b: vector(s.b),
+            radius: s.radius as f32,
+            prev: s.prev.map(vector),
+            next: s.next.map(vector),
+            one_sided: s.one_sided,
+        },
     }
 }
 
@@ -150,7 +158,7 @@ pub struct BodyMeta {
     pub is_static: bool,
     /// Shape, in its wire form.
     pub shape: ShapeSpec,
-    /// Mass (kg), 0 for static bodies.
+    /// Mass (kg), 0 for static and kinematic bodies.
     pub mass: f32,
     /// Friction coefficient.
     pub friction: f32,
@@ -166,7 +174,8 @@ impl BodyMeta {
             colour,
             is_static: body.is_static(),
             shape: shape_spec(body.shape()),
-            mass: if body.is_static() {
+            // Kinematic bodies too: their mass is infinite.
+            mass: if body.inv_mass() == 0.0 {
                 0.0
             } else {
                 body.mass() as f32

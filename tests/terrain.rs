@@ -285,3 +285,20 @@ fn segments_are_static_or_kinematic_only() {
     let e = w.add_body(&BodyDef::fixed(short, Vec2::ZERO)).unwrap_err();
     assert!(e.to_string().contains("shape.b"), "{e}");
 }
+
+/// The stiff suite's "slide across a tiled floor": as one chain it must pass; as 20 boxes it
+/// documents the ghost collision (it stays finite and on the floor, and it does lose speed
+/// and tilt: if it ever stopped snagging, the case's note would be wrong).
+#[cfg(feature = "measure")]
+#[test]
+fn stiff_suite_slides_across_a_tiled_floor() {
+    use tiltbox::measure::accuracy::extreme;
+    let chain = extreme::tiled_floor_chain(&Settings::default());
+    println!("{}", chain.summary());
+    assert!(chain.passed, "{}", chain.summary());
+    let boxes = extreme::tiled_floor_boxes(&Settings::default());
+    println!("{}", boxes.summary());
+    assert!(boxes.passed, "{}", boxes.summary());
+    let lost = boxes.value("largest speed change (relative)").unwrap();
+    assert!(lost > 0.01, "tiles as boxes no longer snag: {}", boxes.summary());
+}

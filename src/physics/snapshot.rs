@@ -58,7 +58,7 @@ pub struct BodyState {
     pub sleep_time: Real,
     /// Island it sleeps with.
     pub sleep_island: u32,
-    /// Kinematic (moved by its velocity only). Appended: checkpoint version 3 on.
+    /// Kinematic (moved by its velocity only). Appended: checkpoint format version 4 on.
     pub kinematic: bool,
 }
 

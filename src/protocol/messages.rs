@@ -330,6 +330,18 @@ pub struct SceneState {
     pub bodies: Vec<BodyInfo>,
 }
 
+/// `…/velocity`: set a kinematic body's velocity (how a client drives a paddle or a
+/// platform). Refused for bodies that are not kinematic, and for speeds over the World's cap.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SetVelocity {
+    /// The kinematic body.
+    pub id: BodyRef,
+    /// Linear velocity (m/s, world frame).
+    pub velocity: Vector,
+    /// Angular velocity (rad/s, counter-clockwise).
+    pub angular_velocity: f32,
+}
+
 /// `…/stats`: once a second. Durations are microseconds over the last second.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Stats {

@@ -17,6 +17,7 @@ pub use messages::{
     BodyInfo, BodyRef, Colour, Event, EventKind, Orientation, Pose, Remove, Reset, SceneState,
     SetGravity, ShapeSpec, Snapshot, Spawn, SpawnBody, Stats, Tilt, Vector,
 };
+pub use messages::SetVelocity;
 pub use tilt::gravity_from_accelerometer;
 
 use serde::de::DeserializeOwned;
@@ -36,6 +37,7 @@ macro_rules! messages {
     ($($t:ident),*) => { $(impl Message for $t { const NAME: &'static str = stringify!($t); })* };
 }
 messages!(Snapshot, SetGravity, Tilt, Spawn, Remove, Reset, Event, SceneState, Stats);
+messages!(SetVelocity);
 
 /// Why a payload could not be decoded.
 #[derive(Clone, Debug, PartialEq, Eq, Error)]

@@ -24,7 +24,9 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Bumped whenever the header or the records change shape.
-pub const FORMAT_VERSION: u32 = 3;
+/// 4: commands may set a kinematic body's velocity, shapes may be segments and bodies
+/// kinematic (issue 17); earlier records read the same, but an older build cannot read these.
+pub const FORMAT_VERSION: u32 = 4;
 const MAGIC: &[u8; 8] = b"TILTJRNL";
 /// Largest record accepted when reading (a corrupt length must not allocate gigabytes).
 const MAX_RECORD: u32 = 256 << 20;

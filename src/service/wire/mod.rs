@@ -17,8 +17,8 @@ use super::command::Command;
 use super::config::Limits;
 use crate::physics::{Body, Real, Shape, Vec2};
 use crate::protocol::{
-    decode, BodyInfo, CommandKey, DecodeError, Remove, Reset, SetGravity, ShapeSpec, Spawn, Tilt,
-    Vector,
+    decode, BodyInfo, CommandKey, DecodeError, Remove, Reset, SetGravity, SetVelocity, ShapeSpec,
+    Spawn, Tilt, Vector,
 };
 
 /// Decode and validate a payload that arrived on `key`: the command to apply, or the reason
@@ -81,6 +81,18 @@ pub fn parse_command(key: CommandKey, payload: &[u8], limits: &Limits) -> Result
         CommandKey::Reset => {
             let Reset = decode(payload).map_err(bad)?;
             Ok(Command::Reset)
+        }
+        CommandKey::Velocity => {
+            // The speed cap and the body's kind are the World's to check when applied.
+            let v: SetVelocity = decode(payload).map_err(bad)?;
+            finite("velocity.x", v.velocity.x)?;
+            finite("velocity.y", v.velocity.y)?;
+            finite("angular_velocity", v.angular_velocity)?;
+            Ok(Command::SetVelocity {
+                id: v.id,
+                velocity: v.velocity,
+                angular_velocity: v.angular_velocity,
+            })
         }
     }
 }

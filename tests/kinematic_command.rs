@@ -170,3 +170,43 @@ fn the_terrain_scene_goes_on_the_wire_as_segments_and_a_moving_paddle() {
     sim.step().unwrap();
     assert!(sim.poses().poses.iter().any(|p| p.id == paddle.id));
 }
+
+/// docs/protocol.md's `Segment` and `SetVelocity` examples are what the encoder writes.
+#[test]
+fn the_documented_segment_and_velocity_bytes_are_exact() {
+    let doc = common::read_repo_file("docs/protocol.md");
+    let hex = |bytes: &[u8]| {
+        bytes
+            .chunks(16)
+            .map(|row| {
+                row.iter()
+                    .map(|b| format!("{b:02x}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    let piece = ShapeSpec::Segment {
+        a: Vector::new(-1.0, 0.0),
+        b: Vector::new(1.0, 0.0),
+        radius: 0.0,
+        prev: None,
+        next: Some(Vector::new(3.0, 0.5)),
+        one_sided: true,
+    };
+    let bytes = postcard::to_allocvec(&piece).unwrap();
+    assert_eq!(bytes.len(), 32);
+    assert!(doc.contains(&hex(&bytes)), "segment:\n{}", hex(&bytes));
+    let v = SetVelocity {
+        id: BodyRef {
+            index: 5,
+            generation: 0,
+        },
+        velocity: Vector::new(0.5, 0.0),
+        angular_velocity: 0.0,
+    };
+    let bytes = encode(&v).unwrap();
+    assert_eq!(bytes.len(), 15);
+    assert!(doc.contains(&hex(&bytes)), "velocity:\n{}", hex(&bytes));
+}

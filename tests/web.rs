@@ -883,6 +883,7 @@ fn tag_type(tag: tiltbox::client::web::wire::Tag) -> &'static str {
         Tag::Spawn => "Spawn",
         Tag::Remove => "Remove",
         Tag::Reset => "Reset",
+        Tag::Velocity => "SetVelocity",
     }
 }
 

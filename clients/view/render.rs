@@ -142,7 +142,9 @@ impl Fill {
                 let len2 = (ex * ex + ey * ey).max(f64::MIN_POSITIVE);
                 let t = (((x - a.0) * ex + (y - a.1) * ey) / len2).clamp(0.0, 1.0);
                 let (dx, dy) = (x - a.0 - t * ex, y - a.1 - t * ey);
-                let rr = r + tol;
+                // Half a dot's diagonal: the nearest dot to any point of a slanted line lies
+                // within it, so a bare line shows unbroken.
+                let rr = r + tol * std::f64::consts::SQRT_2;
                 dx * dx + dy * dy <= rr * rr
             }
             Fill::General { vertices } => {

@@ -166,3 +166,23 @@ fn the_terrain_scene_keeps_its_bodies_in_the_box() {
     let turned: Real = world.body(ids[paddle]).unwrap().angle();
     assert!((turned - 12.0).abs() < 1e-3, "{turned}");
 }
+
+/// The terrain examples in docs/scenes.md load as written.
+#[test]
+fn the_terrain_examples_in_docs_scenes_md_load() {
+    let doc = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scenes.md"),
+    )
+    .unwrap();
+    let at = doc.find("### Terrain: segments and chains").expect("the section");
+    let start = at + doc[at..].find("```text\n").unwrap() + "```text\n".len();
+    let end = start + doc[start..].find("```").unwrap();
+    let lines: Vec<&str> = doc[start..end].lines().collect();
+    assert_eq!(lines.len(), 3);
+    let counts: Vec<usize> = lines
+        .iter()
+        .map(|line| load(&format!("[[body]]\n{line}\nposition = [0, 0]\n")).bodies.len())
+        .collect();
+    // A segment, a chain of 4 points (3 pieces), a loop of 4 points (4 pieces).
+    assert_eq!(counts, [1, 3, 4]);
+}

@@ -125,7 +125,7 @@ impl Allow {
                 .find(|k| k.suffix() == part)
                 .ok_or_else(|| {
                     format!(
-                        "--allow {s:?}: unknown command {part:?} (one of gravity, tilt, spawn, remove, reset, none)"
+                        "--allow {s:?}: unknown command {part:?} (one of gravity, tilt, spawn, remove, reset, velocity, none)"
                     )
                 })?;
             a = a.with(key);

@@ -42,9 +42,19 @@ fn every_dynamic_kind_rests_on_a_segment_with_the_face_normal() {
     for (shape, y, count) in cases {
         let m = collide(&floor, at(0.0, 0.0, 0.0), &shape, at(1.0, y, 0.0), 0.02);
         assert_eq!(m.count, count, "{}", shape.kind());
-        assert!(close(m.normal, vec2(0.0, 1.0)), "{}: {:?}", shape.kind(), m.normal);
+        assert!(
+            close(m.normal, vec2(0.0, 1.0)),
+            "{}: {:?}",
+            shape.kind(),
+            m.normal
+        );
         for p in m.points() {
-            assert!((p.separation + 0.01).abs() < 1e-4, "{}: {}", shape.kind(), p.separation);
+            assert!(
+                (p.separation + 0.01).abs() < 1e-4,
+                "{}: {}",
+                shape.kind(),
+                p.separation
+            );
         }
         // Swapped: the same contact from the body's side.
         let s = collide(&shape, at(1.0, y, 0.0), &floor, at(0.0, 0.0, 0.0), 0.02);
@@ -63,7 +73,11 @@ fn a_box_over_a_flat_seam_sees_only_the_floor_normal() {
     let xf = at(-0.495, 0.49, 0.0); // right face at x = 0.005, the seam at x = 0
     let lone = Shape::Segment(Box::new(Segment::new(vec2(0.0, 0.0), vec2(2.0, 0.0), 0.0)));
     let m = collide(&lone, at(0.0, 0.0, 0.0), &b, xf, 0.02);
-    assert!(m.count > 0 && m.normal.x.abs() > 0.9, "lone: {:?}", m.normal);
+    assert!(
+        m.count > 0 && m.normal.x.abs() > 0.9,
+        "lone: {:?}",
+        m.normal
+    );
     let chain = pieces(&[vec2(-2.0, 0.0), vec2(0.0, 0.0), vec2(2.0, 0.0)]);
     for (shape, piece) in &chain {
         let m = collide(shape, *piece, &b, xf, 0.02);
@@ -81,7 +95,11 @@ fn a_box_over_a_flat_seam_sees_only_the_floor_normal() {
 fn a_convex_corner_is_reported_by_one_piece() {
     let s = 30.0_f32.to_radians() as Real;
     let top = vec2(0.0, 0.0);
-    let chain = pieces(&[vec2(-2.0 * s.cos(), -2.0 * s.sin()), top, vec2(2.0 * s.cos(), -2.0 * s.sin())]);
+    let chain = pieces(&[
+        vec2(-2.0 * s.cos(), -2.0 * s.sin()),
+        top,
+        vec2(2.0 * s.cos(), -2.0 * s.sin()),
+    ]);
     let disc = Shape::circle(0.25);
     let xf = at(0.0, 0.24, 0.0);
     let found: Vec<_> = chain
@@ -90,7 +108,11 @@ fn a_convex_corner_is_reported_by_one_piece() {
         .filter(|m| m.count > 0)
         .collect();
     assert_eq!(found.len(), 1, "{found:?}");
-    assert!(close(found[0].normal, vec2(0.0, 1.0)), "{:?}", found[0].normal);
+    assert!(
+        close(found[0].normal, vec2(0.0, 1.0)),
+        "{:?}",
+        found[0].normal
+    );
     assert!((found[0].points[0].separation + 0.01).abs() < 1e-5);
 }
 
@@ -99,7 +121,11 @@ fn a_convex_corner_is_reported_by_one_piece() {
 #[test]
 fn a_concave_corner_gives_each_piece_its_own_normal() {
     let s = 30.0_f32.to_radians() as Real;
-    let chain = pieces(&[vec2(-2.0 * s.cos(), 2.0 * s.sin()), vec2(0.0, 0.0), vec2(2.0 * s.cos(), 2.0 * s.sin())]);
+    let chain = pieces(&[
+        vec2(-2.0 * s.cos(), 2.0 * s.sin()),
+        vec2(0.0, 0.0),
+        vec2(2.0 * s.cos(), 2.0 * s.sin()),
+    ]);
     let disc = Shape::circle(0.25);
     // In the valley, touching both slopes.
     let xf = at(0.0, 0.25 / s.cos() - 0.01, 0.0);
@@ -110,8 +136,16 @@ fn a_concave_corner_gives_each_piece_its_own_normal() {
         .map(|m| m.normal)
         .collect();
     assert_eq!(normals.len(), 2);
-    assert!(close(normals[0], vec2(s.sin(), s.cos())), "{:?}", normals[0]);
-    assert!(close(normals[1], vec2(-s.sin(), s.cos())), "{:?}", normals[1]);
+    assert!(
+        close(normals[0], vec2(s.sin(), s.cos())),
+        "{:?}",
+        normals[0]
+    );
+    assert!(
+        close(normals[1], vec2(-s.sin(), s.cos())),
+        "{:?}",
+        normals[1]
+    );
 }
 
 /// One-sided pieces ignore bodies whose centre is behind them; two-sided ones push them out
@@ -121,9 +155,21 @@ fn one_sided_segments_ignore_what_is_behind_them() {
     let mut s = Segment::new(vec2(-1.0, 0.0), vec2(1.0, 0.0), 0.0);
     let disc = Shape::circle(0.25);
     let below = at(0.0, -0.2, 0.0);
-    let two = collide(&Shape::Segment(Box::new(s.clone())), at(0.0, 0.0, 0.0), &disc, below, 0.02);
+    let two = collide(
+        &Shape::Segment(Box::new(s.clone())),
+        at(0.0, 0.0, 0.0),
+        &disc,
+        below,
+        0.02,
+    );
     assert!(two.count == 1 && close(two.normal, vec2(0.0, -1.0)));
     s.one_sided = true;
-    let one = collide(&Shape::Segment(Box::new(s)), at(0.0, 0.0, 0.0), &disc, below, 0.02);
+    let one = collide(
+        &Shape::Segment(Box::new(s)),
+        at(0.0, 0.0, 0.0),
+        &disc,
+        below,
+        0.02,
+    );
     assert_eq!(one.count, 0);
 }

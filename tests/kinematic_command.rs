@@ -7,7 +7,9 @@ mod common;
 
 use tiltbox::physics::{vec2, Body, Real};
 use tiltbox::protocol::*;
-use tiltbox::service::{checkpoint, parse_command, Incoming, SceneSource, ServerConfig, Simulation};
+use tiltbox::service::{
+    checkpoint, parse_command, Incoming, SceneSource, ServerConfig, Simulation,
+};
 
 fn terrain() -> (ServerConfig, Simulation) {
     let config = ServerConfig::default();
@@ -61,7 +63,10 @@ fn a_client_drives_the_paddle_and_bad_commands_change_nothing() {
         velocity,
         angular_velocity,
     };
-    assert_eq!(send(&mut sim, &config, &set(Vector::new(0.5, 0.0), 0.0)), None);
+    assert_eq!(
+        send(&mut sim, &config, &set(Vector::new(0.5, 0.0), 0.0)),
+        None
+    );
     let x0 = body(&sim, paddle).position().x;
     for _ in 0..60 {
         sim.step().unwrap();
@@ -70,7 +75,11 @@ fn a_client_drives_the_paddle_and_bad_commands_change_nothing() {
     assert_eq!(p.linear_velocity(), vec2(0.5, 0.0));
     assert_eq!(p.angular_velocity(), 0.0);
     // 1 s at 0.5 m/s: exact up to f32 sums over 60 steps.
-    assert!((p.position().x - x0 - 0.5).abs() < 1e-4, "{}", p.position().x);
+    assert!(
+        (p.position().x - x0 - 0.5).abs() < 1e-4,
+        "{}",
+        p.position().x
+    );
 
     let brick = named(&sim, "red brick");
     let refusals: [(SetVelocity, &[&str]); 5] = [
@@ -92,8 +101,14 @@ fn a_client_drives_the_paddle_and_bad_commands_change_nothing() {
             &["id", "999v0"],
         ),
         (set(Vector::new(f32::NAN, 0.0), 0.0), &["velocity.x", "NaN"]),
-        (set(Vector::new(0.0, 0.0), f32::INFINITY), &["angular_velocity", "inf"]),
-        (set(Vector::new(1000.0, 0.0), 0.0), &["velocity (speed)", "1000", "400"]),
+        (
+            set(Vector::new(0.0, 0.0), f32::INFINITY),
+            &["angular_velocity", "inf"],
+        ),
+        (
+            set(Vector::new(1000.0, 0.0), 0.0),
+            &["velocity (speed)", "1000", "400"],
+        ),
     ];
     let rejected = sim.rejected();
     for (message, words) in refusals {
@@ -124,8 +139,8 @@ fn a_checkpoint_keeps_kinematic_bodies_and_chains() {
     }
     let bytes = checkpoint::encode(&sim.export_state()).unwrap();
     let source = SceneSource::File(common::repo_path("config/scenes/terrain.toml"));
-    let mut restored = Simulation::restore(&config, source, checkpoint::decode(&bytes).unwrap())
-        .unwrap();
+    let mut restored =
+        Simulation::restore(&config, source, checkpoint::decode(&bytes).unwrap()).unwrap();
     for _ in 0..30 {
         sim.step().unwrap();
         restored.step().unwrap();
@@ -150,7 +165,10 @@ fn the_terrain_scene_goes_on_the_wire_as_segments_and_a_moving_paddle() {
     for (i, b) in pieces.iter().enumerate() {
         assert!(b.is_static);
         let ShapeSpec::Segment {
-            prev, next, one_sided, ..
+            prev,
+            next,
+            one_sided,
+            ..
         } = b.shape
         else {
             panic!("{:?}", b.shape)

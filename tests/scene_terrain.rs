@@ -150,7 +150,11 @@ fn the_terrain_scene_keeps_its_bodies_in_the_box() {
         .filter(|b| b.name.starts_with("hills["))
         .count();
     assert_eq!(chain, 16);
-    let paddle = scene.bodies.iter().position(|b| b.name == "paddle").unwrap();
+    let paddle = scene
+        .bodies
+        .iter()
+        .position(|b| b.name == "paddle")
+        .unwrap();
     assert_eq!(scene.bodies[paddle].def.mass, MassSpec::Kinematic);
     let (mut world, ids) = scene.build_world().unwrap();
     let dynamic: Vec<_> = scene.dynamic_bodies().map(|(i, _)| ids[i]).collect();
@@ -174,14 +178,20 @@ fn the_terrain_examples_in_docs_scenes_md_load() {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scenes.md"),
     )
     .unwrap();
-    let at = doc.find("### Terrain: segments and chains").expect("the section");
+    let at = doc
+        .find("### Terrain: segments and chains")
+        .expect("the section");
     let start = at + doc[at..].find("```text\n").unwrap() + "```text\n".len();
     let end = start + doc[start..].find("```").unwrap();
     let lines: Vec<&str> = doc[start..end].lines().collect();
     assert_eq!(lines.len(), 3);
     let counts: Vec<usize> = lines
         .iter()
-        .map(|line| load(&format!("[[body]]\n{line}\nposition = [0, 0]\n")).bodies.len())
+        .map(|line| {
+            load(&format!("[[body]]\n{line}\nposition = [0, 0]\n"))
+                .bodies
+                .len()
+        })
         .collect();
     // A segment, a chain of 4 points (3 pieces), a loop of 4 points (4 pieces).
     assert_eq!(counts, [1, 3, 4]);

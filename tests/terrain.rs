@@ -51,7 +51,11 @@ fn frictionless_box_slides_over_a_tiled_chain_at_constant_speed_without_tilting(
     // box tiles gave, and above f32 round-off of a resting box's angle.
     assert!(worst_speed < 1e-4, "speed off by {worst_speed} relative");
     assert!(worst_tilt < 1e-4, "tilted {worst_tilt} rad");
-    assert!((b.position().x - 32.0).abs() < 0.01, "x = {}", b.position().x);
+    assert!(
+        (b.position().x - 32.0).abs() < 0.01,
+        "x = {}",
+        b.position().x
+    );
 }
 
 /// A disc rolling without slipping down a slope accelerates at a = g sin(theta) / (1 + I/(m r^2))
@@ -105,23 +109,37 @@ fn box_rides_a_kinematic_platform_without_drifting() {
     let mut w = world(vec2(0.0, -9.81));
     let v = vec2(1.0, 0.0);
     let platform = w
-        .add_body(&BodyDef::kinematic(Shape::rect(4.0, 0.2), vec2(0.0, 0.0), v))
+        .add_body(&BodyDef::kinematic(
+            Shape::rect(4.0, 0.2),
+            vec2(0.0, 0.0),
+            v,
+        ))
         .unwrap();
     let rider = w
         .add_body(&BodyDef::dynamic(Shape::rect(0.5, 0.5), vec2(0.0, 0.35)))
         .unwrap();
-    let offset = |w: &World| w.body(rider).unwrap().position() - w.body(platform).unwrap().position();
+    let offset =
+        |w: &World| w.body(rider).unwrap().position() - w.body(platform).unwrap().position();
     steps(&mut w, 1.0, |_| {});
     let settled = offset(&w);
     let mut drift: Real = 0.0;
-    steps(&mut w, 5.0, |w| drift = drift.max((offset(w).x - settled.x).abs()));
+    steps(&mut w, 5.0, |w| {
+        drift = drift.max((offset(w).x - settled.x).abs())
+    });
     let p = w.body(platform).unwrap();
     println!("platform: rider drift {drift:e} m over 5 s");
     // The platform is never slowed: x = v t exactly up to f32 sums (330 steps x ulp(5)).
-    assert!((p.position().x - 6.0).abs() < 1e-3, "platform at {}", p.position().x);
+    assert!(
+        (p.position().x - 6.0).abs() < 1e-3,
+        "platform at {}",
+        p.position().x
+    );
     assert_eq!(p.linear_velocity(), v);
     assert!(drift < 1e-3, "rider drifted {drift} m");
-    assert!(w.body(rider).unwrap().is_awake(), "a carried body must not sleep");
+    assert!(
+        w.body(rider).unwrap().is_awake(),
+        "a carried body must not sleep"
+    );
 }
 
 /// A kinematic wall moving at 1 m/s into a stack of five boxes pushes the whole stack along
@@ -158,12 +176,19 @@ fn kinematic_wall_pushes_a_stack_unslowed() {
         }
     };
     steps(&mut w, 2.0, &mut overlap);
-    let before: Vec<Real> = stack.iter().map(|&id| w.body(id).unwrap().position().x).collect();
+    let before: Vec<Real> = stack
+        .iter()
+        .map(|&id| w.body(id).unwrap().position().x)
+        .collect();
     steps(&mut w, 1.0, &mut overlap);
     let wb = w.body(wall).unwrap();
     println!("push: deepest overlap {deepest:e} m");
     // Never slowed: x = x0 + v t up to f32 sums (180 steps x ulp(2)).
-    assert!((wb.position().x - 2.0).abs() < 1e-3, "wall at {}", wb.position().x);
+    assert!(
+        (wb.position().x - 2.0).abs() < 1e-3,
+        "wall at {}",
+        wb.position().x
+    );
     assert_eq!(wb.linear_velocity(), vec2(1.0, 0.0));
     for (&id, x0) in stack.iter().zip(before) {
         let b = w.body(id).unwrap();
@@ -171,8 +196,17 @@ fn kinematic_wall_pushes_a_stack_unslowed() {
         // 2 cm (the contact's soft give as the ground's friction pulls back).
         let moved = b.position().x - x0;
         println!("push: box {} moved {moved} m in the last second", b.id());
-        assert!((moved - 1.0).abs() < 0.02, "box {} moved {moved} m in 1 s", b.id());
-        assert!(b.position().x > 2.0, "box {} at x = {}", b.id(), b.position().x);
+        assert!(
+            (moved - 1.0).abs() < 0.02,
+            "box {} moved {moved} m in 1 s",
+            b.id()
+        );
+        assert!(
+            b.position().x > 2.0,
+            "box {} at x = {}",
+            b.id(),
+            b.position().x
+        );
     }
     // The soft contact lets the wall sink into the boxes a little, never through: 2 cm.
     assert!(deepest < 0.02, "wall overlapped a box by {deepest} m");
@@ -229,7 +263,10 @@ fn bodies_inside_a_closed_chain_stay_inside_under_gravity_flips() {
     println!("closed chain: closest centre {closest} m from the wall");
     // Every centre stays at least its smallest half size (0.2 m for the boxes, 0.3 m for the
     // discs) from the wall, less 5 cm for a soft contact's overlap at landing.
-    assert!(closest > 0.15, "a centre came within {closest} m of the wall");
+    assert!(
+        closest > 0.15,
+        "a centre came within {closest} m of the wall"
+    );
 }
 
 /// A one-sided segment lets a body through from below (a platform jumped through) and holds
@@ -244,7 +281,10 @@ fn one_sided_segments_push_only_to_their_left() {
             .unwrap();
         // Thrown up from below at 8 m/s: it would rise 3.3 m, through the platform at 2 m.
         let id = w
-            .add_body(&BodyDef::dynamic(Shape::circle(0.25), vec2(0.0, 0.0)).with_velocity(vec2(0.0, 8.0)))
+            .add_body(
+                &BodyDef::dynamic(Shape::circle(0.25), vec2(0.0, 0.0))
+                    .with_velocity(vec2(0.0, 8.0)),
+            )
             .unwrap();
         steps(&mut w, 3.0, |_| {});
         let y = w.body(id).unwrap().position().y;
@@ -263,19 +303,30 @@ fn one_sided_segments_push_only_to_their_left() {
 fn a_kinematic_body_wakes_what_it_carries_when_it_moves() {
     let mut w = world(vec2(0.0, -9.81));
     let platform = w
-        .add_body(&BodyDef::kinematic(Shape::rect(4.0, 0.2), Vec2::ZERO, Vec2::ZERO))
+        .add_body(&BodyDef::kinematic(
+            Shape::rect(4.0, 0.2),
+            Vec2::ZERO,
+            Vec2::ZERO,
+        ))
         .unwrap();
     let rider = w
         .add_body(&BodyDef::dynamic(Shape::rect(0.5, 0.5), vec2(0.0, 0.35)))
         .unwrap();
     steps(&mut w, 3.0, |_| {});
-    assert!(!w.body(rider).unwrap().is_awake(), "the rider should be asleep by now");
+    assert!(
+        !w.body(rider).unwrap().is_awake(),
+        "the rider should be asleep by now"
+    );
     w.set_velocity(platform, vec2(0.0, 0.5), 0.0).unwrap();
     steps(&mut w, 2.0, |_| {});
     let b = w.body(rider).unwrap();
     assert!(b.is_awake());
     // Lifted 1 m with the platform: 0.35 + 1.0, within the soft contact's sag (5 mm).
-    assert!((b.position().y - 1.35).abs() < 5e-3, "rider at y = {}", b.position().y);
+    assert!(
+        (b.position().y - 1.35).abs() < 5e-3,
+        "rider at y = {}",
+        b.position().y
+    );
     assert!(w.body(platform).unwrap().is_awake());
 }
 
@@ -284,8 +335,13 @@ fn a_kinematic_body_wakes_what_it_carries_when_it_moves() {
 fn segments_are_static_or_kinematic_only() {
     let mut w = world(vec2(0.0, -9.81));
     let s = Shape::Segment(Box::new(Segment::new(vec2(0.0, 0.0), vec2(1.0, 0.0), 0.1)));
-    let e = w.add_body(&BodyDef::dynamic(s.clone(), Vec2::ZERO)).unwrap_err();
-    assert!(e.to_string().contains("mass must be static or kinematic"), "{e}");
+    let e = w
+        .add_body(&BodyDef::dynamic(s.clone(), Vec2::ZERO))
+        .unwrap_err();
+    assert!(
+        e.to_string().contains("mass must be static or kinematic"),
+        "{e}"
+    );
     assert!(w
         .add_body(&BodyDef::kinematic(s, Vec2::ZERO, vec2(1.0, 0.0)))
         .is_ok());
@@ -308,7 +364,11 @@ fn stiff_suite_slides_across_a_tiled_floor() {
     println!("{}", boxes.summary());
     assert!(boxes.passed, "{}", boxes.summary());
     let lost = boxes.value("largest speed change (relative)").unwrap();
-    assert!(lost > 0.01, "tiles as boxes no longer snag: {}", boxes.summary());
+    assert!(
+        lost > 0.01,
+        "tiles as boxes no longer snag: {}",
+        boxes.summary()
+    );
 }
 
 /// A kinematic body at rest is ground to everything else: a stack with a 200:1 mass ratio

@@ -603,6 +603,10 @@ fn a_segment_is_a_line_from_a_to_b() {
     }
     // A metre to either side of the line, and past its ends: dark.
     for (dx, dy) in [(0.0, 1.0), (0.0, -1.0), (2.0, -0.5), (5.0, 1.25)] {
-        assert_eq!(f.lit(c.0 + dx, c.1 + dy), None, "off the line at ({dx}, {dy})");
+        assert_eq!(
+            f.lit(c.0 + dx, c.1 + dy),
+            None,
+            "off the line at ({dx}, {dy})"
+        );
     }
 }

@@ -652,6 +652,7 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
             ShapeSpec::Circle { .. } => "circle",
             ShapeSpec::Capsule { .. } => "capsule",
             ShapeSpec::Polygon { .. } => "polygon",
+            ShapeSpec::Segment { .. } => "segment",
         })
         .collect();
     assert_eq!(kinds, ["rect", "circle", "capsule", "polygon"]);

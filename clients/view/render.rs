@@ -80,7 +80,11 @@ enum Fill {
     /// A convex polygon as half-planes `n . p <= c` (`n` the unit outward normal of an edge).
     Convex { planes: Vec<(f64, f64, f64)> },
     /// A segment from `a` to `b` grown by `r` (a piece of a chain, or a lone one).
-    Segment { a: (f64, f64), b: (f64, f64), r: f64 },
+    Segment {
+        a: (f64, f64),
+        b: (f64, f64),
+        r: f64,
+    },
     /// Any other polygon (not convex, winding round more than once, no area, under three
     /// vertices): even-odd inside, or within the tolerance of an edge.
     General { vertices: Vec<(f64, f64)> },

@@ -230,7 +230,12 @@ mod tests {
         let pts = [vec2(0.0, 0.0), vec2(1.0, 0.0), vec2(1.0, 0.0)];
         let e = chain(&pts, false, false).unwrap_err();
         assert!(e.to_string().contains("shape.points[2]"), "{e}");
-        let pts = [vec2(0.0, 0.0), vec2(1.0, 0.0), vec2(1.0, 1.0), vec2(0.0, 0.0)];
+        let pts = [
+            vec2(0.0, 0.0),
+            vec2(1.0, 0.0),
+            vec2(1.0, 1.0),
+            vec2(0.0, 0.0),
+        ];
         let e = chain(&pts, true, false).unwrap_err();
         assert!(e.to_string().contains("do not repeat"), "{e}");
     }

@@ -803,7 +803,8 @@ impl World {
             let c = self.contacts[k];
             if !active(slots, c.a) && !active(slots, c.b) {
                 // Not kept with a kinematic body: it finds the sleeper again when it moves.
-                let kinematic = |i: u32| slots[i as usize].body.as_ref().is_some_and(|b| b.kinematic);
+                let kinematic =
+                    |i: u32| slots[i as usize].body.as_ref().is_some_and(|b| b.kinematic);
                 if !kinematic(c.a) && !kinematic(c.b) {
                     self.sleeping_contacts.push(c);
                 }

@@ -13,11 +13,11 @@ pub mod messages;
 pub mod tilt;
 
 pub use keys::{CommandKey, KeyError, Keys, DEFAULT_WORLD};
+pub use messages::SetVelocity;
 pub use messages::{
     BodyInfo, BodyRef, Colour, Event, EventKind, Orientation, Pose, Remove, Reset, SceneState,
     SetGravity, ShapeSpec, Snapshot, Spawn, SpawnBody, Stats, Tilt, Vector,
 };
-pub use messages::SetVelocity;
 pub use tilt::gravity_from_accelerometer;
 
 use serde::de::DeserializeOwned;

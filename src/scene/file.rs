@@ -151,7 +151,8 @@ impl ShapeEntry {
                 radius,
                 one_sided,
             } => {
-                let mut segment = Segment::new(Vec2::new(a[0], a[1]), Vec2::new(b[0], b[1]), radius);
+                let mut segment =
+                    Segment::new(Vec2::new(a[0], a[1]), Vec2::new(b[0], b[1]), radius);
                 segment.one_sided = one_sided;
                 Shape::Segment(Box::new(segment))
             }

@@ -119,7 +119,15 @@ pub fn collide_segment(
                     s: xf_l.q.c * xf_b.q.s - xf_l.q.s * xf_b.q.c,
                 },
             };
-            face_contact(half, s.radius, side, &core_b.transformed(rel), rb, xf_l, margin)
+            face_contact(
+                half,
+                s.radius,
+                side,
+                &core_b.transformed(rel),
+                rb,
+                xf_l,
+                margin,
+            )
         }
     }
 }

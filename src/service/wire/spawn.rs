@@ -153,10 +153,12 @@ fn check_shape_limits(spec: &ShapeSpec, shape: &Shape, limits: &Limits) -> Resul
             Vec::new()
         }
         ShapeSpec::Segment { .. } => {
-            return Err("shape = segment: a spawned body is dynamic, and segments are for \
+            return Err(
+                "shape = segment: a spawned body is dynamic, and segments are for \
                         static and kinematic bodies (put terrain and platforms in the scene \
                         file)"
-                .into())
+                    .into(),
+            )
         }
     };
     for s in sizes {

@@ -90,9 +90,7 @@ pub fn tiled_floor_boxes(settings: &Settings) -> Verdict {
 /// 1e-4 relative and never tilt (|angle| < 1e-4 rad) over the 10 s (the bound).
 pub fn tiled_floor_chain(settings: &Settings) -> Verdict {
     let mut w = new_world(settings, gravity());
-    let points: Vec<_> = (0..=TILES)
-        .map(|i| vec2(i as Real * TILE, 0.0))
-        .collect();
+    let points: Vec<_> = (0..=TILES).map(|i| vec2(i as Real * TILE, 0.0)).collect();
     for def in chain_bodies(&points, false, true).unwrap() {
         w.add_body(&def.with_friction(0.0)).unwrap();
     }

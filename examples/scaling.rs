@@ -164,7 +164,11 @@ fn main() {
             best(
                 // A new daemon's first message is a keyframe of every body.
                 || Simulation::new(&c, SceneSource::Given(Box::new(scene.clone()))).expect("sim"),
-                |mut s| encode(s.poses()).expect("encodable").len(),
+                |mut s| {
+                    let mut payload = Vec::new();
+                    s.snapshot_into(&mut payload);
+                    payload.len()
+                },
             ),
         );
         record(

@@ -376,6 +376,7 @@ fn world_core(shape: &Shape, xf: Transform) -> (Vec<Vec2>, Real) {
             radius,
         ),
         Shape::Polygon(ref p) => (p.vertices().to_vec(), 0.0),
+        Shape::Segment(ref s) => (vec![s.a, s.b], s.radius),
     };
     (local.0.into_iter().map(|v| xf.apply(v)).collect(), local.1)
 }

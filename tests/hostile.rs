@@ -151,6 +151,14 @@ fn valid(rng: &mut Rng, key: CommandKey) -> Vec<u8> {
             })
         }
         CommandKey::Reset => encode(&Reset),
+        CommandKey::Velocity => encode(&SetVelocity {
+            id: BodyRef {
+                index: rng.pick(&[0u32, 1, 5, 40, u32::MAX]),
+                generation: rng.pick(&[0u32, 1, u32::MAX]),
+            },
+            velocity: Vector::new(edgy(rng), edgy(rng)),
+            angular_velocity: edgy(rng),
+        }),
     }
     .unwrap()
 }
@@ -229,7 +237,7 @@ fn assert_sane(sim: &Simulation, limits: &Limits, at: usize) {
 fn every_decoder_survives_random_and_mutated_bytes() {
     let mut rng = Rng(0x1234_5678_9abc_def1);
     for i in 0..20_000 {
-        let key = CommandKey::ALL[i % 5];
+        let key = CommandKey::ALL[i % CommandKey::ALL.len()];
         let p = hostile(&mut rng, key);
         // command decoders, and the daemon-side messages clients decode
         let _ = decode::<SetGravity>(&p);
@@ -314,7 +322,7 @@ fn every_shape_kind_with_edge_values_in_every_field_is_refused_or_simulated() {
     config.limits.max_spawns_per_second = 1_000_000;
     let limits = config.limits.clone();
     let mut sim = Simulation::new(&config, SceneSource::Embedded).unwrap();
-    let base: [ShapeSpec; 4] = [
+    let base: [ShapeSpec; 5] = [
         ShapeSpec::Rect {
             width: 0.5,
             height: 0.25,
@@ -327,12 +335,22 @@ fn every_shape_kind_with_edge_values_in_every_field_is_refused_or_simulated() {
         ShapeSpec::Polygon {
             vertices: ring(5, 0.3, 0.4, -0.2, 0.1),
         },
+        // Never spawned (a spawn is dynamic, segments are terrain): always refused.
+        ShapeSpec::Segment {
+            a: Vector::new(-0.5, 0.0),
+            b: Vector::new(0.5, 0.1),
+            radius: 0.05,
+            prev: None,
+            next: Some(Vector::new(1.0, 0.0)),
+            one_sided: true,
+        },
     ];
-    // (shape, which f32 of it to replace): rect 2, circle 1, capsule 2, polygon 10
+    // (shape, which f32 of it to replace): rect 2, circle 1, capsule 2, polygon 10, segment 5
     let fields = |s: &ShapeSpec| match s {
         ShapeSpec::Rect { .. } | ShapeSpec::Capsule { .. } => 2,
         ShapeSpec::Circle { .. } => 1,
         ShapeSpec::Polygon { vertices } => 2 * vertices.len(),
+        ShapeSpec::Segment { .. } => 5,
     };
     let set = |s: &mut ShapeSpec, i: usize, v: f32| match s {
         ShapeSpec::Rect { width, height } => *[width, height][i] = v,
@@ -341,6 +359,9 @@ fn every_shape_kind_with_edge_values_in_every_field_is_refused_or_simulated() {
         ShapeSpec::Polygon { vertices } => {
             let p = &mut vertices[i / 2];
             *[&mut p.x, &mut p.y][i % 2] = v;
+        }
+        ShapeSpec::Segment { a, b, radius, .. } => {
+            *[&mut a.x, &mut a.y, &mut b.x, &mut b.y, radius][i] = v
         }
     };
     let (mut accepted, mut refused, mut spawns) = (0, 0, 0);
@@ -428,11 +449,11 @@ fn every_shape_kind_with_edge_values_in_every_field_is_refused_or_simulated() {
 #[test]
 fn the_intake_channel_is_bounded_under_a_flood() {
     let (tx, rx) = sync_channel::<Incoming>(16);
-    let dropped: Arc<[AtomicU64; 5]> = Arc::new(Default::default());
+    let dropped: Arc<[AtomicU64; CommandKey::ALL.len()]> = Arc::new(Default::default());
     let intake = Intake::new(tx, Limits::default(), dropped.clone());
     let mut rng = Rng(42);
     for i in 0..5_000 {
-        let key = CommandKey::ALL[i % 5];
+        let key = CommandKey::ALL[i % CommandKey::ALL.len()];
         intake.handle(key, &hostile(&mut rng, key));
     }
     let queued = rx.try_iter().count();

@@ -594,3 +594,32 @@ fn a_triangle_fills_its_half_of_its_bounding_box() {
     assert_eq!(p(&f, -1.2, -1.2), None);
     assert_eq!(p(&f, -1.4, -1.4), None);
 }
+
+/// A chain piece (a segment with no thickness) is a line of dots from `a` to `b`, turned with
+/// its body, and nothing beside it.
+#[test]
+fn a_segment_is_a_line_from_a_to_b() {
+    let c = (10.0, 5.0);
+    let piece = ShapeSpec::Segment {
+        a: Vector::new(-4.0, -1.0),
+        b: Vector::new(4.0, 1.0),
+        radius: 0.0,
+        prev: Some(Vector::new(-6.0, -1.0)),
+        next: None,
+        one_sided: true,
+    };
+    let view = walled_one(c, piece);
+    let f = Frame::of(&view);
+    for t in [-1.0, -0.5, 0.0, 0.5, 1.0] {
+        let (x, y) = (c.0 + 4.0 * t, c.1 + t);
+        assert_eq!(f.lit(x, y), Some(rgb(GREEN)), "on the line at {t}");
+    }
+    // A metre to either side of the line, and past its ends: dark.
+    for (dx, dy) in [(0.0, 1.0), (0.0, -1.0), (2.0, -0.5), (5.0, 1.25)] {
+        assert_eq!(
+            f.lit(c.0 + dx, c.1 + dy),
+            None,
+            "off the line at ({dx}, {dy})"
+        );
+    }
+}

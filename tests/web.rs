@@ -654,6 +654,7 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
             ShapeSpec::Circle { .. } => "circle",
             ShapeSpec::Capsule { .. } => "capsule",
             ShapeSpec::Polygon { .. } => "polygon",
+            ShapeSpec::Segment { .. } => "segment",
         })
         .collect();
     assert_eq!(kinds, ["rect", "circle", "capsule", "polygon"]);
@@ -905,6 +906,7 @@ fn tag_type(tag: tiltbox::client::web::wire::Tag) -> &'static str {
         Tag::Spawn => "Spawn",
         Tag::Remove => "Remove",
         Tag::Reset => "Reset",
+        Tag::Velocity => "SetVelocity",
     }
 }
 

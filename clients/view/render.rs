@@ -81,6 +81,12 @@ enum Fill {
     Capsule { half: f64, r: f64 },
     /// A convex polygon as half-planes `n . p <= c` (`n` the unit outward normal of an edge).
     Convex { planes: Vec<(f64, f64, f64)> },
+    /// A segment from `a` to `b` grown by `r` (a piece of a chain, or a lone one).
+    Segment {
+        a: (f64, f64),
+        b: (f64, f64),
+        r: f64,
+    },
     /// Any other polygon (not convex, winding round more than once, no area, under three
     /// vertices): even-odd inside, or within the tolerance of an edge.
     General { vertices: Vec<(f64, f64)> },
@@ -107,6 +113,11 @@ impl Fill {
                     None => Fill::General { vertices: v },
                 }
             }
+            ShapeSpec::Segment { a, b, radius, .. } => Fill::Segment {
+                a: (a.x as f64, a.y as f64),
+                b: (b.x as f64, b.y as f64),
+                r: *radius as f64,
+            },
         }
     }
 
@@ -131,6 +142,17 @@ impl Fill {
                 ex * ex + y * y <= rr * rr
             }
             Fill::Convex { planes } => planes.iter().all(|(nx, ny, c)| nx * x + ny * y <= c + tol),
+            Fill::Segment { a, b, r } => {
+                // Distance from the point to the segment, against the radius grown by tol.
+                let (ex, ey) = (b.0 - a.0, b.1 - a.1);
+                let len2 = (ex * ex + ey * ey).max(f64::MIN_POSITIVE);
+                let t = (((x - a.0) * ex + (y - a.1) * ey) / len2).clamp(0.0, 1.0);
+                let (dx, dy) = (x - a.0 - t * ex, y - a.1 - t * ey);
+                // Half a dot's diagonal: the nearest dot to any point of a slanted line lies
+                // within it, so a bare line shows unbroken.
+                let rr = r + tol * std::f64::consts::SQRT_2;
+                dx * dx + dy * dy <= rr * rr
+            }
             Fill::General { vertices } => {
                 point_in_polygon(vertices, x, y) || near_outline(vertices, x, y, tol)
             }

@@ -68,6 +68,18 @@ impl ViewBody {
                 });
                 return finite(b);
             }
+            ShapeSpec::Segment { a, b, radius, .. } => {
+                let at = |v: &crate::protocol::Vector| {
+                    (self.x + c * v.x - s * v.y, self.y + s * v.x + c * v.y)
+                };
+                let ((ax, ay), (bx, by)) = (at(a), at(b));
+                return finite((
+                    ax.min(bx) - radius,
+                    ay.min(by) - radius,
+                    ax.max(bx) + radius,
+                    ay.max(by) + radius,
+                ));
+            }
         };
         finite((self.x - hx, self.y - hy, self.x + hx, self.y + hy))
     }
@@ -87,6 +99,10 @@ pub fn describe_shape(shape: &ShapeSpec) -> String {
         ShapeSpec::Circle { radius } => format!("circle r={radius}"),
         ShapeSpec::Capsule { length, radius } => format!("capsule l={length} r={radius}"),
         ShapeSpec::Polygon { vertices } => format!("polygon {} vertices", vertices.len()),
+        ShapeSpec::Segment { a, b, radius, .. } => {
+            let length = (b.x - a.x).hypot(b.y - a.y);
+            format!("segment l={length} r={radius}")
+        }
     }
 }
 

@@ -8,7 +8,9 @@
 //! Frames from a page are decoded with the protocol's own decoders, re-encoded, and only then
 //! put on Zenoh; anything else is refused with a reason and changes nothing.
 
-use crate::protocol::{self, CommandKey, DecodeError, Remove, Reset, SetGravity, Spawn, Tilt};
+use crate::protocol::{
+    self, CommandKey, DecodeError, Remove, Reset, SetGravity, SetVelocity, Spawn, Tilt,
+};
 use std::fmt;
 use std::time::Instant;
 
@@ -34,6 +36,8 @@ pub enum Tag {
     Remove = 8,
     /// `…/reset` (page → gateway): a `Reset`.
     Reset = 9,
+    /// `…/velocity` (page → gateway): a `SetVelocity` (drive a kinematic body).
+    Velocity = 10,
 }
 
 impl Tag {
@@ -49,6 +53,7 @@ impl Tag {
             7 => Tag::Spawn,
             8 => Tag::Remove,
             9 => Tag::Reset,
+            10 => Tag::Velocity,
             _ => return None,
         })
     }
@@ -61,6 +66,7 @@ impl Tag {
             Tag::Spawn => CommandKey::Spawn,
             Tag::Remove => CommandKey::Remove,
             Tag::Reset => CommandKey::Reset,
+            Tag::Velocity => CommandKey::Velocity,
             _ => return None,
         })
     }
@@ -76,11 +82,11 @@ pub fn frame(tag: Tag, payload: &[u8]) -> Vec<u8> {
 
 /// Which commands pages may send (`--allow`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Allow([bool; 5]);
+pub struct Allow([bool; CommandKey::ALL.len()]);
 
 impl Allow {
     /// Nothing allowed: a watch-only page.
-    pub const NONE: Allow = Allow([false; 5]);
+    pub const NONE: Allow = Allow([false; CommandKey::ALL.len()]);
 
     /// The default: tilt and spawn.
     pub fn default_set() -> Allow {
@@ -119,7 +125,7 @@ impl Allow {
                 .find(|k| k.suffix() == part)
                 .ok_or_else(|| {
                     format!(
-                        "--allow {s:?}: unknown command {part:?} (one of gravity, tilt, spawn, remove, reset, none)"
+                        "--allow {s:?}: unknown command {part:?} (one of gravity, tilt, spawn, remove, reset, velocity, none)"
                     )
                 })?;
             a = a.with(key);
@@ -210,6 +216,7 @@ pub fn check_upstream(bytes: &[u8], allow: &Allow) -> Result<Checked, Refusal> {
         CommandKey::Spawn => recode::<Spawn>(key, payload),
         CommandKey::Remove => recode::<Remove>(key, payload),
         CommandKey::Reset => recode::<Reset>(key, payload),
+        CommandKey::Velocity => recode::<SetVelocity>(key, payload),
     }
 }
 

@@ -47,6 +47,11 @@ pub enum MassSpec {
     Density(Real),
     /// Total mass in kilograms.
     Mass(Real),
+    /// Moved by the velocity it is given, not by forces or contacts: infinite mass and
+    /// inertia like a static body, but it moves, pushes dynamic bodies, carries them by
+    /// friction and is never pushed back (platforms, paddles, elevators).
+    /// Set its velocity with [`super::World::set_velocity`].
+    Kinematic,
 }
 
 /// Everything needed to create a body. Validated by [`BodyDef::validate`] before it reaches a World.
@@ -103,6 +108,15 @@ impl BodyDef {
         finite("angle", angle)?;
         let position = origin + Rot::from_angle(angle).rotate(offset);
         Ok(BodyDef::dynamic(shape, position).with_angle(angle))
+    }
+
+    /// A kinematic body at `position` moving at `velocity` (m/s), friction 0.6, restitution 0.
+    pub fn kinematic(shape: Shape, position: Vec2, velocity: Vec2) -> BodyDef {
+        BodyDef {
+            mass: MassSpec::Kinematic,
+            linear_velocity: velocity,
+            ..BodyDef::dynamic(shape, position)
+        }
     }
 
     /// A static (immovable) body at `position`, friction 0.6, restitution 0.
@@ -164,8 +178,17 @@ impl BodyDef {
         finite("velocity.x", self.linear_velocity.x)?;
         finite("velocity.y", self.linear_velocity.y)?;
         finite("angular_velocity", self.angular_velocity)?;
+        if matches!(self.shape, Shape::Segment(_))
+            && matches!(self.mass, MassSpec::Density(_) | MassSpec::Mass(_))
+        {
+            return Err(PhysicsError::InvalidShape {
+                field: "mass".into(),
+                reason: "must be static or kinematic for a segment (segments and chains are                          terrain, platforms and paddles; a thick moving rod is a capsule)"
+                    .into(),
+            });
+        }
         let mass = match self.mass {
-            MassSpec::Static => None,
+            MassSpec::Static | MassSpec::Kinematic => None,
             MassSpec::Density(d) => {
                 positive("density", d)?;
                 Some(("mass (density x area)", d * self.shape.area()))
@@ -231,13 +254,15 @@ pub struct Body {
     pub(crate) sleep_time: Real,
     /// While asleep: the island it fell asleep with (a slot index), so it wakes with it.
     pub(crate) sleep_island: u32,
+    /// Moved by its velocity only (infinite mass, see [`MassSpec::Kinematic`]).
+    pub(crate) kinematic: bool,
 }
 
 impl Body {
     /// Build a body from a definition that has passed [`BodyDef::validate`].
     pub(crate) fn from_def(id: BodyId, def: &BodyDef) -> Body {
         let (mass, inv_mass, inertia, inv_inertia) = match def.mass {
-            MassSpec::Static => (Real::INFINITY, 0.0, Real::INFINITY, 0.0),
+            MassSpec::Static | MassSpec::Kinematic => (Real::INFINITY, 0.0, Real::INFINITY, 0.0),
             MassSpec::Density(d) => {
                 let m = d * def.shape.area();
                 let i = def.shape.inertia(m);
@@ -248,7 +273,8 @@ impl Body {
                 (m, 1.0 / m, i, 1.0 / i)
             }
         };
-        let is_static = inv_mass == 0.0;
+        let kinematic = def.mass == MassSpec::Kinematic;
+        let is_static = inv_mass == 0.0 && !kinematic;
         Body {
             id,
             shape: def.shape.clone(),
@@ -272,6 +298,7 @@ impl Body {
             awake: true,
             sleep_time: 0.0,
             sleep_island: id.index,
+            kinematic,
         }
     }
 
@@ -338,9 +365,17 @@ impl Body {
     pub fn restitution(&self) -> Real {
         self.restitution
     }
-    /// True for immovable bodies.
+    /// True for immovable bodies (not kinematic ones, which move).
     pub fn is_static(&self) -> bool {
-        self.inv_mass == 0.0
+        self.inv_mass == 0.0 && !self.kinematic
+    }
+    /// True for kinematic bodies: moved by their velocity, never by contacts or forces.
+    pub fn is_kinematic(&self) -> bool {
+        self.kinematic
+    }
+    /// True for a kinematic body with a non-zero velocity: it pushes and wakes what it meets.
+    pub(crate) fn is_moving_kinematic(&self) -> bool {
+        self.kinematic && (self.linear_velocity != Vec2::ZERO || self.angular_velocity != 0.0)
     }
     /// False while the body sleeps (resting with its island). Static bodies report true.
     pub fn is_awake(&self) -> bool {
@@ -352,7 +387,7 @@ impl Body {
     }
     /// Kinetic energy, translational plus rotational (J).
     pub fn kinetic_energy(&self) -> Real {
-        if self.is_static() {
+        if self.inv_mass == 0.0 {
             return 0.0;
         }
         0.5 * self.mass * self.linear_velocity.length_squared()
@@ -366,7 +401,9 @@ impl Body {
             angle: self.angle,
             linear_velocity: self.linear_velocity,
             angular_velocity: self.angular_velocity,
-            mass: if self.is_static() {
+            mass: if self.kinematic {
+                MassSpec::Kinematic
+            } else if self.is_static() {
                 MassSpec::Static
             } else {
                 MassSpec::Mass(self.mass)

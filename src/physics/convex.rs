@@ -137,6 +137,18 @@ impl Polygon {
         p
     }
 
+    /// The segment from `a` to `b` (body frame, m) as a two-sided "polygon": edge 0 faces
+    /// the right of a -> b, edge 1 (running back) its left. A segment shape's core.
+    pub(crate) fn between(a: Vec2, b: Vec2) -> Polygon {
+        let mut p = Polygon::segment(0.0);
+        let d = (b - a).normalize();
+        p.vertices[0] = a;
+        p.vertices[1] = b;
+        p.normals[0] = Vec2::new(d.y, -d.x);
+        p.normals[1] = Vec2::new(-d.y, d.x);
+        p
+    }
+
     /// A single point: a circle's core.
     pub(crate) fn point() -> Polygon {
         Polygon {

@@ -7,6 +7,7 @@
 use super::convex::Polygon;
 use super::error::{positive, PhysicsError};
 use super::math::{Real, Transform, Vec2, PI};
+use super::segment::Segment;
 use serde::{Deserialize, Serialize};
 
 /// A collision shape in body coordinates (metres), centred on the centre of mass.
@@ -40,6 +41,10 @@ pub enum Shape {
     /// Boxed: a polygon is 136 bytes, and keeping it out of line keeps `Shape` (and every body)
     /// small in worlds of boxes and circles.
     Polygon(Box<Polygon>),
+    /// A line segment (a lone one, or one piece of a chain with its neighbours), for static
+    /// and kinematic bodies: terrain, platforms, paddles (see [`Segment`]). Boxed like the
+    /// polygon. Appended last, so the other kinds keep their serialized indices.
+    Segment(Box<Segment>),
 }
 
 impl Shape {
@@ -116,6 +121,7 @@ impl Shape {
             }
             // A Polygon can only be built through its checks.
             Shape::Polygon(_) => {}
+            Shape::Segment(ref s) => s.validate()?,
         }
         Ok(())
     }
@@ -131,6 +137,8 @@ impl Shape {
                 radius: r,
             } => 4.0 * l * r + PI * r * r,
             Shape::Polygon(ref p) => p.area(),
+            // A bare line has none; a thick one is a stadium.
+            Shape::Segment(ref s) => 2.0 * s.length() * s.radius + PI * s.radius * s.radius,
         }
     }
 
@@ -163,6 +171,9 @@ impl Shape {
                 i_rect + i_discs
             }
             Shape::Polygon(ref p) => mass * p.second_moment() / p.area(),
+            // Static and kinematic only (their mass is infinite): a thin rod about its middle,
+            // m L^2 / 12, should anyone ask.
+            Shape::Segment(ref s) => mass * s.length() * s.length() / 12.0,
         }
     }
 
@@ -176,6 +187,7 @@ impl Shape {
                 radius,
             } => half_length + radius,
             Shape::Polygon(ref p) => p.radius(),
+            Shape::Segment(ref s) => s.a.length().max(s.b.length()) + s.radius,
         }
     }
 
@@ -205,6 +217,14 @@ impl Shape {
                     max: xf.p + hi,
                 };
             }
+            Shape::Segment(ref s) => {
+                let (a, b) = (xf.q.rotate(s.a), xf.q.rotate(s.b));
+                let r = Vec2::splat(s.radius);
+                return Aabb {
+                    min: xf.p + a.min(b) - r,
+                    max: xf.p + a.max(b) + r,
+                };
+            }
         };
         Aabb {
             min: xf.p - e,
@@ -212,13 +232,15 @@ impl Shape {
         }
     }
 
-    /// The kind's name as scenes and messages spell it: `rect`, `circle`, `capsule`, `polygon`.
+    /// The kind's name as scenes and messages spell it: `rect`, `circle`, `capsule`, `polygon`,
+    /// `segment`.
     pub fn kind(&self) -> &'static str {
         match self {
             Shape::Rect { .. } => "rect",
             Shape::Circle { .. } => "circle",
             Shape::Capsule { .. } => "capsule",
             Shape::Polygon(_) => "polygon",
+            Shape::Segment(_) => "segment",
         }
     }
 }

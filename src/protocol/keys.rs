@@ -18,16 +18,19 @@ pub enum CommandKey {
     Remove,
     /// `…/reset`
     Reset,
+    /// `…/velocity` (a kinematic body's velocity)
+    Velocity,
 }
 
 impl CommandKey {
     /// Every command key, in a fixed order (its index is [`CommandKey::index`]).
-    pub const ALL: [CommandKey; 5] = [
+    pub const ALL: [CommandKey; 6] = [
         CommandKey::Gravity,
         CommandKey::Tilt,
         CommandKey::Spawn,
         CommandKey::Remove,
         CommandKey::Reset,
+        CommandKey::Velocity,
     ];
 
     /// The last segment of the key, e.g. `spawn`.
@@ -38,6 +41,7 @@ impl CommandKey {
             CommandKey::Spawn => "spawn",
             CommandKey::Remove => "remove",
             CommandKey::Reset => "reset",
+            CommandKey::Velocity => "velocity",
         }
     }
 
@@ -159,6 +163,10 @@ impl Keys {
     /// `…/reset`
     pub fn reset(&self) -> String {
         self.command(CommandKey::Reset)
+    }
+    /// `…/velocity`
+    pub fn velocity(&self) -> String {
+        self.command(CommandKey::Velocity)
     }
 }
 

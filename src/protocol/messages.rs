@@ -83,6 +83,25 @@ pub enum ShapeSpec {
         /// Vertices, counter-clockwise, metres.
         vertices: Vec<Vector>,
     },
+    /// Variant 4: a line segment from `a` to `b` (m, body frame) grown by `radius` (m, may be
+    /// 0), for static and kinematic bodies only; a piece of a chain carries the chain's
+    /// vertex before `a` (`prev`) and after `b` (`next`) so bodies slide over its joints, and
+    /// `one_sided` pushes only to the left of a -> b. A scene's `chain` arrives as one body
+    /// per piece.
+    Segment {
+        /// First end, metres.
+        a: Vector,
+        /// Second end, metres.
+        b: Vector,
+        /// Thickness on each side of the line, metres.
+        radius: f32,
+        /// The chain's vertex before `a`, metres.
+        prev: Option<Vector>,
+        /// The chain's vertex after `b`, metres.
+        next: Option<Vector>,
+        /// Push only to the left of a -> b.
+        one_sided: bool,
+    },
 }
 
 /// One body's pose in a [`Snapshot`], as a client reconstructs it from the quantized wire
@@ -312,6 +331,18 @@ pub struct SceneState {
     pub gravity: Vector,
     /// Every body, static ones included, in slot order.
     pub bodies: Vec<BodyInfo>,
+}
+
+/// `…/velocity`: set a kinematic body's velocity (how a client drives a paddle or a
+/// platform). Refused for bodies that are not kinematic, and for speeds over the World's cap.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SetVelocity {
+    /// The kinematic body.
+    pub id: BodyRef,
+    /// Linear velocity (m/s, world frame).
+    pub velocity: Vector,
+    /// Angular velocity (rad/s, counter-clockwise).
+    pub angular_velocity: f32,
 }
 
 /// `…/stats`: once a second. Durations are microseconds over the last second.

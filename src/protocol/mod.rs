@@ -14,6 +14,7 @@ pub mod snapshot;
 pub mod tilt;
 
 pub use keys::{CommandKey, KeyError, Keys, DEFAULT_WORLD};
+pub use messages::SetVelocity;
 pub use messages::{
     BodyInfo, BodyRef, Colour, Event, EventKind, Orientation, Pose, Remove, Reset, SceneState,
     SetGravity, ShapeSpec, Snapshot, Spawn, SpawnBody, Stats, Tilt, Vector,
@@ -41,6 +42,7 @@ macro_rules! messages {
     ($($t:ident),*) => { $(impl Message for $t { const NAME: &'static str = stringify!($t); })* };
 }
 messages!(SetGravity, Tilt, Spawn, Remove, Reset, Event, SceneState, Stats);
+messages!(SetVelocity);
 
 /// Why a payload could not be decoded.
 #[derive(Clone, Debug, PartialEq, Eq, Error)]

@@ -9,7 +9,10 @@
 use super::error::{body_label, describe, LineCounter};
 use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
 use crate::physics::error::{finite, non_negative, positive, unit_interval};
-use crate::physics::{BodyDef, MassSpec, PhysicsError, Polygon, Real, Settings, Shape, Vec2};
+use crate::physics::segment::chain;
+use crate::physics::{
+    BodyDef, MassSpec, PhysicsError, Polygon, Real, Rot, Segment, Settings, Shape, Vec2,
+};
 use serde::Deserialize;
 use toml::{Spanned, Table};
 
@@ -80,6 +83,62 @@ enum ShapeEntry {
     /// (Read as lists of any length so that a vertex that is not a pair is reported with its
     /// index, not as toml's bare "invalid length".)
     Polygon { vertices: Vec<Vec<Real>> },
+    /// `{ type = "segment", a = [x, y], b = [x, y], radius = R, one_sided = false }`: the line
+    /// from a to b (relative to `position`, in the body's turned frame) grown by R (default
+    /// 0). Static (the default for it) or kinematic only. One-sided pushes only to the left
+    /// of a -> b.
+    Segment {
+        a: [Real; 2],
+        b: [Real; 2],
+        #[serde(default)]
+        radius: Real,
+        #[serde(default)]
+        one_sided: bool,
+    },
+    /// `{ type = "chain", points = [[x, y], ...], loop = false, one_sided = false }`: a
+    /// polyline relative to `position` (turned by `angle`), static only, cut into one body per
+    /// piece (named `NAME[i]`) whose neighbours keep bodies from catching on its joints.
+    /// `loop = true` joins the last point to the first (do not repeat it). One-sided pieces
+    /// push only to the left of the walk: list a floor left to right, a container
+    /// counter-clockwise.
+    Chain {
+        points: Vec<Vec<Real>>,
+        #[serde(default, rename = "loop")]
+        closed: bool,
+        #[serde(default)]
+        one_sided: bool,
+    },
+}
+
+/// Read `[x, y]` pairs as written, refusing anything else with the index of the bad one
+/// (`field` is e.g. `shape.vertices`).
+fn read_points(at: &str, field: &str, list: &[Vec<Real>]) -> Result<Vec<Vec2>, SceneError> {
+    let mut points = Vec::with_capacity(list.len());
+    for (i, v) in list.iter().enumerate() {
+        let field = || format!("{field}[{i}]");
+        let written = || {
+            let coords: Vec<String> = v.iter().map(Real::to_string).collect();
+            Some(format!("[{}]", coords.join(", ")))
+        };
+        let &[x, y] = v.as_slice() else {
+            return Err(SceneError::invalid(
+                at,
+                field(),
+                written(),
+                "must be a pair [x, y] (metres)",
+            ));
+        };
+        if !(x.is_finite() && y.is_finite()) {
+            return Err(SceneError::invalid(
+                at,
+                field(),
+                written(),
+                "coordinates must be finite numbers",
+            ));
+        }
+        points.push(Vec2::new(x, y));
+    }
+    Ok(points)
 }
 
 impl ShapeEntry {
@@ -97,34 +156,30 @@ impl ShapeEntry {
                 return Ok((capsule, Vec2::ZERO));
             }
             ShapeEntry::Polygon { ref vertices } => {
-                let mut points = Vec::with_capacity(vertices.len());
-                for (i, v) in vertices.iter().enumerate() {
-                    let field = || format!("shape.vertices[{i}]");
-                    let written = || {
-                        let coords: Vec<String> = v.iter().map(Real::to_string).collect();
-                        Some(format!("[{}]", coords.join(", ")))
-                    };
-                    let &[x, y] = v.as_slice() else {
-                        return Err(SceneError::invalid(
-                            at,
-                            field(),
-                            written(),
-                            "must be a pair [x, y] (metres)",
-                        ));
-                    };
-                    if !(x.is_finite() && y.is_finite()) {
-                        return Err(SceneError::invalid(
-                            at,
-                            field(),
-                            written(),
-                            "coordinates must be finite numbers",
-                        ));
-                    }
-                    points.push(Vec2::new(x, y));
-                }
+                let points = read_points(at, "shape.vertices", vertices)?;
                 let (polygon, centroid) =
                     Polygon::new(&points).map_err(|e| SceneError::physics(at, e))?;
                 return Ok((Shape::from(polygon), centroid));
+            }
+            ShapeEntry::Segment {
+                a,
+                b,
+                radius,
+                one_sided,
+            } => {
+                let mut segment =
+                    Segment::new(Vec2::new(a[0], a[1]), Vec2::new(b[0], b[1]), radius);
+                segment.one_sided = one_sided;
+                Shape::Segment(Box::new(segment))
+            }
+            // Expanded by `BodyEntry::into_bodies`, never asked for one shape.
+            ShapeEntry::Chain { .. } => {
+                return Err(SceneError::invalid(
+                    at,
+                    "shape.type",
+                    Some("\"chain\"".into()),
+                    "a chain is many bodies",
+                ))
             }
         };
         shape.validate().map_err(|e| SceneError::physics(at, e))?;
@@ -149,6 +204,8 @@ struct BodyEntry {
     mass: Option<Real>,
     #[serde(default, rename = "static")]
     is_static: bool,
+    #[serde(default)]
+    kinematic: bool,
     #[serde(default = "default_friction")]
     friction: Real,
     #[serde(default)]
@@ -275,9 +332,15 @@ pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
         };
         match entry {
             Entry::Body(entry) => {
-                reserve(&bodies, 1)?;
-                let index = bodies.len();
-                bodies.push(entry.into_body(index)?);
+                if let ShapeEntry::Chain { .. } = entry.shape {
+                    let pieces = entry.into_chain(bodies.len())?;
+                    reserve(&bodies, pieces.len() as u64)?;
+                    bodies.extend(pieces);
+                } else {
+                    reserve(&bodies, 1)?;
+                    let index = bodies.len();
+                    bodies.push(entry.into_body(index)?);
+                }
             }
             Entry::Stack(entry) => {
                 let at = generator_label(kind, entry.name.as_deref(), k);
@@ -382,11 +445,101 @@ fn parse_colour(at: &str, colour: Option<&str>) -> Result<Colour, SceneError> {
 }
 
 impl BodyEntry {
+    /// A `chain` entry as one static body per piece, named `NAME[i]` (`chain[i]` unnamed);
+    /// `index` is the first piece's position in the scene.
+    fn into_chain(self, index: usize) -> Result<Vec<SceneBody>, SceneError> {
+        let at = body_label(self.name.as_deref(), index);
+        let ShapeEntry::Chain {
+            ref points,
+            closed,
+            one_sided,
+        } = self.shape
+        else {
+            return Ok(Vec::new());
+        };
+        let refuse = |field: &str, written: String| {
+            Err(SceneError::invalid(
+                &at,
+                field,
+                Some(written),
+                "a chain is static terrain: it takes no mass, density, velocity or kinematic",
+            ))
+        };
+        if self.kinematic {
+            return refuse("kinematic", "true".into());
+        }
+        if let Some(d) = self.density {
+            return refuse("density", d.to_string());
+        }
+        if let Some(m) = self.mass {
+            return refuse("mass", m.to_string());
+        }
+        let [vx, vy] = self.velocity;
+        if vx != 0.0 || vy != 0.0 || self.angular_velocity != 0.0 {
+            return refuse("velocity", format!("[{vx}, {vy}]"));
+        }
+        let colour = parse_colour(&at, self.colour.as_deref())?;
+        let local = read_points(&at, "shape.points", points)?;
+        let position = Vec2::new(self.position[0], self.position[1]);
+        check(&at, finite("position.x", position.x))?;
+        check(&at, finite("position.y", position.y))?;
+        check(&at, finite("angle", self.angle))?;
+        let turn = Rot::from_angle(self.angle);
+        let pieces = chain(&local, closed, one_sided).map_err(|e| SceneError::physics(&at, e))?;
+        let prefix = self.name.as_deref().unwrap_or("chain");
+        pieces
+            .into_iter()
+            .enumerate()
+            .map(|(i, (mid, segment))| {
+                let def = BodyDef::fixed(
+                    Shape::Segment(Box::new(segment)),
+                    position + turn.rotate(mid),
+                )
+                .with_angle(self.angle)
+                .with_friction(self.friction)
+                .with_restitution(self.restitution);
+                def.validate()
+                    .map_err(|e| SceneError::physics(at.clone(), e))?;
+                Ok(SceneBody {
+                    name: format!("{prefix}[{i}]"),
+                    def,
+                    colour,
+                    is_static: true,
+                })
+            })
+            .collect()
+    }
+
     /// Validate and translate; `index` is the body's position in the scene.
     fn into_body(self, index: usize) -> Result<SceneBody, SceneError> {
         let at = body_label(self.name.as_deref(), index);
         let value = |v: Real| Some(v.to_string());
-        let mass = match (self.is_static, self.density, self.mass) {
+        let segment = matches!(self.shape, ShapeEntry::Segment { .. });
+        if self.kinematic && self.is_static {
+            return Err(SceneError::invalid(
+                at,
+                "kinematic",
+                Some("true".into()),
+                "a body is static or kinematic, not both (drop one)",
+            ));
+        }
+        if self.kinematic {
+            for (field, given) in [("density", self.density), ("mass", self.mass)] {
+                if let Some(v) = given {
+                    return Err(SceneError::invalid(
+                        at,
+                        field,
+                        value(v),
+                        "a kinematic body has neither density nor mass (it moves by its velocity alone)",
+                    ));
+                }
+            }
+        }
+        // A segment is static unless it says it is kinematic.
+        let is_static = self.is_static
+            || (segment && !self.kinematic && self.density.is_none() && self.mass.is_none());
+        let mass = match (is_static, self.density, self.mass) {
+            _ if self.kinematic => MassSpec::Kinematic,
             (true, None, None) => MassSpec::Static,
             (true, Some(d), _) => {
                 return Err(SceneError::invalid(
@@ -423,7 +576,7 @@ impl BodyEntry {
                 ))
             }
         };
-        if self.is_static {
+        if is_static {
             let [vx, vy] = self.velocity;
             if vx != 0.0 || vy != 0.0 {
                 return Err(SceneError::invalid(
@@ -468,7 +621,7 @@ impl BodyEntry {
             name: self.name.unwrap_or_else(|| format!("body {index}")),
             def,
             colour,
-            is_static: self.is_static,
+            is_static,
         })
     }
 }

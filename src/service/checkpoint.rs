@@ -23,7 +23,8 @@ use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
 use std::thread::JoinHandle;
 
 /// Bumped whenever [`SimState`] (or anything in it, e.g. the engine's `Settings`) changes shape.
-pub const FORMAT_VERSION: u32 = 3;
+/// 4: bodies record whether they are kinematic, shapes may be segments (issue 17).
+pub const FORMAT_VERSION: u32 = 4;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

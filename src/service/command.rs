@@ -23,6 +23,16 @@ pub enum Command {
     Remove(Vec<BodyRef>),
     /// Reload the scene.
     Reset,
+    /// Set a kinematic body's velocity (m/s, rad/s): the id as sent, resolved when applied.
+    /// Appended, so earlier journals read as before.
+    SetVelocity {
+        /// The body, as sent.
+        id: BodyRef,
+        /// Linear velocity (m/s).
+        velocity: Vector,
+        /// Angular velocity (rad/s).
+        angular_velocity: f32,
+    },
 }
 
 /// A body to add, validated.

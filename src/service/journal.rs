@@ -38,7 +38,8 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Bumped whenever the header, the records or their framing change shape. Version 4 added
-/// the per-record length check and checksum; older journals are refused (re-record the run).
+/// the per-record length check and checksum, commands that set a kinematic body's velocity,
+/// segment and chain shapes and kinematic bodies; older journals are refused (re-record the run).
 pub const FORMAT_VERSION: u32 = 4;
 const MAGIC: &[u8; 8] = b"TILTJRNL";
 /// Bytes before the first record: magic and version.

@@ -151,6 +151,7 @@ impl Box2d {
                     MassSpec::Density(rho) => rho as f32,
                     // Box2D takes a density: the one that gives this mass.
                     MassSpec::Mass(m) => (m / d.shape.area()) as f32,
+                    MassSpec::Kinematic => panic!("the peer scenes have no kinematic bodies"),
                 };
                 match d.shape {
                     Shape::Rect { half_extents: h } => {
@@ -191,6 +192,7 @@ impl Box2d {
                         let p = b2MakePolygon(&hull, 0.0);
                         b2CreatePolygonShape(body, &sd, &p);
                     }
+                    Shape::Segment(_) => panic!("the peer scenes have no segments or chains"),
                 }
                 if !is_static {
                     dynamic.push(body);

@@ -311,6 +311,7 @@ fn rapier_collider(shape: &Shape) -> ColliderBuilder {
                 .expect("rapier2d refused a polygon tiltbox accepted");
             ColliderBuilder::new(shape)
         }
+        Shape::Segment(_) => panic!("the peer scenes have no segments or chains"),
     }
 }
 
@@ -370,7 +371,7 @@ impl Rapier {
                     let mass = match def.mass {
                         MassSpec::Density(d) => d * def.shape.area(),
                         MassSpec::Mass(m) => m,
-                        MassSpec::Static => unreachable!(),
+                        MassSpec::Static | MassSpec::Kinematic => unreachable!(),
                     };
                     collider.mass_properties(MassProperties::new(
                         Vector::ZERO,
@@ -380,6 +381,7 @@ impl Rapier {
                 }
                 (MassSpec::Density(d), _) => collider.density(d as f32),
                 (MassSpec::Mass(m), _) => collider.mass(m as f32),
+                (MassSpec::Kinematic, _) => panic!("the peer scenes have no kinematic bodies"),
             };
             let (handle, _) = world.insert(builder, collider);
             if def.mass != MassSpec::Static {

@@ -86,11 +86,15 @@ const vector = r => ({ x: r.f32(), y: r.f32() });
 const bodyRef = r => ({ index: r.u32(), generation: r.u32() });
 const colour = r => ({ r: r.u8(), g: r.u8(), b: r.u8() });
 function shapeSpec(r) {
-  switch (r.variant(4, 'ShapeSpec')) {
+  switch (r.variant(5, 'ShapeSpec')) {
     case 0: return { Rect: { width: r.f32(), height: r.f32() } };
     case 1: return { Circle: { radius: r.f32() } };
     case 2: return { Capsule: { length: r.f32(), radius: r.f32() } };
-    default: return { Polygon: { vertices: r.seq(vector) } };
+    case 3: return { Polygon: { vertices: r.seq(vector) } };
+    default: return { Segment: {
+      a: vector(r), b: vector(r), radius: r.f32(), prev: r.option(vector), next: r.option(vector),
+      one_sided: r.bool(),
+    } };
   }
 }
 // An id in a list sorted by slot: 2 (index - next) + (generation != 0), then the generation.
@@ -479,7 +483,10 @@ function shapeExtent(b, x, y, a) {
   const pts = [];
   if (s.Rect) { const w = s.Rect.width / 2, h = s.Rect.height / 2; pts.push([-w, -h], [w, -h], [w, h], [-w, h]); }
   else if (s.Polygon) s.Polygon.vertices.forEach(v => pts.push([v.x, v.y]));
-  else {
+  else if (s.Segment) {
+    const g = s.Segment, r = g.radius;
+    pts.push([g.a.x - r, g.a.y - r], [g.a.x + r, g.a.y + r], [g.b.x - r, g.b.y - r], [g.b.x + r, g.b.y + r]);
+  } else {
     const r = s.Circle ? s.Circle.radius : s.Capsule.radius;
     const h = s.Capsule ? s.Capsule.length / 2 - r : 0;
     return [x - Math.abs(c * h) - r, y - Math.abs(sn * h) - r, x + Math.abs(c * h) + r, y + Math.abs(sn * h) + r];
@@ -524,6 +531,15 @@ function drawBody(b, x, y, a, px) {
     ctx.arc(h, 0, r, -Math.PI / 2, Math.PI / 2);
     ctx.arc(-h, 0, r, Math.PI / 2, 3 * Math.PI / 2);
     ctx.closePath();
+  } else if (s.Segment) {  // a line of terrain: stroked, as thick as it is (at least 2 px)
+    const g = s.Segment;
+    ctx.moveTo(g.a.x, g.a.y); ctx.lineTo(g.b.x, g.b.y);
+    ctx.lineWidth = Math.max(2 * g.radius, 2 * px);
+    ctx.lineCap = 'round';
+    ctx.strokeStyle = css(b.info.colour);
+    ctx.stroke();
+    ctx.restore();
+    return;
   } else {
     const v = s.Polygon.vertices;
     ctx.moveTo(v[0].x, v[0].y);

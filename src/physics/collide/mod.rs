@@ -8,10 +8,12 @@
 mod capsule;
 mod circle;
 mod polygon;
+mod segment;
 
 pub use capsule::collide_capsules;
 pub use circle::{collide_circles, collide_polygon_circle};
 pub use polygon::{collide_polygons, collide_rects};
+pub use segment::collide_segment;
 
 use super::convex::Polygon;
 use super::math::{Real, Transform, Vec2};
@@ -72,8 +74,11 @@ impl Manifold {
 /// circle by the one-point circle routines; capsule pairs by their segments' closest points;
 /// every other pair (polygons, rectangles, a capsule against either) by the general clipper on
 /// the shapes' cores and radii.
+/// Segments (chain pieces) go through `collide_segment`, which knows their neighbours.
 pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: Real) -> Manifold {
     match (a, b) {
+        (Shape::Segment(s), _) => collide_segment(s, xf_a, b, xf_b, margin),
+        (_, Shape::Segment(s)) => collide_segment(s, xf_b, a, xf_a, margin).swapped(),
         (Shape::Rect { half_extents: ha }, Shape::Rect { half_extents: hb }) => {
             collide_rects(*ha, xf_a, *hb, xf_b, margin)
         }
@@ -116,6 +121,7 @@ fn core(shape: &Shape) -> (Cow<'_, Polygon>, Real) {
             radius,
         } => (Cow::Owned(Polygon::segment(*half_length)), *radius),
         Shape::Circle { radius } => (Cow::Owned(Polygon::point()), *radius),
+        Shape::Segment(s) => (Cow::Owned(Polygon::between(s.a, s.b)), s.radius),
     }
 }
 

@@ -17,7 +17,11 @@ impl World {
         self.proxies
             .extend(self.slots.iter().map(|slot| match &slot.body {
                 Some(b) => {
-                    let reach = if b.is_active() { travel(b, g, dt) } else { 0.0 };
+                    let reach = if b.is_active() || b.kinematic {
+                        travel(b, g, dt)
+                    } else {
+                        0.0
+                    };
                     Proxy {
                         aabb: b
                             .shape
@@ -46,6 +50,10 @@ impl World {
             else {
                 continue;
             };
+            if a.inv_mass == 0.0 && b.inv_mass == 0.0 {
+                // A kinematic body meets static and kinematic ones without a contact.
+                continue;
+            }
             let reach = closing_reach(a, b, g, dt);
             let manifold = collide(
                 &a.shape,
@@ -65,12 +73,23 @@ impl World {
                 .iter()
                 .map(|p| p.separation)
                 .fold(Real::INFINITY, Real::min);
-            if nearest <= reach + self.settings.linear_slop {
+            // A kinematic body at rest wakes nothing (it is ground until it moves).
+            let resting_kinematic = |x: &Body| x.kinematic && !x.is_moving_kinematic();
+            let mut woken = false;
+            if nearest <= reach + self.settings.linear_slop
+                && !resting_kinematic(a)
+                && !resting_kinematic(b)
+            {
                 for (i, body) in [(ia, a), (ib, b)] {
                     if !body.awake {
                         self.wake_queue.push(i);
+                        woken = true;
                     }
                 }
+            }
+            if !(a.is_active() || b.is_active() || woken) {
+                // A sleeper beside a kinematic body at rest: nothing to solve.
+                continue;
             }
             // Both lists are sorted by key: advance the cursor in the old one.
             while old < self.previous.len() && self.previous[old].key < key {
@@ -84,7 +103,7 @@ impl World {
                 normal: manifold.normal,
                 friction: fm.mix(a.friction, b.friction),
                 restitution: rm.mix(a.restitution, b.restitution),
-                touches_static: a.is_static() || b.is_static(),
+                touches_static: a.inv_mass == 0.0 || b.inv_mass == 0.0,
                 points: [ContactPoint::default(); 2],
                 count: manifold.count,
                 softness: Softness::RIGID,
@@ -120,7 +139,13 @@ impl World {
 #[inline]
 fn closing_reach(a: &Body, b: &Body, g: Vec2, dt: Real) -> Real {
     let motion = |x: &Body| {
-        if x.is_active() {
+        if x.kinematic {
+            (
+                x.linear_velocity,
+                x.angular_velocity.abs() * x.shape.bounding_radius(),
+                Vec2::ZERO,
+            )
+        } else if x.is_active() {
             (
                 x.linear_velocity,
                 x.angular_velocity.abs() * x.shape.bounding_radius(),

@@ -161,7 +161,12 @@ impl World {
         for k in 0..self.contacts.len() {
             let c = self.contacts[k];
             if !active(slots, c.a) && !active(slots, c.b) {
-                self.sleeping_contacts.push(c);
+                // Not kept with a kinematic body: it finds the sleeper again when it moves.
+                let kinematic =
+                    |i: u32| slots[i as usize].body.as_ref().is_some_and(|b| b.kinematic);
+                if !kinematic(c.a) && !kinematic(c.b) {
+                    self.sleeping_contacts.push(c);
+                }
             } else {
                 self.contacts[kept] = c;
                 kept += 1;

@@ -431,7 +431,7 @@ impl World {
     /// Total potential energy in the current gravity field, relative to the origin (J).
     pub fn potential_energy(&self) -> Real {
         self.bodies()
-            .filter(|b| !b.is_static())
+            .filter(|b| b.inv_mass > 0.0)
             .map(|b| -b.mass * self.gravity.dot(b.position))
             .sum()
     }

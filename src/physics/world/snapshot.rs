@@ -59,6 +59,8 @@ pub struct BodyState {
     pub sleep_time: Real,
     /// Island it sleeps with.
     pub sleep_island: u32,
+    /// Kinematic (moved by its velocity only). Appended: checkpoint format version 4 on.
+    pub kinematic: bool,
 }
 
 /// A slot: its generation and its body, if live.
@@ -388,6 +390,7 @@ impl World {
                         awake: b.awake,
                         sleep_time: b.sleep_time,
                         sleep_island: b.sleep_island,
+                        kinematic: b.kinematic,
                     }),
                 })
                 .collect(),
@@ -481,6 +484,7 @@ impl World {
                         awake: b.awake,
                         sleep_time: b.sleep_time,
                         sleep_island: b.sleep_island,
+                        kinematic: b.kinematic && b.mass[1] == 0.0,
                     })
                 }
             };

@@ -46,6 +46,7 @@ impl World {
             SolverKind::SoftStep => self.solve_soft_step(dt, limits),
         }
         self.store_solver_bodies();
+        self.move_kinematic(dt);
         if self.settings.enable_sleep {
             self.update_sleep(dt);
         }
@@ -168,6 +169,12 @@ impl World {
                     dtheta: 0.0,
                     dq: Rot::IDENTITY,
                 },
+                // Infinite mass that moves: contacts see its velocity, nothing changes it.
+                Some(b) if b.kinematic => SolverBody {
+                    v: b.linear_velocity,
+                    w: b.angular_velocity,
+                    ..SolverBody::FIXED
+                },
                 _ => SolverBody::FIXED,
             }));
         // One more fixed body, last, for the empty lanes of the wide solver's bundles.
@@ -190,6 +197,18 @@ impl World {
             b.position += sb.dp;
             b.angle += sb.dtheta;
             b.rot = Rot::from_angle(b.angle);
+        }
+    }
+
+    /// Kinematic bodies move by their own velocity over the step (they are fixed bodies to the
+    /// solver, which only reads their velocity).
+    fn move_kinematic(&mut self, dt: Real) {
+        for b in self.slots.iter_mut().filter_map(|s| s.body.as_mut()) {
+            if b.is_moving_kinematic() {
+                b.position += dt * b.linear_velocity;
+                b.angle += dt * b.angular_velocity;
+                b.rot = Rot::from_angle(b.angle);
+            }
         }
     }
 }

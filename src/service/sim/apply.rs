@@ -48,6 +48,13 @@ impl Simulation {
             Command::Spawn(defs) => self.spawn(defs).map(Some),
             Command::Remove(ids) => self.remove(ids).map(Some),
             Command::Reset => self.reset().map(Some),
+            Command::SetVelocity {
+                id,
+                velocity,
+                angular_velocity,
+            } => self
+                .set_velocity(id, velocity, angular_velocity)
+                .map(|()| None),
         };
         match result {
             Ok(kind) => {
@@ -135,6 +142,24 @@ impl Simulation {
             self.poses.forget(id);
         }
         Ok(EventKind::Removed { ids: refs })
+    }
+
+    /// Set a kinematic body's velocity. Only kinematic bodies take one: a dynamic body is
+    /// moved by forces and contacts, a static one not at all.
+    fn set_velocity(&mut self, r: BodyRef, v: Vector, w: f32) -> Result<(), String> {
+        let Some(body) = self.world.bodies().find(|b| BodyRef::from(b.id()) == r) else {
+            return Err(format!("id: no body with id {r}"));
+        };
+        if !body.is_kinematic() {
+            return Err(format!(
+                "id: body {r} is not kinematic (only kinematic bodies take a velocity; make it \
+                 kinematic = true in the scene)"
+            ));
+        }
+        let id = body.id();
+        self.world
+            .set_velocity(id, vec2(v), w as crate::physics::Real)
+            .map_err(|e| e.to_string())
     }
 
     /// Reload the scene; the event carries every body of the new World.

@@ -17,8 +17,8 @@ use super::command::Command;
 use super::config::Limits;
 use crate::physics::{Body, Real, Shape, Vec2};
 use crate::protocol::{
-    decode, BodyInfo, CommandKey, DecodeError, Remove, Reset, SetGravity, ShapeSpec, Spawn, Tilt,
-    Vector,
+    decode, BodyInfo, CommandKey, DecodeError, Remove, Reset, SetGravity, SetVelocity, ShapeSpec,
+    Spawn, Tilt, Vector,
 };
 
 /// Decode and validate a payload that arrived on `key`: the command to apply, or the reason
@@ -82,6 +82,18 @@ pub fn parse_command(key: CommandKey, payload: &[u8], limits: &Limits) -> Result
             let Reset = decode(payload).map_err(bad)?;
             Ok(Command::Reset)
         }
+        CommandKey::Velocity => {
+            // The speed cap and the body's kind are the World's to check when applied.
+            let v: SetVelocity = decode(payload).map_err(bad)?;
+            finite("velocity.x", v.velocity.x)?;
+            finite("velocity.y", v.velocity.y)?;
+            finite("angular_velocity", v.angular_velocity)?;
+            Ok(Command::SetVelocity {
+                id: v.id,
+                velocity: v.velocity,
+                angular_velocity: v.angular_velocity,
+            })
+        }
     }
 }
 
@@ -135,6 +147,14 @@ pub(crate) fn shape_spec(shape: &Shape) -> ShapeSpec {
         Shape::Polygon(ref p) => ShapeSpec::Polygon {
             vertices: p.vertices().iter().map(|&v| vector(v)).collect(),
         },
+        Shape::Segment(ref s) => ShapeSpec::Segment {
+            a: vector(s.a),
+            b: vector(s.b),
+            radius: s.radius as f32,
+            prev: s.prev.map(vector),
+            next: s.next.map(vector),
+            one_sided: s.one_sided,
+        },
     }
 }
 
@@ -150,7 +170,7 @@ pub struct BodyMeta {
     pub is_static: bool,
     /// Shape, in its wire form.
     pub shape: ShapeSpec,
-    /// Mass (kg), 0 for static bodies.
+    /// Mass (kg), 0 for static and kinematic bodies.
     pub mass: f32,
     /// Friction coefficient.
     pub friction: f32,
@@ -166,7 +186,8 @@ impl BodyMeta {
             colour,
             is_static: body.is_static(),
             shape: shape_spec(body.shape()),
-            mass: if body.is_static() {
+            // Kinematic bodies too: their mass is infinite.
+            mass: if body.inv_mass() == 0.0 {
                 0.0
             } else {
                 body.mass() as f32

@@ -49,6 +49,21 @@ pub(crate) fn shape_from_spec(spec: &ShapeSpec) -> Result<(Shape, Vec2), Physics
             let (p, centroid) = Polygon::new(&points)?;
             return Ok((Shape::from(p), centroid));
         }
+        ShapeSpec::Segment {
+            a,
+            b,
+            radius,
+            prev,
+            next,
+            one_sided,
+        } => Shape::Segment(Box::new(crate::physics::Segment {
+            a: vec2(a),
+            b: vec2(b),
+            radius: radius as Real,
+            prev: prev.map(vec2),
+            next: next.map(vec2),
+            one_sided,
+        })),
     };
     shape.validate()?;
     Ok((shape, Vec2::ZERO))
@@ -136,6 +151,14 @@ fn check_shape_limits(spec: &ShapeSpec, shape: &Shape, limits: &Limits) -> Resul
                 }
             }
             Vec::new()
+        }
+        ShapeSpec::Segment { .. } => {
+            return Err(
+                "shape = segment: a spawned body is dynamic, and segments are for \
+                        static and kinematic bodies (put terrain and platforms in the scene \
+                        file)"
+                    .into(),
+            )
         }
     };
     for s in sizes {

@@ -5,11 +5,13 @@
 //!
 //! - `stacks.rs`: stacks and pyramids, and a stack far from the origin;
 //! - `contacts.rs`: mass ratios, deep overlap, bullets, a pile of mixed shapes;
-//! - `limits.rs`: tiny and large bodies, gravity flips, a huge step, non-finite input.
+//! - `limits.rs`: tiny and large bodies, gravity flips, a huge step, non-finite input;
+//! - `terrain.rs`: sliding across a tiled floor, as boxes and as a chain.
 
 mod contacts;
 mod limits;
 mod stacks;
+mod terrain;
 
 pub use contacts::{bullet, deep_overlap, mass_ratio_100, mass_ratio_1000, mixed_pile};
 pub use limits::{gravity_flip, huge_dt, large_bodies, non_finite_refused, tiny_bodies};
@@ -17,6 +19,7 @@ pub use stacks::{
     far_from_origin, pyramid_100, pyramid_134, pyramid_20, pyramid_30, pyramid_sleeps,
     real_spacing, stack_20, stack_50,
 };
+pub use terrain::{tiled_floor_boxes, tiled_floor_chain};
 
 use super::{Verdict, G};
 use crate::physics::{vec2, BodyId, Settings, Vec2, World};
@@ -66,6 +69,16 @@ pub fn all() -> Vec<ExtremeCase> {
             mixed_pile,
         ),
         c("huge_dt", "Huge dt (0.1 s)", huge_dt),
+        c(
+            "tiled_floor_boxes",
+            "Slide across a tiled floor (tiles as boxes)",
+            tiled_floor_boxes,
+        ),
+        c(
+            "tiled_floor_chain",
+            "Slide across a tiled floor (one chain)",
+            tiled_floor_chain,
+        ),
         c(
             "non_finite_refused",
             "NaN / inf refused",

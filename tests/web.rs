@@ -878,7 +878,10 @@ async fn garbage_frames_are_refused_and_the_gateway_keeps_serving() {
     let f0 = page.eval("tiltbox.state.frame").await.as_u64().unwrap();
     tokio::time::sleep(Duration::from_millis(300)).await;
     let f1 = page.eval("tiltbox.state.frame").await.as_u64().unwrap();
-    assert!(f1 > f0 + 5, "page frames {f0} -> {f1}");
+    let why = page
+        .eval("JSON.stringify({skipped: tiltbox.snapshots.skipped, last: tiltbox.snapshots.last, key: tiltbox.snapshots.key && tiltbox.snapshots.key.frame, joined: tiltbox.state.joined, framesIn: tiltbox.metrics.framesIn, connected: tiltbox.metrics.connected})")
+        .await;
+    assert!(f1 > f0 + 5, "page frames {f0} -> {f1}: {why}");
     use std::sync::atomic::Ordering::Relaxed;
     let c = gw.counters();
     assert!(c.refused.load(Relaxed) >= 13, "{c:?}");

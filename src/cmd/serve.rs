@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 use tiltbox::cli::{init_logging, runtime, wait_for_signal, Failure};
 use tiltbox::service::{
-    bench_net, shutdown_worlds, start_worlds, ConfigError, ServerConfig, ServerOptions,
+    bench_net, gas_scene, shutdown_worlds, start_worlds, ConfigError, ServerConfig, ServerOptions,
     ServiceError,
 };
 
@@ -125,6 +125,15 @@ pub struct ServeArgs {
     /// tick lateness, publish-to-receive latency and snapshot sizes.
     #[arg(long, value_name = "SECONDS")]
     pub bench_net: Option<f64>,
+    /// With --bench-net: viewer sessions subscribing to the poses besides the measuring one
+    /// (the fan-out; each counts the snapshots and bytes it receives).
+    #[arg(long, value_name = "N", default_value_t = 100, requires = "bench_net")]
+    pub bench_viewers: usize,
+    /// With --bench-net: serve a generated scene of B discs that never rest (a gas in a box,
+    /// every body in every delta) instead of the configured one.
+    #[arg(long, value_name = "B", requires = "bench_net",
+          value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub bench_bodies: Option<u32>,
 }
 
 impl ServeArgs {
@@ -228,7 +237,17 @@ pub fn run(args: ServeArgs) -> Result<ExitCode, Failure> {
     let runtime = runtime().map_err(anyhow::Error::from)?;
     let result = runtime.block_on(async {
         if let Some(seconds) = args.bench_net {
-            let report = bench_net(&config, seconds).await.map_err(failure)?;
+            let mut config = config.clone();
+            if let Some(b) = args.bench_bodies {
+                let path =
+                    std::env::temp_dir().join(format!("tiltbox-gas-{}.toml", std::process::id()));
+                std::fs::write(&path, gas_scene(b)).map_err(anyhow::Error::from)?;
+                config.scene = Some(path);
+                config.limits.max_bodies = config.limits.max_bodies.max(b + 4);
+            }
+            let report = bench_net(&config, seconds, args.bench_viewers)
+                .await
+                .map_err(failure)?;
             println!("{report}");
             return Ok(ExitCode::SUCCESS);
         }

@@ -1,6 +1,8 @@
-//! `tiltbox serve --bench-net SECONDS`: run the daemon with an in-process client on a second
-//! Zenoh session over TCP loopback, and measure tick lateness, publish-to-receive latency of
-//! snapshots and snapshot sizes.
+//! `tiltbox serve --bench-net SECONDS [--bench-viewers N] [--bench-bodies B]`: run the daemon
+//! with an in-process client on a second Zenoh session over TCP loopback, and measure tick
+//! lateness, publish-to-receive latency of snapshots and snapshot sizes; N more viewer
+//! sessions (the fan-out) count what each receives. [`gas_scene`] is a scene of B bodies that
+//! never rest, for the fan-out at scale.
 
 use super::config::{ServerConfig, ZenohSettings};
 use super::net::{Server, ServerOptions, ServiceError};
@@ -38,6 +40,46 @@ pub struct BenchReport {
     pub delta: (usize, usize),
     /// Median delta size among deltas that carried at least one pose, and their median poses.
     pub moving_delta: (usize, usize),
+    /// Viewer sessions besides the measuring client.
+    pub viewers: usize,
+    /// Snapshots a second received per viewer: the slowest and the median viewer.
+    pub viewer_hz: [f64; 2],
+    /// Bytes a second received per viewer (median), and by all viewers together.
+    pub viewer_bytes_per_s: [f64; 2],
+}
+
+/// A scene of `bodies` discs (radius 0.1 m, 0.4 m apart) in a closed box, no gravity, no
+/// friction, fully elastic, each with its own velocity (1 to 3 m/s): bodies that never come to
+/// rest, so every delta carries them all.
+pub fn gas_scene(bodies: u32) -> String {
+    let side = (bodies as f64).sqrt().ceil().max(1.0) as u32;
+    let half = side as f64 * 0.2 + 0.5;
+    let mut s = format!(
+        "name = \"gas of {bodies}\"\ngravity = [0.0, 0.0]\n\n[settings]\nenable_sleep = false\n"
+    );
+    let wall = |x: f64, y: f64, w: f64, h: f64| {
+        format!(
+            "\n[[body]]\nstatic = true\nshape = {{ type = \"rect\", width = {w}, height = {h} }}\n\
+             position = [{x}, {y}]\n"
+        )
+    };
+    s += &wall(0.0, -half - 0.25, 2.0 * half + 1.0, 0.5);
+    s += &wall(0.0, half + 0.25, 2.0 * half + 1.0, 0.5);
+    s += &wall(-half - 0.25, 0.0, 0.5, 2.0 * half);
+    s += &wall(half + 0.25, 0.0, 0.5, 2.0 * half);
+    for i in 0..bodies {
+        let (col, row) = ((i % side) as f64, (i / side) as f64);
+        let (x, y) = (-half + 0.7 + col * 0.4, -half + 0.7 + row * 0.4);
+        let a = i as f64 * 2.399_963; // the golden angle: directions spread evenly
+        let speed = 1.0 + (i % 3) as f64;
+        s += &format!(
+            "\n[[body]]\nshape = {{ type = \"circle\", radius = 0.1 }}\nposition = [{x:.3}, {y:.3}]\n\
+             velocity = [{:.3}, {:.3}]\ndensity = 1.0\nfriction = 0.0\nrestitution = 1.0\n",
+            speed * a.cos(),
+            speed * a.sin()
+        );
+    }
+    s
 }
 
 fn percentiles(mut v: Vec<u32>) -> [u32; 3] {
@@ -47,6 +89,15 @@ fn percentiles(mut v: Vec<u32>) -> [u32; 3] {
     v.sort_unstable();
     let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
     [at(0.5), at(0.99), *v.last().unwrap()]
+}
+
+/// The smallest and the median of `v` (0 for none).
+fn spread(mut v: Vec<f64>) -> [f64; 2] {
+    if v.is_empty() {
+        return [0.0; 2];
+    }
+    v.sort_by(f64::total_cmp);
+    [v[0], v[v.len() / 2]]
 }
 
 fn median_pair(mut v: Vec<(usize, usize)>) -> (usize, usize) {
@@ -87,12 +138,22 @@ impl fmt::Display for BenchReport {
             "delta (median):           {} bytes, {} poses",
             self.delta.0, self.delta.1
         )?;
-        write!(
+        writeln!(
             f,
             "delta with motion (med.): {} bytes, {} poses, {} bytes/body",
             self.moving_delta.0,
             self.moving_delta.1,
             per(self.moving_delta)
+        )?;
+        write!(
+            f,
+            "fan-out:                  {} viewers, {:.1} Hz slowest, {:.1} Hz median, {:.1} kB/s \
+             each (median), {:.2} MB/s in all",
+            self.viewers,
+            self.viewer_hz[0],
+            self.viewer_hz[1],
+            self.viewer_bytes_per_s[0] / 1e3,
+            self.viewer_bytes_per_s[1] / 1e6
         )
     }
 }
@@ -105,8 +166,12 @@ struct Received {
 }
 
 /// Run the daemon configured by `config` for `seconds` with a client connected to its first
-/// listen endpoint, and report.
-pub async fn bench_net(config: &ServerConfig, seconds: f64) -> Result<BenchReport, ServiceError> {
+/// listen endpoint and `viewers` more viewer sessions, and report.
+pub async fn bench_net(
+    config: &ServerConfig,
+    seconds: f64,
+    viewers: usize,
+) -> Result<BenchReport, ServiceError> {
     let epoch = Instant::now();
     let published: Arc<Vec<AtomicU64>> = Arc::new((0..SLOTS).map(|_| AtomicU64::new(0)).collect());
     let hook = {
@@ -137,9 +202,33 @@ pub async fn bench_net(config: &ServerConfig, seconds: f64) -> Result<BenchRepor
         ..ZenohSettings::default()
     }
     .zenoh_config()?;
-    let session = zenoh::open(client)
+    let session = zenoh::open(client.clone())
         .await
         .map_err(|e| ServiceError::Zenoh(format!("client session: {e}")))?;
+    // The fan-out: each viewer its own session, counting snapshots and bytes.
+    let mut fan = Vec::with_capacity(viewers);
+    for _ in 0..viewers {
+        let s = zenoh::open(client.clone())
+            .await
+            .map_err(|e| ServiceError::Zenoh(format!("viewer session: {e}")))?;
+        let counts: Arc<[AtomicU64; 2]> = Arc::default();
+        let c = counts.clone();
+        let sub = s
+            .declare_subscriber(server.keys().poses())
+            .callback(move |sample| {
+                c[0].fetch_add(1, Ordering::Relaxed);
+                c[1].fetch_add(sample.payload().len() as u64, Ordering::Relaxed);
+            })
+            .await
+            .map_err(|e| ServiceError::Zenoh(format!("viewer subscriber: {e}")))?;
+        fan.push((s, sub, counts));
+    }
+    // count from here: the sessions opened one after the other, some long before
+    for (_, _, counts) in &fan {
+        counts[0].store(0, Ordering::Relaxed);
+        counts[1].store(0, Ordering::Relaxed);
+    }
+    let fan_start = Instant::now();
     let samples: Arc<Mutex<Vec<Received>>> = Arc::default();
     let sub = {
         let samples = samples.clone();
@@ -166,6 +255,17 @@ pub async fn bench_net(config: &ServerConfig, seconds: f64) -> Result<BenchRepor
             .map_err(|e| ServiceError::Zenoh(format!("client subscriber: {e}")))?
     };
     tokio::time::sleep(Duration::from_secs_f64(seconds)).await;
+    let fan_secs = fan_start.elapsed().as_secs_f64();
+    let mut per_viewer: Vec<(f64, f64)> = Vec::with_capacity(viewers);
+    for (s, sub, counts) in fan {
+        let (n, bytes) = (
+            counts[0].load(Ordering::Relaxed),
+            counts[1].load(Ordering::Relaxed),
+        );
+        per_viewer.push((n as f64 / fan_secs, bytes as f64 / fan_secs));
+        let _ = sub.undeclare().await;
+        let _ = s.close().await;
+    }
     let _ = sub.undeclare().wait();
     let _ = session.close().await;
     let summary = server.shutdown().await?;
@@ -201,5 +301,36 @@ pub async fn bench_net(config: &ServerConfig, seconds: f64) -> Result<BenchRepor
         keyframe: median_pair(keyframes),
         delta: (delta_bytes, delta_poses),
         moving_delta: median_pair(moving),
+        viewers,
+        viewer_hz: spread(per_viewer.iter().map(|v| v.0).collect()),
+        viewer_bytes_per_s: [
+            spread(per_viewer.iter().map(|v| v.1).collect())[1],
+            per_viewer.iter().map(|v| v.1).sum(),
+        ],
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_gas_scene_loads_with_its_bodies_inside_the_box() {
+        for n in [1, 7, 1000] {
+            let scene = crate::scene::Scene::from_toml_str(&gas_scene(n)).unwrap();
+            let (world, _) = scene.build_world().unwrap();
+            let dynamic: Vec<_> = world.bodies().filter(|b| !b.is_static()).collect();
+            assert_eq!(dynamic.len(), n as usize);
+            let half = (n as f64).sqrt().ceil() * 0.2 + 0.5;
+            for b in dynamic {
+                let p = b.position();
+                let inside = |v: f64| v.abs() < half - 0.1;
+                assert!(
+                    inside(p.x as f64) && inside(p.y as f64),
+                    "{p:?} outside {half}"
+                );
+                assert!(b.linear_velocity().length() >= 0.99);
+            }
+        }
+    }
 }

@@ -28,7 +28,7 @@ mod sim;
 mod tick;
 mod wire;
 
-pub use bench::{bench_net, BenchReport};
+pub use bench::{bench_net, gas_scene, BenchReport};
 pub use command::{Command, DroppedCounts, Incoming, Intake, SpawnDef};
 pub use config::{ConfigError, Limits, ServerConfig, ZenohSettings};
 pub use files::FileError;

@@ -389,7 +389,7 @@ mod tests {
             spawn[3], 0,
             "version, count, None, then the shape's variant"
         );
-        spawn[3] = 4;
+        spawn[3] = 5; // 4 is Segment since issue 17
         assert_eq!(
             decode::<Spawn>(&spawn),
             Err(DecodeError::UnknownVariant { message: "Spawn" })

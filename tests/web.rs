@@ -876,8 +876,19 @@ async fn garbage_frames_are_refused_and_the_gateway_keeps_serving() {
     w.gravity((0.0, -9.81), 5).await;
     // and the page's own connection kept receiving all along
     let f0 = page.eval("tiltbox.state.frame").await.as_u64().unwrap();
-    tokio::time::sleep(Duration::from_millis(300)).await;
-    let f1 = page.eval("tiltbox.state.frame").await.as_u64().unwrap();
+    // A page that joined between keyframes applies deltas only from the next keyframe on (at
+    // most a second at keyframe_every = 60; with 300 ms this failed whenever the keyframe was
+    // further off): allow 5 s, and say how long it took.
+    let mut f1 = f0;
+    let waited = Instant::now();
+    for _ in 0..50 {
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        f1 = page.eval("tiltbox.state.frame").await.as_u64().unwrap();
+        if f1 > f0 + 5 {
+            break;
+        }
+    }
+    println!("page frames {f0} -> {f1} after {:?}", waited.elapsed());
     let why = page
         .eval("JSON.stringify({skipped: tiltbox.snapshots.skipped, last: tiltbox.snapshots.last, key: tiltbox.snapshots.key && tiltbox.snapshots.key.frame, joined: tiltbox.state.joined, framesIn: tiltbox.metrics.framesIn, connected: tiltbox.metrics.connected})")
         .await;

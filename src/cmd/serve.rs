@@ -134,6 +134,10 @@ pub struct ServeArgs {
     #[arg(long, value_name = "B", requires = "bench_net",
           value_parser = clap::value_parser!(u32).range(1..=100_000))]
     pub bench_bodies: Option<u32>,
+    /// With --bench-net: the viewers connect through a Zenoh router session listening on
+    /// ENDPOINT (e.g. tcp/127.0.0.1:7448), which connects to the daemon, instead of directly.
+    #[arg(long, value_name = "ENDPOINT", requires = "bench_net")]
+    pub bench_router: Option<String>,
 }
 
 impl ServeArgs {
@@ -245,9 +249,14 @@ pub fn run(args: ServeArgs) -> Result<ExitCode, Failure> {
                 config.scene = Some(path);
                 config.limits.max_bodies = config.limits.max_bodies.max(b + 4);
             }
-            let report = bench_net(&config, seconds, args.bench_viewers)
-                .await
-                .map_err(failure)?;
+            let report = bench_net(
+                &config,
+                seconds,
+                args.bench_viewers,
+                args.bench_router.as_deref(),
+            )
+            .await
+            .map_err(failure)?;
             println!("{report}");
             return Ok(ExitCode::SUCCESS);
         }

@@ -1,8 +1,10 @@
-//! `tiltbox serve --bench-net SECONDS [--bench-viewers N] [--bench-bodies B]`: run the daemon
-//! with an in-process client on a second Zenoh session over TCP loopback, and measure tick
-//! lateness, publish-to-receive latency of snapshots and snapshot sizes; N more viewer
-//! sessions (the fan-out) count what each receives. [`gas_scene`] is a scene of B bodies that
-//! never rest, for the fan-out at scale.
+//! `tiltbox serve --bench-net SECONDS [--bench-viewers N] [--bench-bodies B] [--bench-router
+//! ENDPOINT]`: run the daemon with an in-process client on a second Zenoh session over TCP
+//! loopback, and measure tick lateness, publish-to-receive latency of snapshots and snapshot
+//! sizes; N more viewer sessions (the fan-out) count what each receives, connected to the
+//! daemon directly or through a Zenoh router session listening on ENDPOINT (the same router
+//! code `zenohd` runs, here in the benchmark's process). [`gas_scene`] is a scene of B bodies
+//! that never rest, for the fan-out at scale.
 
 use super::config::{ServerConfig, ZenohSettings};
 use super::net::{Server, ServerOptions, ServiceError};
@@ -42,6 +44,8 @@ pub struct BenchReport {
     pub moving_delta: (usize, usize),
     /// Viewer sessions besides the measuring client.
     pub viewers: usize,
+    /// The router endpoint the viewers connected through; None: straight to the daemon.
+    pub router: Option<String>,
     /// Snapshots a second received per viewer: the slowest and the median viewer.
     pub viewer_hz: [f64; 2],
     /// Bytes a second received per viewer (median), and by all viewers together.
@@ -147,9 +151,13 @@ impl fmt::Display for BenchReport {
         )?;
         write!(
             f,
-            "fan-out:                  {} viewers, {:.1} Hz slowest, {:.1} Hz median, {:.1} kB/s \
-             each (median), {:.2} MB/s in all",
+            "fan-out:                  {} viewers ({}), {:.1} Hz slowest, {:.1} Hz median, {:.1} \
+             kB/s each (median), {:.2} MB/s in all",
             self.viewers,
+            match &self.router {
+                Some(r) => format!("through a router at {r}"),
+                None => "straight to the daemon".to_owned(),
+            },
             self.viewer_hz[0],
             self.viewer_hz[1],
             self.viewer_bytes_per_s[0] / 1e3,
@@ -166,11 +174,13 @@ struct Received {
 }
 
 /// Run the daemon configured by `config` for `seconds` with a client connected to its first
-/// listen endpoint and `viewers` more viewer sessions, and report.
+/// listen endpoint and `viewers` more viewer sessions, and report. With `router`, the viewers
+/// connect to a router session listening there, which connects to the daemon.
 pub async fn bench_net(
     config: &ServerConfig,
     seconds: f64,
     viewers: usize,
+    router: Option<&str>,
 ) -> Result<BenchReport, ServiceError> {
     let epoch = Instant::now();
     let published: Arc<Vec<AtomicU64>> = Arc::new((0..SLOTS).map(|_| AtomicU64::new(0)).collect());
@@ -195,6 +205,7 @@ pub async fn bench_net(
         .cloned()
         .unwrap_or_else(|| "tcp/127.0.0.1:7447".into());
     // A peer that connects to the daemon and listens on nothing, as the clients are.
+    let client_endpoint = endpoint.clone();
     let client = ZenohSettings {
         mode: "peer".into(),
         listen: Vec::new(),
@@ -205,10 +216,40 @@ pub async fn bench_net(
     let session = zenoh::open(client.clone())
         .await
         .map_err(|e| ServiceError::Zenoh(format!("client session: {e}")))?;
+    // Optionally a router between the daemon and the viewers, as a deployment with zenohd has.
+    let router_session = match router {
+        Some(at) => {
+            let settings = ZenohSettings {
+                mode: "router".into(),
+                listen: vec![at.to_owned()],
+                connect: vec![client_endpoint.clone()],
+                ..ZenohSettings::default()
+            }
+            .zenoh_config()?;
+            Some(
+                zenoh::open(settings)
+                    .await
+                    .map_err(|e| ServiceError::Zenoh(format!("router session on {at}: {e}")))?,
+            )
+        }
+        None => None,
+    };
+    // Through a router the viewers are Zenoh clients: a client talks to its router only, so
+    // nothing reaches it straight from the daemon.
+    let viewer = match router {
+        Some(at) => ZenohSettings {
+            mode: "client".into(),
+            listen: Vec::new(),
+            connect: vec![at.to_owned()],
+            ..ZenohSettings::default()
+        }
+        .zenoh_config()?,
+        None => client.clone(),
+    };
     // The fan-out: each viewer its own session, counting snapshots and bytes.
     let mut fan = Vec::with_capacity(viewers);
     for _ in 0..viewers {
-        let s = zenoh::open(client.clone())
+        let s = zenoh::open(viewer.clone())
             .await
             .map_err(|e| ServiceError::Zenoh(format!("viewer session: {e}")))?;
         let counts: Arc<[AtomicU64; 2]> = Arc::default();
@@ -268,6 +309,9 @@ pub async fn bench_net(
     }
     let _ = sub.undeclare().wait();
     let _ = session.close().await;
+    if let Some(r) = router_session {
+        let _ = r.close().await;
+    }
     let summary = server.shutdown().await?;
     let samples = std::mem::take(&mut *samples.lock().unwrap_or_else(|e| e.into_inner()));
 
@@ -302,6 +346,7 @@ pub async fn bench_net(
         delta: (delta_bytes, delta_poses),
         moving_delta: median_pair(moving),
         viewers,
+        router: router.map(str::to_owned),
         viewer_hz: spread(per_viewer.iter().map(|v| v.0).collect()),
         viewer_bytes_per_s: [
             spread(per_viewer.iter().map(|v| v.1).collect())[1],

@@ -1,6 +1,6 @@
 //! Rigid bodies: their definition (what a caller asks for) and their state (what the World keeps).
 
-use super::error::{finite, non_negative, positive, unit_interval, PhysicsError};
+use super::error::{finite, finite_vec, non_negative, positive, unit_interval, PhysicsError};
 use super::math::{is_finite_vec, Real, Rot, Transform, Vec2};
 use super::shape::Shape;
 use serde::{Deserialize, Serialize};
@@ -75,6 +75,19 @@ pub struct BodyDef {
     pub restitution: Real,
 }
 
+/// `BodyDef`'s builder methods: each takes the definition, sets one field and hands it back.
+macro_rules! builder_setters {
+    ($($(#[$doc:meta])* $name:ident($arg:ident: $ty:ty) => $field:ident = $value:expr;)*) => {
+        $(
+            $(#[$doc])*
+            pub fn $name(mut self, $arg: $ty) -> Self {
+                self.$field = $value;
+                self
+            }
+        )*
+    };
+}
+
 impl BodyDef {
     /// A dynamic body of density 1 kg/m^2 at rest at `position`, friction 0.6, restitution 0.
     pub fn dynamic(shape: Shape, position: Vec2) -> BodyDef {
@@ -103,8 +116,7 @@ impl BodyDef {
         origin: Vec2,
         angle: Real,
     ) -> Result<BodyDef, PhysicsError> {
-        finite("position.x", origin.x)?;
-        finite("position.y", origin.y)?;
+        finite_vec(["position.x", "position.y"], origin)?;
         finite("angle", angle)?;
         let position = origin + Rot::from_angle(angle).rotate(offset);
         Ok(BodyDef::dynamic(shape, position).with_angle(angle))
@@ -127,56 +139,29 @@ impl BodyDef {
         }
     }
 
-    /// Set the orientation (radians).
-    pub fn with_angle(mut self, angle: Real) -> Self {
-        self.angle = angle;
-        self
-    }
-
-    /// Set the linear velocity (m/s).
-    pub fn with_velocity(mut self, v: Vec2) -> Self {
-        self.linear_velocity = v;
-        self
-    }
-
-    /// Set the angular velocity (rad/s).
-    pub fn with_angular_velocity(mut self, w: Real) -> Self {
-        self.angular_velocity = w;
-        self
-    }
-
-    /// Set the density (kg/m^2).
-    pub fn with_density(mut self, density: Real) -> Self {
-        self.mass = MassSpec::Density(density);
-        self
-    }
-
-    /// Set the total mass (kg).
-    pub fn with_mass(mut self, mass: Real) -> Self {
-        self.mass = MassSpec::Mass(mass);
-        self
-    }
-
-    /// Set the friction coefficient.
-    pub fn with_friction(mut self, friction: Real) -> Self {
-        self.friction = friction;
-        self
-    }
-
-    /// Set the coefficient of restitution.
-    pub fn with_restitution(mut self, restitution: Real) -> Self {
-        self.restitution = restitution;
-        self
+    builder_setters! {
+        /// Set the orientation (radians).
+        with_angle(angle: Real) => angle = angle;
+        /// Set the linear velocity (m/s).
+        with_velocity(v: Vec2) => linear_velocity = v;
+        /// Set the angular velocity (rad/s).
+        with_angular_velocity(w: Real) => angular_velocity = w;
+        /// Set the density (kg/m^2).
+        with_density(density: Real) => mass = MassSpec::Density(density);
+        /// Set the total mass (kg).
+        with_mass(mass: Real) => mass = MassSpec::Mass(mass);
+        /// Set the friction coefficient.
+        with_friction(friction: Real) => friction = friction;
+        /// Set the coefficient of restitution.
+        with_restitution(restitution: Real) => restitution = restitution;
     }
 
     /// Refuse anything the engine cannot simulate, naming the field and the value.
     pub fn validate(&self) -> Result<(), PhysicsError> {
         self.shape.validate()?;
-        finite("position.x", self.position.x)?;
-        finite("position.y", self.position.y)?;
+        finite_vec(["position.x", "position.y"], self.position)?;
         finite("angle", self.angle)?;
-        finite("velocity.x", self.linear_velocity.x)?;
-        finite("velocity.y", self.linear_velocity.y)?;
+        finite_vec(["velocity.x", "velocity.y"], self.linear_velocity)?;
         finite("angular_velocity", self.angular_velocity)?;
         if matches!(self.shape, Shape::Segment(_))
             && matches!(self.mass, MassSpec::Density(_) | MassSpec::Mass(_))

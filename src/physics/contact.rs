@@ -62,6 +62,26 @@ pub(crate) struct Arms {
 }
 
 impl Arms {
+    /// The six arms as words, in field order (for saved states and lane packing).
+    #[inline]
+    pub fn to_words(self) -> [Real; 6] {
+        [
+            self.rn_a, self.rn_b, self.rt_a, self.rt_b, self.ra_n, self.rb_n,
+        ]
+    }
+
+    /// The inverse of [`Arms::to_words`].
+    pub fn from_words([rn_a, rn_b, rt_a, rt_b, ra_n, rb_n]: [Real; 6]) -> Arms {
+        Arms {
+            rn_a,
+            rn_b,
+            rt_a,
+            rt_b,
+            ra_n,
+            rb_n,
+        }
+    }
+
     /// The arms of anchors `ra`, `rb` for normal `n` and tangent `t`.
     #[inline]
     pub fn new(ra: Vec2, rb: Vec2, n: Vec2, t: Vec2) -> Arms {

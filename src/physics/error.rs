@@ -1,6 +1,6 @@
 //! Typed errors for input the engine refuses.
 
-use super::math::Real;
+use super::math::{Real, Vec2};
 use thiserror::Error;
 
 /// Why the engine refused a call. Every variant names the field and the offending value,
@@ -49,6 +49,13 @@ pub(crate) fn finite(field: &'static str, value: Real) -> Result<Real, PhysicsEr
     } else {
         Err(PhysicsError::NotFinite { field, value })
     }
+}
+
+/// Check that both components of `v` are finite, naming `fields[0]` (x) or `fields[1]` (y).
+pub(crate) fn finite_vec(fields: [&'static str; 2], v: Vec2) -> Result<Vec2, PhysicsError> {
+    finite(fields[0], v.x)?;
+    finite(fields[1], v.y)?;
+    Ok(v)
 }
 
 /// Check that `value` is finite and strictly positive.

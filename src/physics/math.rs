@@ -69,6 +69,18 @@ impl Rot {
         Rot { c, s }
     }
 
+    /// `[cos, sin]`, as a saved state stores it.
+    #[inline]
+    pub fn to_cos_sin(self) -> [Real; 2] {
+        [self.c, self.s]
+    }
+
+    /// The rotation whose cosine and sine are `[c, s]` (not renormalised).
+    #[inline]
+    pub fn from_cos_sin([c, s]: [Real; 2]) -> Rot {
+        Rot { c, s }
+    }
+
     /// The angle in radians, in (-pi, pi].
     #[inline]
     pub fn angle(self) -> Real {

@@ -100,6 +100,21 @@ struct Radii {
     b: Real,
 }
 
+/// The incident edge of `polygon` against reference normal `n`: the edge whose normal is most
+/// anti-parallel to `n` (the first such, in vertex order).
+pub(super) fn incident_edge(polygon: &Polygon, n: Vec2) -> usize {
+    let mut edge = 0;
+    let mut min_dot = Real::INFINITY;
+    for (i, normal) in polygon.normals[..polygon.count].iter().enumerate() {
+        let d = n.dot(*normal);
+        if d < min_dot {
+            min_dot = d;
+            edge = i;
+        }
+    }
+    edge
+}
+
 /// Closest points between segments p1-q1 and p2-q2: (s, t) along each, both clamped to [0, 1]
 /// (the standard clamp-and-recompute solution of the 2x2 normal equations).
 pub(super) fn segment_closest(p1: Vec2, q1: Vec2, p2: Vec2, q2: Vec2) -> (Real, Real) {
@@ -220,18 +235,8 @@ fn clip_to_reference(
     // Incident edge: the edge of the other polygon whose normal is most anti-parallel to the
     // reference normal.
     let n = reference.normals[ref_edge];
-    let mut inc_edge = 0;
-    let mut min_dot = Real::INFINITY;
-    for i in 0..incident.count {
-        let d = n.dot(incident.normals[i]);
-        if d < min_dot {
-            min_dot = d;
-            inc_edge = i;
-        }
-    }
-
-    let i1 = inc_edge;
-    let i2 = (inc_edge + 1) % incident.count;
+    let i1 = incident_edge(incident, n);
+    let i2 = (i1 + 1) % incident.count;
     let seg = [incident.vertices[i1], incident.vertices[i2]];
     let r1 = reference.vertices[ref_edge];
     let r2 = reference.vertices[(ref_edge + 1) % reference.count];

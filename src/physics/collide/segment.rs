@@ -20,7 +20,7 @@
 //! "Replaced by the face normal" means the contact is rebuilt as a face contact: the other
 //! body's incident edge clipped to the segment's extent and measured along the face normal.
 
-use super::polygon::collide_polygons;
+use super::polygon::{collide_polygons, incident_edge};
 use super::{collide_polygon_circle, core, FeatureId, Manifold, ManifoldPoint};
 use crate::physics::convex::Polygon;
 use crate::physics::math::{Real, Rot, Transform, Vec2};
@@ -167,15 +167,7 @@ fn face_contact(
     let (i1, i2) = if inc.count == 1 {
         (0, 0)
     } else {
-        let mut best = 0;
-        let mut min_dot = Real::INFINITY;
-        for i in 0..inc.count {
-            let d = n.dot(inc.normals[i]);
-            if d < min_dot {
-                min_dot = d;
-                best = i;
-            }
-        }
+        let best = incident_edge(inc, n);
         (best, (best + 1) % inc.count)
     };
     let mut points = [inc.vertices[i1], inc.vertices[i2]];

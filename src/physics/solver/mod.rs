@@ -275,6 +275,28 @@ impl BlockMass {
     }
 }
 
+impl BlockMass {
+    /// The new accumulated normal impulses of a two-point contact (see [`solve_block_lcp`]).
+    ///
+    /// `vn` are the points' normal velocities (m/s) and `lambda` their accumulated impulses
+    /// (N s). Row i aims at the normal velocity `aim(i, free_i)`, where
+    /// free_i = vn_i - (K lambda)_i is its velocity with the accumulated impulse taken out.
+    #[inline]
+    pub fn solve(
+        &self,
+        lambda: [Real; 2],
+        vn: [Real; 2],
+        aim: impl Fn(usize, Real) -> Real,
+    ) -> Option<[Real; 2]> {
+        let k_lambda = self.mul(lambda);
+        let rhs = [0, 1].map(|i| {
+            let free = vn[i] - k_lambda[i];
+            free - aim(i, free)
+        });
+        solve_block_lcp(self, rhs)
+    }
+}
+
 /// Solve the two-point contact LCP exactly: find x >= 0 with w = K x + b >= 0 and x.w = 0,
 /// where x is the new accumulated normal impulse and w the excess normal velocity over the
 /// target. Enumerates the four cases (both active, only 1, only 2, none), as Box2D v2's

@@ -5,7 +5,7 @@
 //! points `iterations` times, each time solving the normal impulse (clamped so bodies only
 //! push) and the friction impulse (clamped to the Coulomb cone).
 
-use super::{apply_impulse, pair_mut, solve_block_lcp, BlockMass, SolverBody};
+use super::{apply_impulse, pair_mut, BlockMass, SolverBody};
 use crate::physics::contact::{Contact, ContactPoint};
 use crate::physics::math::{cross, cross_sv, Real, Vec2};
 use crate::physics::settings::Settings;
@@ -181,12 +181,7 @@ fn iterate(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
         let n = c.normal;
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
-        let solved = match &c.block {
-            Some(block) if settings.accumulate_impulses && c.count == 2 => {
-                block_normal(a, b, &mut c.points, n, block)
-            }
-            _ => false,
-        };
+        let solved = settings.accumulate_impulses && c.count == 2 && block_normal(a, b, c);
         if !solved {
             for p in &mut c.points[..c.count] {
                 let (ra, rb) = (p.anchor_a, p.anchor_b);
@@ -227,30 +222,23 @@ fn iterate(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
 }
 
 /// Both normal impulses of a two-point contact at once, each aiming at its bias velocity
-/// (see `solve_block_lcp`). Returns false, having applied nothing, when ill-conditioned.
-fn block_normal(
-    a: &mut SolverBody,
-    b: &mut SolverBody,
-    points: &mut [ContactPoint; 2],
-    n: Vec2,
-    block: &BlockMass,
-) -> bool {
+/// (see `solve_block_lcp`). Returns false, having applied nothing, when the contact has no
+/// well-conditioned block or no LCP case fits.
+fn block_normal(a: &mut SolverBody, b: &mut SolverBody, c: &mut Contact) -> bool {
+    let (Some(block), n) = (c.block, c.normal) else {
+        return false;
+    };
+    let points = &mut c.points;
     let ra = [points[0].anchor_a, points[1].anchor_a];
     let rb = [points[0].anchor_b, points[1].anchor_b];
     let lambda = [points[0].normal_impulse, points[1].normal_impulse];
-    let k_lambda = block.mul(lambda);
-    let mut rhs = [0.0; 2];
-    for i in 0..2 {
-        let vn = (b.v + cross_sv(b.w, rb[i]) - a.v - cross_sv(a.w, ra[i])).dot(n);
-        rhs[i] = vn - k_lambda[i] - points[i].bias;
-    }
-    let Some(x) = solve_block_lcp(block, rhs) else {
+    let vn = [0, 1].map(|i| (b.v + cross_sv(b.w, rb[i]) - a.v - cross_sv(a.w, ra[i])).dot(n));
+    let Some(x) = block.solve(lambda, vn, |i, _| points[i].bias) else {
         return false;
     };
     for i in 0..2 {
-        let applied = x[i] - lambda[i];
         points[i].normal_impulse = x[i];
-        apply_impulse(a, b, ra[i], rb[i], applied * n);
+        apply_impulse(a, b, ra[i], rb[i], (x[i] - lambda[i]) * n);
     }
     true
 }

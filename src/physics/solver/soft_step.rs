@@ -11,8 +11,8 @@
 use super::sequential::point_masses;
 use super::wide::WideSolver;
 use super::{
-    apply_along, integrate_positions, integrate_velocities, pair_mut, relative_velocity,
-    solve_block_lcp, BlockMass, Limits, Moving, SolverBody,
+    apply_along, integrate_positions, integrate_velocities, pair_mut, relative_velocity, BlockMass,
+    Limits, Moving, SolverBody,
 };
 use crate::physics::contact::{Arms, Contact, ContactPoint};
 use crate::physics::math::{Real, Vec2, PI};
@@ -32,6 +32,20 @@ pub(crate) struct Softness {
 }
 
 impl Softness {
+    /// The three coefficients as words, in field order (for saved states).
+    pub fn to_words(self) -> [Real; 3] {
+        [self.bias_rate, self.mass_scale, self.impulse_scale]
+    }
+
+    /// The inverse of [`Softness::to_words`].
+    pub fn from_words([bias_rate, mass_scale, impulse_scale]: [Real; 3]) -> Softness {
+        Softness {
+            bias_rate,
+            mass_scale,
+            impulse_scale,
+        }
+    }
+
     /// A rigid constraint: full correction, no compliance.
     pub const RIGID: Softness = Softness {
         bias_rate: 0.0,
@@ -359,15 +373,12 @@ fn block_normal(
     coeffs: &[(Real, Real, Real); 2],
 ) -> bool {
     let lambda = [points[0].normal_impulse, points[1].normal_impulse];
-    let k_lambda = block.mul(lambda);
-    let mut rhs = [0.0; 2];
-    for i in 0..2 {
-        let vn = relative_velocity(a, b, n, points[i].arms.rn_a, points[i].arms.rn_b);
+    let vn = [0, 1].map(|i| relative_velocity(a, b, n, points[i].arms.rn_a, points[i].arms.rn_b));
+    let aim = |i: usize, free: Real| {
         let (bias, _, impulse_scale) = coeffs[i];
-        let target = impulse_scale * (vn - k_lambda[i]) - bias;
-        rhs[i] = vn - k_lambda[i] - target;
-    }
-    let Some(x) = solve_block_lcp(block, rhs) else {
+        impulse_scale * free - bias
+    };
+    let Some(x) = block.solve(lambda, vn, aim) else {
         return false;
     };
     for i in 0..2 {

@@ -72,6 +72,24 @@ struct Bundle {
     p: [PointLanes; 2],
 }
 
+impl Bundle {
+    /// Both sides' body lanes (with this step's motion when `motion`).
+    #[inline]
+    fn gather(&self, bodies: &[SolverBody], motion: bool) -> (BodyLanes, BodyLanes) {
+        (
+            BodyLanes::gather(bodies, &self.a, self.inv_mass_a, self.inv_i_a, motion),
+            BodyLanes::gather(bodies, &self.b, self.inv_mass_b, self.inv_i_b, motion),
+        )
+    }
+
+    /// Write both sides' velocities back.
+    #[inline]
+    fn scatter(&self, bodies: &mut [SolverBody], a: &BodyLanes, b: &BodyLanes) {
+        a.scatter(bodies, &self.a);
+        b.scatter(bodies, &self.b);
+    }
+}
+
 /// Buffers for the wide solve, kept by the World so a steady step does not allocate.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct WideSolver {
@@ -249,10 +267,7 @@ impl WideSolver {
     /// Apply each contact's accumulated impulses (the warm start of a substep).
     pub fn warm_start(&mut self, bodies: &mut [SolverBody]) {
         for bundle in &mut self.bundles {
-            let mut a =
-                BodyLanes::gather(bodies, &bundle.a, bundle.inv_mass_a, bundle.inv_i_a, false);
-            let mut b =
-                BodyLanes::gather(bodies, &bundle.b, bundle.inv_mass_b, bundle.inv_i_b, false);
+            let (mut a, mut b) = bundle.gather(bodies, false);
             let (nx, ny) = (bundle.nx, bundle.ny);
             let (tx, ty) = (ny, -nx);
             for p in &mut bundle.p {
@@ -260,8 +275,7 @@ impl WideSolver {
                 BodyLanes::apply(&mut a, &mut b, nx, ny, p.rn_a, p.rn_b, p.normal_impulse);
                 BodyLanes::apply(&mut a, &mut b, tx, ty, p.rt_a, p.rt_b, p.tangent_impulse);
             }
-            a.scatter(bodies, &bundle.a);
-            b.scatter(bodies, &bundle.b);
+            bundle.scatter(bodies, &a, &b);
         }
     }
 
@@ -286,10 +300,7 @@ impl WideSolver {
         let inv_h = Lanes::splat(inv_h);
         let push_out = Lanes::splat(-max_push_out);
         for bundle in &mut self.bundles {
-            let mut a =
-                BodyLanes::gather(bodies, &bundle.a, bundle.inv_mass_a, bundle.inv_i_a, true);
-            let mut b =
-                BodyLanes::gather(bodies, &bundle.b, bundle.inv_mass_b, bundle.inv_i_b, true);
+            let (mut a, mut b) = bundle.gather(bodies, true);
             let (nx, ny) = (bundle.nx, bundle.ny);
             let dp_n = (b.dpx - a.dpx) * nx + (b.dpy - a.dpy) * ny;
 
@@ -374,8 +385,7 @@ impl WideSolver {
                 }
             }
 
-            a.scatter(bodies, &bundle.a);
-            b.scatter(bodies, &bundle.b);
+            bundle.scatter(bodies, &a, &b);
         }
     }
 
@@ -477,13 +487,9 @@ fn pack(
             field[lane] = value;
         }
         for (j, p) in c.points[..c.count].iter().enumerate() {
-            let values = [
-                p.arms.rn_a,
-                p.arms.rn_b,
-                p.arms.rt_a,
-                p.arms.rt_b,
-                p.arms.ra_n,
-                p.arms.rb_n,
+            let mut values = [0.0; 13];
+            values[..6].copy_from_slice(&p.arms.to_words());
+            values[6..].copy_from_slice(&[
                 p.adjusted_separation,
                 p.normal_mass,
                 p.tangent_mass,
@@ -491,7 +497,7 @@ fn pack(
                 p.tangent_impulse,
                 p.total_normal_impulse,
                 p.max_normal_impulse,
-            ];
+            ]);
             for (field, value) in pts[j].iter_mut().zip(values) {
                 field[lane] = value;
             }

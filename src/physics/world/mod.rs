@@ -10,7 +10,7 @@ use super::body::{Body, BodyDef, BodyId};
 use super::broad_phase::{pair_of, Proxy, SweepAndPrune};
 use super::collide::collide;
 use super::contact::{Contact, ContactInfo, ContactPoint, ContactPointInfo};
-use super::error::{finite, positive, PhysicsError};
+use super::error::{finite, finite_vec, positive, PhysicsError};
 use super::math::{cross, Real, Rot, Vec2};
 use super::settings::{Settings, SolverKind};
 use super::solver::soft_step::Softness;
@@ -83,8 +83,7 @@ impl World {
     /// An empty world with validated `settings` and `gravity` (m/s^2).
     pub fn new(settings: Settings, gravity: Vec2) -> Result<World, PhysicsError> {
         settings.validate()?;
-        finite("gravity.x", gravity.x)?;
-        finite("gravity.y", gravity.y)?;
+        finite_vec(["gravity.x", "gravity.y"], gravity)?;
         Ok(World::with_settings(settings, gravity))
     }
 
@@ -137,8 +136,7 @@ impl World {
 
     /// Set gravity (m/s^2), effective from the next step.
     pub fn set_gravity(&mut self, gravity: Vec2) -> Result<(), PhysicsError> {
-        finite("gravity.x", gravity.x)?;
-        finite("gravity.y", gravity.y)?;
+        finite_vec(["gravity.x", "gravity.y"], gravity)?;
         if gravity != self.gravity {
             // A tilt changes what "at rest" means for everything.
             self.wake_all();
@@ -295,11 +293,8 @@ impl World {
 
     /// Add a force (N) through the centre of mass for the next step.
     pub fn apply_force(&mut self, id: BodyId, force: Vec2) -> Result<(), PhysicsError> {
-        finite("force.x", force.x)?;
-        finite("force.y", force.y)?;
-        let b = self.body_mut(id)?;
-        b.force += force;
-        Ok(())
+        let centre = self.position_of(id)?;
+        self.apply_force_at(id, force, centre)
     }
 
     /// Add a force (N) at a world point (m) for the next step: force plus torque r x F.
@@ -309,10 +304,8 @@ impl World {
         force: Vec2,
         point: Vec2,
     ) -> Result<(), PhysicsError> {
-        finite("force.x", force.x)?;
-        finite("force.y", force.y)?;
-        finite("point.x", point.x)?;
-        finite("point.y", point.y)?;
+        finite_vec(["force.x", "force.y"], force)?;
+        finite_vec(["point.x", "point.y"], point)?;
         let b = self.body_mut(id)?;
         b.force += force;
         b.torque += cross(point - b.position, force);
@@ -329,11 +322,15 @@ impl World {
 
     /// Apply an impulse (N s) at the centre of mass now: v += P / m.
     pub fn apply_impulse(&mut self, id: BodyId, impulse: Vec2) -> Result<(), PhysicsError> {
-        let p = self
-            .body(id)
+        let centre = self.position_of(id)?;
+        self.apply_impulse_at(id, impulse, centre)
+    }
+
+    /// A body's centre of mass (m), or `UnknownBody`.
+    fn position_of(&self, id: BodyId) -> Result<Vec2, PhysicsError> {
+        self.body(id)
             .map(|b| b.position)
-            .ok_or(PhysicsError::UnknownBody(id))?;
-        self.apply_impulse_at(id, impulse, p)
+            .ok_or(PhysicsError::UnknownBody(id))
     }
 
     /// Apply an impulse (N s) at a world point (m) now: v += P / m, w += (r x P) / I.
@@ -343,10 +340,8 @@ impl World {
         impulse: Vec2,
         point: Vec2,
     ) -> Result<(), PhysicsError> {
-        finite("impulse.x", impulse.x)?;
-        finite("impulse.y", impulse.y)?;
-        finite("point.x", point.x)?;
-        finite("point.y", point.y)?;
+        finite_vec(["impulse.x", "impulse.y"], impulse)?;
+        finite_vec(["point.x", "point.y"], point)?;
         let max_v = self.settings.max_linear_speed;
         let max_w = self.settings.max_rotation * 1e3;
         let b = self.body_mut(id)?;
@@ -367,8 +362,7 @@ impl World {
         linear: Vec2,
         angular: Real,
     ) -> Result<(), PhysicsError> {
-        finite("velocity.x", linear.x)?;
-        finite("velocity.y", linear.y)?;
+        finite_vec(["velocity.x", "velocity.y"], linear)?;
         finite("angular_velocity", angular)?;
         let radius = self
             .body(id)

@@ -370,7 +370,8 @@ mod tests {
         let msg = |pts: &[Vec2]| Polygon::new(pts).unwrap_err().to_string();
         let v = |pts: &[(Real, Real)]| pts.iter().map(|&(x, y)| vec2(x, y)).collect::<Vec<_>>();
         // (vertices, what the message must contain)
-        let cases: [(&[(Real, Real)], &[&str]); 6] = [
+        type Case<'a> = (&'a [(Real, Real)], &'a [&'a str]);
+        let cases: [Case; 6] = [
             (
                 &[(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)],
                 &["shape.vertices[1]", "clockwise"],

@@ -6,19 +6,13 @@
 
 use super::{FeatureId, Manifold, ManifoldPoint};
 use crate::physics::convex::Polygon;
-use crate::physics::math::{Real, Transform, Vec2};
+use crate::physics::math::{Real, Rot, Transform, Vec2};
 
-/// Contact between a circle of radius `ra` at `xf_a` and one of radius `rb` at `xf_b`; the
-/// normal points from A's centre to B's. Concentric circles push apart along +y.
-pub fn collide_circles(
-    ra: Real,
-    xf_a: Transform,
-    rb: Real,
-    xf_b: Transform,
-    margin: Real,
-) -> Manifold {
-    // Work in A's frame so far-from-origin worlds subtract positions once.
-    let d = xf_a.q.inv_rotate(xf_b.p - xf_a.p);
+/// Contact between a circle of radius `ra` centred at `pa` and one of radius `rb` at `pb`
+/// (world frame, m); the normal points from A's centre to B's. Concentric circles push apart
+/// along +y. A circle has no orientation, so only the centres matter.
+pub fn collide_circles(ra: Real, pa: Vec2, rb: Real, pb: Vec2, margin: Real) -> Manifold {
+    let d = pb - pa;
     let dist = d.length();
     let separation = dist - ra - rb;
     if separation > margin {
@@ -29,7 +23,11 @@ pub fn collide_circles(
     } else {
         Vec2::Y
     };
-    one_point(xf_a, n, n * (ra + 0.5 * separation), separation, 0)
+    let centre_a = Transform {
+        p: pa,
+        q: Rot::IDENTITY,
+    };
+    one_point(centre_a, n, n * (ra + 0.5 * separation), separation, 0)
 }
 
 /// Contact between polygon `a` grown by `ra` (a rectangle, polygon or capsule core) at `xf_a`

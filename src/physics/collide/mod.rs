@@ -83,7 +83,7 @@ pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: R
             collide_rects(*ha, xf_a, *hb, xf_b, margin)
         }
         (Shape::Circle { radius: ra }, Shape::Circle { radius: rb }) => {
-            collide_circles(*ra, xf_a, *rb, xf_b, margin)
+            collide_circles(*ra, xf_a.p, *rb, xf_b.p, margin)
         }
         (_, Shape::Circle { radius: rb }) => {
             let (core_a, ra) = core(a);

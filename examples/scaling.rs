@@ -1,5 +1,5 @@
 //! How the per-body paths of the daemon scale with the number of bodies: a scene file read
-//! and built, spawning through the daemon's command path, a pose keyframe, the `…/scene`
+//! and built, spawning and removing through the daemon's command path, a pose keyframe, the `…/scene`
 //! reply, a checkpoint written and read back, and a journal read and replayed. Each should
 //! cost the same per body at 10k, 50k and 100k bodies (the last column: per-body time at N
 //! over per-body time at 10k; 1.0 is linear, 5 or 10 would be quadratic).
@@ -15,7 +15,7 @@
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
-use tiltbox::protocol::{encode, CommandKey, ShapeSpec, Spawn, SpawnBody, Vector};
+use tiltbox::protocol::{encode, BodyRef, CommandKey, Remove, ShapeSpec, Spawn, SpawnBody, Vector};
 use tiltbox::scene::Scene;
 use tiltbox::service::journal::{replay, Journal, JournalWriter};
 use tiltbox::service::{
@@ -159,6 +159,44 @@ fn main() {
         );
 
         let sim = Simulation::new(&c, SceneSource::Given(Box::new(scene.clone()))).expect("sim");
+        // Every dynamic body removed, 64 ids a command: every other body first, then the
+        // rest, so that removals hit the whole World, not its end.
+        let dynamic: Vec<BodyRef> = sim
+            .world()
+            .bodies()
+            .filter(|b| !b.is_static())
+            .map(|b| BodyRef::from(b.id()))
+            .collect();
+        let order: Vec<BodyRef> = dynamic
+            .iter()
+            .step_by(2)
+            .chain(dynamic.iter().skip(1).step_by(2))
+            .copied()
+            .collect();
+        let removals: Vec<Vec<u8>> = order
+            .chunks(PER_SPAWN)
+            .map(|ids| encode(&Remove { ids: ids.to_vec() }).expect("encodable"))
+            .collect();
+        record(
+            "removed, 64 a command (parse + apply)",
+            best(
+                || Simulation::new(&c, SceneSource::Given(Box::new(scene.clone()))).expect("sim"),
+                |mut sim| {
+                    for p in &removals {
+                        let command = parse_command(CommandKey::Remove, p, &c.limits);
+                        let event = sim.apply(Incoming {
+                            key: CommandKey::Remove,
+                            command,
+                        });
+                        assert!(
+                            matches!(event, Some(ref e) if matches!(e.kind, tiltbox::protocol::EventKind::Removed { .. })),
+                            "{event:?}"
+                        );
+                    }
+                    sim
+                },
+            ),
+        );
         record(
             "pose keyframe built and encoded",
             best(

@@ -447,3 +447,64 @@ fn impulses_and_forces_follow_newton() {
         "forces cleared after the step"
     );
 }
+
+/// Three rows of boxes on the ground, left to settle (some asleep): the World to remove from.
+fn rows_of_boxes() -> (World, Vec<BodyId>) {
+    let mut w = world(Settings::default(), vec2(0.0, -10.0));
+    ground(&mut w, 0.0, 40.0, 1.0).unwrap();
+    let mut ids = Vec::new();
+    for row in 0..3 {
+        for col in 0..8 {
+            let p = vec2(col as Real * 3.0 - 10.0, 0.5 + row as Real * 1.0);
+            let def = BodyDef::dynamic(Shape::rect(1.0, 1.0), p);
+            ids.push(w.add_body(&def).unwrap());
+        }
+    }
+    run(&mut w, 3.0);
+    (w, ids)
+}
+
+#[test]
+fn removing_bodies_together_equals_removing_them_one_by_one() {
+    // Every third box (bottom, middle and top rows): the boxes above a removed bottom box
+    // fall, and must do so the same way whichever call removed it.
+    let (mut together, ids) = rows_of_boxes();
+    let mut one_by_one = together.clone();
+    let doomed: Vec<BodyId> = ids.iter().copied().step_by(3).collect();
+    let removed = together.remove_bodies(&doomed).unwrap();
+    assert_eq!(removed.len(), doomed.len());
+    assert!(
+        removed.iter().zip(&doomed).all(|(b, &id)| b.id() == id),
+        "in the order given"
+    );
+    for &id in &doomed {
+        one_by_one.remove_body(id).unwrap();
+    }
+    assert_eq!(together.body_count(), 1 + 24 - doomed.len());
+    assert!(doomed.iter().all(|&id| together.body(id).is_none()));
+    let top_before: Real = together.bodies().map(|b| b.position().y).sum();
+    run(&mut together, 2.0);
+    run(&mut one_by_one, 2.0);
+    assert_eq!(together.state_hash(), one_by_one.state_hash());
+    // Something did fall (the boxes above removed ones), so the comparison covered motion.
+    let top_after: Real = together.bodies().map(|b| b.position().y).sum();
+    assert!(top_before - top_after > 0.5, "{top_before} -> {top_after}");
+}
+
+#[test]
+fn a_bad_list_of_bodies_removes_nothing() {
+    let (mut w, ids) = rows_of_boxes();
+    let hash = w.state_hash();
+    let err = w.remove_bodies(&[ids[0], ids[5], ids[0]]).unwrap_err();
+    assert!(err.to_string().contains("listed twice"), "{err}");
+    let stale = w.remove_body(ids[7]).map(|b| b.id()).unwrap();
+    let hash_after_one = w.state_hash();
+    assert_ne!(hash, hash_after_one);
+    let err = w.remove_bodies(&[ids[1], stale]).unwrap_err();
+    assert!(err.to_string().contains("no body with id"), "{err}");
+    assert_eq!(w.state_hash(), hash_after_one, "nothing half-removed");
+    assert!(w.body(ids[0]).is_some() && w.body(ids[1]).is_some());
+    // A live id is found from its two numbers, a stale one is not.
+    assert_eq!(w.live_id(ids[1].index(), ids[1].generation()), Some(ids[1]));
+    assert_eq!(w.live_id(stale.index(), stale.generation()), None);
+}

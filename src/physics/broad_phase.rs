@@ -65,6 +65,11 @@ pub(crate) struct SweepAndPrune {
     fat_valid: bool,
     /// How many sweeps have run (the steps in between reused the fat pairs).
     sweeps: u64,
+    /// Slots freed since the lists were last compacted, flagged by slot in `dead` (removal
+    /// marks them, the next query drops them in one pass: removing k bodies costs k, not k
+    /// passes over the lists).
+    dead: Vec<bool>,
+    dead_count: usize,
 }
 
 /// A body's box in a sweep order, with its slot.
@@ -99,6 +104,10 @@ impl SortedBox {
 impl SweepAndPrune {
     /// A body slot came alive; `passive` for static or sleeping bodies.
     pub fn insert(&mut self, index: u32, passive: bool) {
+        if self.dead.get(index as usize).copied().unwrap_or(false) {
+            // The slot is reused before its old entry was dropped.
+            self.compact();
+        }
         if passive {
             self.passive.push(index);
             self.passive_dirty = true;
@@ -108,11 +117,31 @@ impl SweepAndPrune {
         self.fat_valid = false;
     }
 
-    /// A body slot was freed.
-    pub fn remove(&mut self, index: u32) {
-        self.active.retain(|&i| i != index);
-        self.passive.retain(|&i| i != index);
+    /// Body slots were freed. Their entries are dropped by the next query (or insert into a
+    /// freed slot), in one pass however many went.
+    pub fn remove(&mut self, slots: &[u32]) {
+        for &i in slots {
+            let i = i as usize;
+            if i >= self.dead.len() {
+                self.dead.resize(i + 1, false);
+            }
+            if !std::mem::replace(&mut self.dead[i], true) {
+                self.dead_count += 1;
+            }
+        }
         self.fat_valid = false;
+    }
+
+    /// Drop the entries of freed slots from both lists.
+    fn compact(&mut self) {
+        if self.dead_count == 0 {
+            return;
+        }
+        let dead = |i: &u32| self.dead.get(*i as usize).copied().unwrap_or(false);
+        self.active.retain(|i| !dead(i));
+        self.passive.retain(|i| !dead(i));
+        self.dead.iter_mut().for_each(|d| *d = false);
+        self.dead_count = 0;
     }
 
     /// Move bodies between the lists (they fell asleep, or woke up).
@@ -139,7 +168,8 @@ impl SweepAndPrune {
     }
 
     /// True when no body is awake and dynamic.
-    pub fn active_is_empty(&self) -> bool {
+    pub fn active_is_empty(&mut self) -> bool {
+        self.compact();
         self.active.is_empty()
     }
 
@@ -147,6 +177,8 @@ impl SweepAndPrune {
     pub fn clear(&mut self) {
         self.active.clear();
         self.passive.clear();
+        self.dead.clear();
+        self.dead_count = 0;
         self.fat_valid = false;
     }
 
@@ -154,7 +186,7 @@ impl SweepAndPrune {
     /// overlap, sorted ascending. `proxies` is indexed by slot.
     pub fn find_pairs(&mut self, proxies: &[Proxy], out: &mut Vec<u64>) {
         out.clear();
-        if self.active.is_empty() {
+        if self.active_is_empty() {
             return;
         }
         let inside = |i: &u32| {
@@ -308,11 +340,15 @@ mod tests {
     }
 
     /// The pairs a full search finds: every active-involving pair of overlapping boxes.
-    fn brute_force(proxies: &[Proxy], active: &[bool]) -> Vec<(u32, u32)> {
+    fn brute_force(proxies: &[Proxy], active: &[bool], alive: &[bool]) -> Vec<(u32, u32)> {
         let mut pairs = Vec::new();
         for a in 0..proxies.len() {
             for b in a + 1..proxies.len() {
-                if (active[a] || active[b]) && proxies[a].aabb.overlaps(&proxies[b].aabb) {
+                if alive[a]
+                    && alive[b]
+                    && (active[a] || active[b])
+                    && proxies[a].aabb.overlaps(&proxies[b].aabb)
+                {
                     pairs.push((a as u32, b as u32));
                 }
             }
@@ -324,8 +360,8 @@ mod tests {
     fn kept_fat_pairs_give_exactly_the_pairs_of_a_full_search() {
         // 60 unit boxes on a jittered grid; each step every active box moves by up to 4 mm
         // (mostly inside its fat box, so the kept pairs are filtered) and every 25th step
-        // one jumps 0.3 m (past FAT_MARGIN, so the pairs are swept again), and bodies fall
-        // asleep and wake. Every step must agree with a search over all pairs.
+        // one jumps 0.3 m (past FAT_MARGIN, so the pairs are swept again); bodies fall
+        // asleep, wake, and are removed. Every step must agree with a search over all pairs.
         let mut seed = 0x9e37_79b9_u32;
         let mut rand = move || {
             seed ^= seed << 13;
@@ -341,6 +377,7 @@ mod tests {
             .collect();
         let mut active = vec![true; 60];
         active[0] = false; // a static body
+        let mut alive = vec![true; 60];
         let mut sap = SweepAndPrune::default();
         for (i, &a) in active.iter().enumerate() {
             sap.insert(i as u32, !a);
@@ -364,9 +401,22 @@ mod tests {
                 active[i] = !active[i];
                 sap.set_passive(&[i as u32], !active[i]);
             }
+            // Bodies removed three at a time, and one slot reused (inserted again) before
+            // the next query has dropped its old entry.
+            if step % 40 == 20 {
+                let gone = [step % 60, (step + 7) % 60, (step + 31) % 60];
+                for &i in &gone {
+                    alive[i] = false;
+                }
+                sap.remove(&gone.map(|i| i as u32));
+                if step % 80 == 20 {
+                    alive[gone[0]] = true;
+                    sap.insert(gone[0] as u32, !active[gone[0]]);
+                }
+            }
             sap.find_pairs(&proxies, &mut out);
             let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
-            assert_eq!(pairs, brute_force(&proxies, &active), "step {step}");
+            assert_eq!(pairs, brute_force(&proxies, &active, &alive), "step {step}");
         }
         // Both paths ran: the 14 jumps of dynamic bodies and the 8 sleep changes swept (some
         // on the same step), and most steps reused the kept pairs (otherwise this tested only

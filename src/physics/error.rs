@@ -37,6 +37,9 @@ pub enum PhysicsError {
         /// What is wrong with it, quoting the value.
         reason: String,
     },
+    /// A list of bodies names one of them twice.
+    #[error("body {0} is listed twice")]
+    ListedTwice(super::body::BodyId),
     /// The World already holds as many bodies as a body id can address.
     #[error("the world is full ({0} bodies)")]
     Full(usize),

@@ -383,7 +383,9 @@ impl SnapshotEncoder {
 
     /// A body was removed: deltas until the next keyframe say so if the keyframe held it.
     pub fn forget(&mut self, id: BodyRef) {
-        if self.key.contains_key(&id) && !self.gone.contains(&id) {
+        // A set, deduplicated when encoded: looking for `id` here made removing k bodies
+        // cost k^2.
+        if self.key.contains_key(&id) {
             self.gone.push(id);
         }
     }
@@ -413,6 +415,7 @@ impl SnapshotEncoder {
             m.reference = frame.saturating_sub(self.key_frame).max(1);
             m.gone.extend_from_slice(&self.gone);
             m.gone.sort_unstable();
+            m.gone.dedup();
         }
         for (id, [x, y, a]) in bodies {
             let q = [

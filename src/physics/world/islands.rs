@@ -181,22 +181,27 @@ impl World {
         if self.wake_queue.is_empty() {
             return;
         }
-        self.changed.clear();
-        for k in 0..self.wake_queue.len() {
-            let i = self.wake_queue[k] as usize;
-            let Some(island) = self.slots[i]
+        // The islands to wake, then one pass over the bodies (not one per island).
+        let slots = &self.slots;
+        let asleep_in = |i: &u32| {
+            slots[*i as usize]
                 .body
                 .as_ref()
                 .filter(|b| !b.awake)
                 .map(|b| b.sleep_island)
-            else {
-                continue;
-            };
+        };
+        let islands = &mut self.waking_islands;
+        islands.clear();
+        islands.extend(self.wake_queue.iter().filter_map(asleep_in));
+        islands.sort_unstable();
+        islands.dedup();
+        self.changed.clear();
+        if !islands.is_empty() {
             for (j, slot) in self.slots.iter_mut().enumerate() {
                 if let Some(b) = slot
                     .body
                     .as_mut()
-                    .filter(|b| !b.awake && b.sleep_island == island)
+                    .filter(|b| !b.awake && islands.binary_search(&b.sleep_island).is_ok())
                 {
                     b.awake = true;
                     b.sleep_time = 0.0;

@@ -71,6 +71,10 @@ pub struct World {
     island_parent: Vec<u32>,
     island_rest: Vec<Real>,
     changed: Vec<u32>,
+    /// Scratch for `wake_queued`: the sleeping islands to wake, sorted.
+    waking_islands: Vec<u32>,
+    /// Scratch for `remove_bodies`: a flag per slot, all false between calls.
+    removing: Vec<bool>,
 }
 
 impl Default for World {
@@ -113,6 +117,8 @@ impl World {
             island_parent: Vec::new(),
             island_rest: Vec::new(),
             changed: Vec::new(),
+            waking_islands: Vec::new(),
+            removing: Vec::new(),
         }
     }
 
@@ -190,24 +196,71 @@ impl World {
 
     /// Remove a body and every contact it had; returns the removed body.
     pub fn remove_body(&mut self, id: BodyId) -> Result<Body, PhysicsError> {
-        self.body(id).ok_or(PhysicsError::UnknownBody(id))?;
-        // Whatever rested on this body must notice it is gone.
-        let i = id.index;
+        let mut removed = self.remove_bodies(&[id])?;
+        Ok(removed.pop().expect("one id, one body"))
+    }
+
+    /// Remove several bodies and every contact they had, all or none: each id must name a
+    /// live body, once. One pass over the contacts and the broad phase however many go
+    /// (removing them one at a time costs a pass each). Returns the bodies in the order given.
+    pub fn remove_bodies(&mut self, ids: &[BodyId]) -> Result<Vec<Body>, PhysicsError> {
+        // Flags set for the ids only (and cleared again), so a short list costs little.
+        let mut gone = std::mem::take(&mut self.removing);
+        gone.resize(self.slots.len(), false);
+        let clear = |gone: &mut Vec<bool>| {
+            for id in ids {
+                if let Some(flag) = gone.get_mut(id.index as usize) {
+                    *flag = false;
+                }
+            }
+        };
+        for &id in ids {
+            let refused = if self.body(id).is_none() {
+                Some(PhysicsError::UnknownBody(id))
+            } else if std::mem::replace(&mut gone[id.index as usize], true) {
+                Some(PhysicsError::ListedTwice(id))
+            } else {
+                None
+            };
+            if let Some(e) = refused {
+                clear(&mut gone);
+                self.removing = gone;
+                return Err(e);
+            }
+        }
+        let is_gone = |i: u32| gone[i as usize];
+        // Whatever rested on these bodies must notice they are gone.
         for c in self.contacts.iter().chain(&self.sleeping_contacts) {
-            if c.a == i || c.b == i {
-                self.wake_queue.push(if c.a == i { c.b } else { c.a });
+            if is_gone(c.a) && !is_gone(c.b) {
+                self.wake_queue.push(c.b);
+            } else if is_gone(c.b) && !is_gone(c.a) {
+                self.wake_queue.push(c.a);
             }
         }
         self.wake_queued();
-        self.sleeping_contacts.retain(|c| c.a != i && c.b != i);
-        let slot = &mut self.slots[id.index as usize];
-        let body = slot.body.take().ok_or(PhysicsError::UnknownBody(id))?;
-        slot.generation = slot.generation.wrapping_add(1);
-        self.free.push(id.index);
-        self.body_count -= 1;
-        self.broad_phase.remove(id.index);
-        self.contacts.retain(|c| c.a != id.index && c.b != id.index);
-        Ok(body)
+        let touches_gone = |c: &Contact| is_gone(c.a) || is_gone(c.b);
+        self.sleeping_contacts.retain(|c| !touches_gone(c));
+        self.contacts.retain(|c| !touches_gone(c));
+        clear(&mut gone);
+        self.removing = gone;
+        let mut removed = Vec::with_capacity(ids.len());
+        let slots: Vec<u32> = ids.iter().map(|id| id.index).collect();
+        self.broad_phase.remove(&slots);
+        for &id in ids {
+            let slot = &mut self.slots[id.index as usize];
+            removed.push(slot.body.take().expect("checked above"));
+            slot.generation = slot.generation.wrapping_add(1);
+            self.free.push(id.index);
+        }
+        self.body_count -= ids.len();
+        Ok(removed)
+    }
+
+    /// The id of the live body in slot `index` with reuse count `generation`, if there is one
+    /// (how a body named on the wire by its two numbers is found without a search).
+    pub fn live_id(&self, index: u32, generation: u32) -> Option<BodyId> {
+        let id = BodyId { index, generation };
+        self.body(id).map(|_| id)
     }
 
     /// Refuse speeds beyond the World's speed cap: linear speed, and the rim speed |w| r of a

@@ -2,11 +2,11 @@
 //! nothing, each answered by the event to publish (or a rejection naming why).
 
 use super::Simulation;
-use crate::physics::{BodyId, PhysicsError};
+use crate::physics::PhysicsError;
 use crate::protocol::{BodyRef, CommandKey, Event, EventKind, Vector};
 use crate::service::command::{Command, Incoming, SpawnDef};
 use crate::service::wire::{body_info, vec2, vector};
-use std::collections::HashMap;
+use std::collections::HashSet;
 
 impl Simulation {
     fn reject(&mut self, key: CommandKey, reason: String) -> Event {
@@ -98,9 +98,7 @@ impl Simulation {
                 Ok(id) => ids.push(id),
                 Err(e) => {
                     // Validated already, so this is a World limit: undo what was added.
-                    for id in ids {
-                        let _ = self.world.remove_body(id);
-                    }
+                    let _ = self.world.remove_bodies(&ids);
                     return Err(format!("bodies[{i}]: {e}"));
                 }
             }
@@ -118,26 +116,23 @@ impl Simulation {
     /// Remove the bodies the wire ids name, all or nothing. A wire id names a body only if a
     /// live body has exactly that id (slot and generation).
     fn remove(&mut self, refs: Vec<BodyRef>) -> Result<EventKind, String> {
-        let live: HashMap<BodyRef, BodyId> = self
-            .world
-            .bodies()
-            .map(|b| (BodyRef::from(b.id()), b.id()))
-            .collect();
+        // Linear in the list: each id is looked up by its slot, duplicates through a set.
         let mut ids = Vec::with_capacity(refs.len());
+        let mut seen = HashSet::with_capacity(refs.len());
         for (i, r) in refs.iter().enumerate() {
-            let Some(&id) = live.get(r) else {
+            let Some(id) = self.world.live_id(r.index, r.generation) else {
                 // The engine's own words for an id it does not know.
                 return Err(format!("ids[{i}]: no body with id {r}"));
             };
-            if refs[..i].contains(r) {
+            if !seen.insert(id) {
                 return Err(format!("ids[{i}]: body {r} is listed twice"));
             }
             ids.push(id);
         }
+        self.world
+            .remove_bodies(&ids)
+            .map_err(|e: PhysicsError| e.to_string())?;
         for &id in &ids {
-            self.world
-                .remove_body(id)
-                .map_err(|e: PhysicsError| e.to_string())?;
             self.bodies.remove(id);
             self.poses.forget(id);
         }
@@ -147,7 +142,8 @@ impl Simulation {
     /// Set a kinematic body's velocity. Only kinematic bodies take one: a dynamic body is
     /// moved by forces and contacts, a static one not at all.
     fn set_velocity(&mut self, r: BodyRef, v: Vector, w: f32) -> Result<(), String> {
-        let Some(body) = self.world.bodies().find(|b| BodyRef::from(b.id()) == r) else {
+        let found = self.world.live_id(r.index, r.generation);
+        let Some(body) = found.and_then(|id| self.world.body(id)) else {
             return Err(format!("id: no body with id {r}"));
         };
         if !body.is_kinematic() {

@@ -340,6 +340,42 @@ fn triangle_point_down_touches_at_its_tip() {
 }
 
 #[test]
+fn capsule_end_just_past_a_box_corner_is_not_clipped_away() {
+    // A 0.9 x 0.5 box at the origin; a capsule (core half length 0.4, radius 0.2) whose core
+    // starts 0.242 m right of the box's top right corner and 10 um above it, and rises away
+    // at 0.46 rad. The box's right face is the reference; the capsule's core lies wholly past
+    // that face's top side plane, by less than the corner test's slack, so clipping left
+    // nothing and a 4.2 cm gap (margin 0.3 m) had no contact (found by the brute-force sweep
+    // below at 6,000 pairs per kind).
+    let bx = Shape::rect(0.9, 0.5);
+    let cap = Shape::capsule(1.2, 0.2);
+    let angle: Real = 0.46;
+    let start = vec2(0.45 + 0.242, 0.25 + 1.0e-5);
+    let centre = start + 0.4 * vec2(angle.cos(), angle.sin());
+    let m = collide(
+        &bx,
+        at(0.0, 0.0, 0.0),
+        &cap,
+        at(centre.x, centre.y, angle),
+        0.3,
+    );
+    assert_eq!(m.count, 1, "{m:?}");
+    // Corner to core end is 0.242 m (to 10 um), less the radius.
+    assert!((m.points[0].separation - 0.042).abs() < 1e-4, "{m:?}");
+    assert!(m.normal.x > 0.999, "{m:?}");
+    // Seen from the capsule, the same contact.
+    let m2 = collide(
+        &cap,
+        at(centre.x, centre.y, angle),
+        &bx,
+        at(0.0, 0.0, 0.0),
+        0.3,
+    );
+    assert_eq!(m2.count, 1, "{m2:?}");
+    assert!((m2.points[0].separation - 0.042).abs() < 1e-4, "{m2:?}");
+}
+
+#[test]
 fn polygons_apart_beyond_the_margin_have_no_contact() {
     let hex = hexagon(1.0);
     let tri = polygon(&[vec2(0.0, 0.0), vec2(1.0, 0.0), vec2(0.0, 1.0)]);

@@ -241,15 +241,50 @@ fn clip_to_reference(
     let r1 = reference.vertices[ref_edge];
     let r2 = reference.vertices[(ref_edge + 1) % reference.count];
 
-    // Cores that do not touch: if the two edges are closest at a vertex of each, the shapes
-    // meet corner to corner, along the line between those vertices, and no face normal is
-    // right (it would understate the gap, or clip away every point of a speculative contact).
-    if sep_a.max(sep_b) > CORE_GAP {
+    // Cores that do not touch meet where their two edges are closest, along the line between
+    // those points: one point, named by the vertex of each edge nearest it.
+    let cores_apart = sep_a.max(sep_b) > CORE_GAP;
+    // (s, t) along each edge, the reference edge's point, and the way to the incident one.
+    let closest = || {
         let (s, t) = segment_closest(r1, r2, seg[0], seg[1]);
         let c_ref = r1 + s * (r2 - r1);
         let c_inc = seg[0] + t * (seg[1] - seg[0]);
-        let d = c_inc - c_ref;
+        (s, t, c_ref, c_inc - c_ref)
+    };
+    let closest_points = |(s, t, c_ref, d): (Real, Real, Vec2, Vec2)| {
         let dist = d.length();
+        let separation = dist - r_ref - r_inc;
+        if separation > margin || dist <= 0.0 {
+            return Manifold::EMPTY;
+        }
+        let n = d / dist;
+        let v_ref = if s < 0.5 {
+            ref_edge
+        } else {
+            (ref_edge + 1) % reference.count
+        };
+        let v_inc = if t < 0.5 { i1 } else { i2 };
+        let (va, vb, normal_in_a) = if flip {
+            (v_inc, v_ref, -n)
+        } else {
+            (v_ref, v_inc, n)
+        };
+        // Halfway between the reference surface (c_ref + r_ref n) and the incident one.
+        let mid = c_ref + (r_ref + 0.5 * separation) * n;
+        let mut manifold = Manifold::EMPTY;
+        manifold.normal = xf_a.q.rotate(normal_in_a);
+        manifold.points[0] = ManifoldPoint {
+            point: xf_a.apply(mid),
+            separation,
+            id: (va as u16) << 8 | vb as u16,
+        };
+        manifold.count = 1;
+        manifold
+    };
+    // If the edges are closest at a vertex of each, the shapes meet corner to corner and no
+    // face normal is right (it would understate the gap, or clip away every point of a
+    // speculative contact).
+    if cores_apart {
         // `x` is the end of its edge (0 or 1) and the other closest point lies beyond that end
         // (direction `away` from the vertex has a part along the edge pointing out). Parallel
         // faces side by side fail this: their gap is square to both edges.
@@ -258,44 +293,24 @@ fn clip_to_reference(
             let slack = 1.0e-3 * away.length() * edge.length();
             (x == 0.0 && along < -slack) || (x == 1.0 && along > slack)
         };
+        let (s, t, c_ref, d) = closest();
         if past_end(s, r2 - r1, d) && past_end(t, seg[1] - seg[0], -d) {
-            let separation = dist - r_ref - r_inc;
-            if separation > margin || dist <= 0.0 {
-                return Manifold::EMPTY;
-            }
-            let n = d / dist;
-            let v_ref = if s == 0.0 {
-                ref_edge
-            } else {
-                (ref_edge + 1) % reference.count
-            };
-            let v_inc = if t == 0.0 { i1 } else { i2 };
-            let (va, vb, normal_in_a) = if flip {
-                (v_inc, v_ref, -n)
-            } else {
-                (v_ref, v_inc, n)
-            };
-            // Halfway between the reference surface (c_ref + r_ref n) and the incident one.
-            let mid = c_ref + (r_ref + 0.5 * separation) * n;
-            let mut manifold = Manifold::EMPTY;
-            manifold.normal = xf_a.q.rotate(normal_in_a);
-            manifold.points[0] = ManifoldPoint {
-                point: xf_a.apply(mid),
-                separation,
-                id: (va as u16) << 8 | vb as u16,
-            };
-            manifold.count = 1;
-            return manifold;
+            return closest_points((s, t, c_ref, d));
         }
     }
 
-    // Side planes of the reference edge: its tangent t, bounded by its two end vertices.
-    let t = (r2 - r1).normalize();
-    let Some(seg) = clip_segment(seg, -t, -t.dot(r1)) else {
-        return Manifold::EMPTY;
-    };
-    let Some(seg) = clip_segment(seg, t, t.dot(r2)) else {
-        return Manifold::EMPTY;
+    // Side planes of the reference edge: its tangent t, bounded by its two end vertices. An
+    // incident edge that lies wholly past one of them (by less than the corner test's slack:
+    // a corner almost square to the reference face) still touches at its closest points.
+    let tangent = (r2 - r1).normalize();
+    let side_clipped = clip_segment(seg, -tangent, -tangent.dot(r1))
+        .and_then(|seg| clip_segment(seg, tangent, tangent.dot(r2)));
+    let Some(seg) = side_clipped else {
+        return if cores_apart {
+            closest_points(closest())
+        } else {
+            Manifold::EMPTY
+        };
     };
 
     // Project onto the reference face (appendix eqs. 45-48), keeping points within the margin.

@@ -669,7 +669,7 @@ impl Generated<'_> {
         &self,
         at: &str,
         count: (&str, u32),
-        spacing: &[(&str, Real)],
+        spacing: &[(&'static str, Real)],
         total: u64,
         bodies: &[SceneBody],
     ) -> Result<Colour, SceneError> {

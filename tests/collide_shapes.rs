@@ -31,6 +31,27 @@ fn points(m: &Manifold) -> Vec<(Vec2, Real)> {
     v
 }
 
+/// `shape` at the origin, unturned, against a disc of `radius` centred at `c`.
+fn against_disc(shape: &Shape, radius: Real, c: Vec2, margin: Real) -> Manifold {
+    collide(
+        shape,
+        at(0.0, 0.0, 0.0),
+        &Shape::circle(radius),
+        at(c.x, c.y, 0.0),
+        margin,
+    )
+}
+
+/// Assert that `m` has normal `normal` and two points, at `a` and `b` (sorted by x), both at
+/// `separation`.
+fn assert_two_points(m: &Manifold, normal: Vec2, [a, b]: [Vec2; 2], separation: Real) {
+    assert_eq!(m.count, 2, "{m:?}");
+    assert!(close(m.normal, normal), "{m:?}");
+    let p = points(m);
+    assert!(close(p[0].0, a) && close(p[1].0, b), "{p:?}");
+    assert!(p.iter().all(|q| near(q.1, separation)), "{p:?}");
+}
+
 fn polygon(points: &[Vec2]) -> Shape {
     Shape::from(Polygon::new(points).unwrap().0)
 }
@@ -105,13 +126,7 @@ fn circle_on_a_box_face_touches_below_its_centre() {
 #[test]
 fn circle_past_a_box_corner_is_pushed_along_the_corner_diagonal() {
     // Box corner at (0.5, 0.5); circle centre at (0.5 + 0.3, 0.5 + 0.4): 0.5 m from the corner.
-    let m = collide(
-        &Shape::rect(1.0, 1.0),
-        at(0.0, 0.0, 0.0),
-        &Shape::circle(0.25),
-        at(0.8, 0.9, 0.0),
-        0.5,
-    );
+    let m = against_disc(&Shape::rect(1.0, 1.0), 0.25, vec2(0.8, 0.9), 0.5);
     assert_eq!(m.count, 1);
     assert!(close(m.normal, vec2(0.6, 0.8)), "{m:?}");
     assert!(near(m.points[0].separation, 0.25));
@@ -122,13 +137,7 @@ fn circle_past_a_box_corner_is_pushed_along_the_corner_diagonal() {
 #[test]
 fn circle_centre_inside_a_box_leaves_through_the_nearest_face() {
     // Centre 0.1 m inside the right face (x = 0.5) of a unit box.
-    let m = collide(
-        &Shape::rect(1.0, 1.0),
-        at(0.0, 0.0, 0.0),
-        &Shape::circle(0.2),
-        at(0.4, 0.05, 0.0),
-        0.0,
-    );
+    let m = against_disc(&Shape::rect(1.0, 1.0), 0.2, vec2(0.4, 0.05), 0.0);
     assert!(close(m.normal, vec2(1.0, 0.0)), "{m:?}");
     assert!(near(m.points[0].separation, -0.3));
 }
@@ -155,26 +164,14 @@ fn circle_against_a_rotated_triangle_face_and_tip() {
     // 0.7 m out from the hypotenuse's midpoint (1, 1) along its normal.
     let n = vec2(1.0, 1.0).normalize();
     let c = vec2(1.0, 1.0) - centroid + 0.7 * n;
-    let m = collide(
-        &tri,
-        at(0.0, 0.0, 0.0),
-        &Shape::circle(0.5),
-        at(c.x, c.y, 0.0),
-        0.5,
-    );
+    let m = against_disc(&tri, 0.5, c, 0.5);
     assert_eq!(m.count, 1);
     assert!(close(m.normal, n), "{m:?}");
     assert!(near(m.points[0].separation, 0.2));
     // Past the tip (2, 0): the normal points from the tip to the centre.
     let tip = vec2(2.0, 0.0) - centroid;
     let c = tip + vec2(0.3, -0.4);
-    let m = collide(
-        &tri,
-        at(0.0, 0.0, 0.0),
-        &Shape::circle(0.25),
-        at(c.x, c.y, 0.0),
-        0.5,
-    );
+    let m = against_disc(&tri, 0.25, c, 0.5);
     assert!(close(m.normal, vec2(0.6, -0.8)), "{m:?}");
     assert!(near(m.points[0].separation, 0.25));
 }
@@ -211,14 +208,12 @@ fn parallel_capsules_touch_at_two_points_crossed_ones_at_one() {
     // Stacked, B shifted 0.5 m right and 0.9 m up: overlap 0.1, the shared part of the cores
     // runs from x = -0.5 to 1.
     let m = collide(&cap, at(0.0, 0.0, 0.0), &cap, at(0.5, 0.9, 0.0), 0.0);
-    assert_eq!(m.count, 2, "{m:?}");
-    assert!(close(m.normal, vec2(0.0, 1.0)), "{m:?}");
-    let p = points(&m);
-    assert!(
-        close(p[0].0, vec2(-0.5, 0.45)) && close(p[1].0, vec2(1.0, 0.45)),
-        "{p:?}"
+    assert_two_points(
+        &m,
+        vec2(0.0, 1.0),
+        [vec2(-0.5, 0.45), vec2(1.0, 0.45)],
+        -0.1,
     );
-    assert!(p.iter().all(|q| near(q.1, -0.1)));
     // Crossed at right angles, B 1.1 m above: one point, gap 0.1.
     let m = collide(&cap, at(0.0, 0.0, 0.0), &cap, at(0.2, 1.1, 1.5707964), 0.2);
     assert_eq!(m.count, 1, "{m:?}");
@@ -241,14 +236,12 @@ fn capsule_lying_on_a_box_rests_on_both_ends_of_its_core() {
     let ground = Shape::rect(10.0, 1.0); // top at 0.5
     let cap = Shape::capsule(3.0, 0.5);
     let m = collide(&ground, at(0.0, 0.0, 0.0), &cap, at(2.0, 0.98, 0.0), 0.0);
-    assert_eq!(m.count, 2, "{m:?}");
-    assert!(close(m.normal, vec2(0.0, 1.0)));
-    let p = points(&m);
-    assert!(
-        close(p[0].0, vec2(1.0, 0.49)) && close(p[1].0, vec2(3.0, 0.49)),
-        "{p:?}"
+    assert_two_points(
+        &m,
+        vec2(0.0, 1.0),
+        [vec2(1.0, 0.49), vec2(3.0, 0.49)],
+        -0.02,
     );
-    assert!(p.iter().all(|q| near(q.1, -0.02)));
 }
 
 #[test]
@@ -573,42 +566,15 @@ fn feature_ids_survive_small_motion_for_every_resting_pair() {
     let hex = hexagon(0.5);
     let h = (3.0 as Real).sqrt() / 4.0;
     let cap = Shape::capsule(2.0, 0.25);
+    // (name, A centred at height a_y, B, the height of B's centre when it rests on A).
+    let pair =
+        |name, a: &Shape, a_y, b: &Shape, y| (name, a.clone(), at(0.0, a_y, 0.0), b.clone(), y);
     let resting: [(&str, Shape, Transform, Shape, Real); 5] = [
-        (
-            "box on box",
-            ground.clone(),
-            at(0.0, 0.0, 0.0),
-            Shape::rect(1.0, 1.0),
-            1.0,
-        ),
-        (
-            "capsule on box",
-            ground.clone(),
-            at(0.0, 0.0, 0.0),
-            cap.clone(),
-            0.75,
-        ),
-        (
-            "hexagon on box",
-            ground.clone(),
-            at(0.0, 0.0, 0.0),
-            hex.clone(),
-            0.5 + h,
-        ),
-        (
-            "capsule on capsule",
-            cap.clone(),
-            at(0.0, 0.5, 0.0),
-            cap.clone(),
-            1.0,
-        ),
-        (
-            "hexagon on hexagon",
-            hex.clone(),
-            at(0.0, 0.5, 0.0),
-            hex.clone(),
-            0.5 + 2.0 * h,
-        ),
+        pair("box on box", &ground, 0.0, &Shape::rect(1.0, 1.0), 1.0),
+        pair("capsule on box", &ground, 0.0, &cap, 0.75),
+        pair("hexagon on box", &ground, 0.0, &hex, 0.5 + h),
+        pair("capsule on capsule", &cap, 0.5, &cap, 1.0),
+        pair("hexagon on hexagon", &hex, 0.5, &hex, 0.5 + 2.0 * h),
     ];
     for (name, a, xa, b, y) in resting {
         let ids = |dx: Real, dy: Real, turn: Real| {

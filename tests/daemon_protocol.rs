@@ -3,6 +3,9 @@
 //! prints the new bytes to paste into the doc.
 #![cfg(feature = "net")]
 
+mod common;
+
+use common::{hex, read_repo_file};
 use tiltbox::protocol::*;
 use tiltbox::scene::Scene;
 use tiltbox::service::{Incoming, SceneSource, ServerConfig, Simulation};
@@ -31,22 +34,8 @@ velocity = [2.0, 0.0]
 density = 1.0
 "#;
 
-/// 16 bytes per line, lower-case hex separated by spaces: the doc's format.
-fn hex(bytes: &[u8]) -> String {
-    bytes
-        .chunks(16)
-        .map(|c| {
-            c.iter()
-                .map(|b| format!("{b:02x}"))
-                .collect::<Vec<_>>()
-                .join(" ")
-        })
-        .collect::<Vec<_>>()
-        .join("\n")
-}
-
 fn doc() -> String {
-    std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/protocol.md")).unwrap()
+    read_repo_file("docs/protocol.md")
 }
 
 fn example_sim() -> Simulation {
@@ -246,7 +235,22 @@ fn hand_derived_shape_examples() -> (Vec<u8>, Vec<u8>) {
     const THREE: [u8; 4] = [0x00, 0x00, 0x40, 0x40];
     const MINUS_ONE: [u8; 4] = [0x00, 0x00, 0x80, 0xbf];
 
-    let mut ball = vec![
+    // angle, velocity.x, velocity.y, angular_velocity: both bodies are at rest, not turned
+    const AT_REST: [[u8; 4]; 4] = [ZERO; 4];
+    // A spawn of one body: its header, then its shape and position, the at-rest fields, its
+    // material (density 1, friction 0.5 for both, then its restitution) and its colour (r, g,
+    // b: u8 each).
+    let spawn = |header: &[u8], shape_and_position: &[[u8; 4]], restitution, colour| {
+        let mut bytes = header.to_vec();
+        let material = [ONE, HALF, restitution];
+        for field in shape_and_position.iter().chain(&AT_REST).chain(&material) {
+            bytes.extend(field);
+        }
+        bytes.extend::<[u8; 3]>(colour);
+        bytes
+    };
+
+    let header = [
         0x01, // protocol version
         0x01, // Spawn.bodies: varint length 1
         0x01, // name: Some
@@ -254,30 +258,17 @@ fn hand_derived_shape_examples() -> (Vec<u8>, Vec<u8>) {
         b'b', b'a', b'l', b'l', // "ball" = 62 61 6c 6c
         0x01, // shape: ShapeSpec variant 1 = Circle
     ];
-    // angle, velocity.x, velocity.y, angular_velocity: both bodies are at rest, not turned
-    const AT_REST: [[u8; 4]; 4] = [ZERO; 4];
     let shape_and_position = [
         QUARTER, // radius 0.25
         ZERO,    // position.x 0
         THREE,   // position.y 3
     ];
-    let material = [
-        ONE,  // density 1
-        HALF, // friction 0.5
-        HALF, // restitution 0.5
-    ];
-    for field in shape_and_position
-        .into_iter()
-        .chain(AT_REST)
-        .chain(material)
-    {
-        ball.extend(field);
-    }
-    ball.extend([0x3a, 0x7b, 0xd5]); // colour r, g, b (u8 each)
-                                     // 1 + 1 + 1 + 1 + 4 + 1 + 10 * 4 + 3
+    // restitution 0.5, colour 3a 7b d5
+    let ball = spawn(&header, &shape_and_position, HALF, [0x3a, 0x7b, 0xd5]);
+    assert_eq!(ball.len(), 1 + 1 + 1 + 1 + 4 + 1 + 10 * 4 + 3);
     assert_eq!(ball.len(), 52);
 
-    let mut triangle = vec![
+    let header = [
         0x01, // protocol version
         0x01, // Spawn.bodies: varint length 1
         0x00, // name: None
@@ -294,20 +285,9 @@ fn hand_derived_shape_examples() -> (Vec<u8>, Vec<u8>) {
         MINUS_ONE,      // position.x -1
         TWO,            // position.y 2
     ];
-    let material = [
-        ONE,  // density 1
-        HALF, // friction 0.5
-        ZERO, // restitution 0
-    ];
-    for field in shape_and_position
-        .into_iter()
-        .chain(AT_REST)
-        .chain(material)
-    {
-        triangle.extend(field);
-    }
-    triangle.extend([0x2e, 0xcc, 0x71]); // colour
-                                         // 5 + 15 * 4 + 3
+    // restitution 0, colour 2e cc 71
+    let triangle = spawn(&header, &shape_and_position, ZERO, [0x2e, 0xcc, 0x71]);
+    assert_eq!(triangle.len(), 5 + 15 * 4 + 3);
     assert_eq!(triangle.len(), 68);
     (ball, triangle)
 }

@@ -198,18 +198,7 @@ fn the_terrain_scene_goes_on_the_wire_as_segments_and_a_moving_paddle() {
 #[test]
 fn the_documented_segment_and_velocity_bytes_are_exact() {
     let doc = common::read_repo_file("docs/protocol.md");
-    let hex = |bytes: &[u8]| {
-        bytes
-            .chunks(16)
-            .map(|row| {
-                row.iter()
-                    .map(|b| format!("{b:02x}"))
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            })
-            .collect::<Vec<_>>()
-            .join("\n")
-    };
+    let hex = common::hex;
     let piece = ShapeSpec::Segment {
         a: Vector::new(-1.0, 0.0),
         b: Vector::new(1.0, 0.0),

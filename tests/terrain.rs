@@ -17,6 +17,14 @@ fn add_chain(w: &mut World, points: &[Vec2], closed: bool, one_sided: bool, fric
     }
 }
 
+/// The kinematic body `id` was never slowed: it is at x = `x` (to 1 mm, f32 sums over a few
+/// hundred steps) and still moves at `v`.
+fn assert_unslowed(w: &World, id: BodyId, x: Real, v: Vec2) {
+    let b = w.body(id).unwrap();
+    assert!((b.position().x - x).abs() < 1e-3, "at {}", b.position().x);
+    assert_eq!(b.linear_velocity(), v);
+}
+
 fn steps(w: &mut World, seconds: Real, mut each: impl FnMut(&World)) {
     for _ in 0..(seconds / DT).round() as usize {
         w.step(DT).unwrap();
@@ -126,15 +134,9 @@ fn box_rides_a_kinematic_platform_without_drifting() {
     steps(&mut w, 5.0, |w| {
         drift = drift.max((offset(w).x - settled.x).abs())
     });
-    let p = w.body(platform).unwrap();
     println!("platform: rider drift {drift:e} m over 5 s");
     // The platform is never slowed: x = v t exactly up to f32 sums (330 steps x ulp(5)).
-    assert!(
-        (p.position().x - 6.0).abs() < 1e-3,
-        "platform at {}",
-        p.position().x
-    );
-    assert_eq!(p.linear_velocity(), v);
+    assert_unslowed(&w, platform, 6.0, v);
     assert!(drift < 1e-3, "rider drifted {drift} m");
     assert!(
         w.body(rider).unwrap().is_awake(),
@@ -181,15 +183,9 @@ fn kinematic_wall_pushes_a_stack_unslowed() {
         .map(|&id| w.body(id).unwrap().position().x)
         .collect();
     steps(&mut w, 1.0, &mut overlap);
-    let wb = w.body(wall).unwrap();
     println!("push: deepest overlap {deepest:e} m");
     // Never slowed: x = x0 + v t up to f32 sums (180 steps x ulp(2)).
-    assert!(
-        (wb.position().x - 2.0).abs() < 1e-3,
-        "wall at {}",
-        wb.position().x
-    );
-    assert_eq!(wb.linear_velocity(), vec2(1.0, 0.0));
+    assert_unslowed(&w, wall, 2.0, vec2(1.0, 0.0));
     for (&id, x0) in stack.iter().zip(before) {
         let b = w.body(id).unwrap();
         // Pushed along at the wall's speed over the last second: the boxes cover 1 m within

@@ -7,6 +7,9 @@
 //! print are not disturbed by each other.
 #![cfg(feature = "web")]
 
+mod common;
+
+use common::net::{daemon_config, serve, subscribe, subscribe_snapshots};
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{json, Value};
 use std::collections::VecDeque;
@@ -17,7 +20,7 @@ use tiltbox::client::session;
 use tiltbox::client::web::wire::Allow;
 use tiltbox::client::web::{Gateway, TlsMode, WebOptions};
 use tiltbox::protocol::*;
-use tiltbox::service::{Server, ServerConfig, ServerOptions};
+use tiltbox::service::Server;
 use tokio::sync::mpsc;
 use tokio_tungstenite::tungstenite::Message as WsMessage;
 
@@ -235,12 +238,27 @@ impl Cdp {
 // ------------------------------------------------------------------------------------------
 // The daemon, the gateway, and a test session watching the daemon.
 
+/// A fresh Chromium (`tag` names its profile) with one blank page open.
+async fn browser_page(tag: &str) -> (Browser, Cdp) {
+    let (browser, devtools) = launch(tag).await;
+    (browser, Cdp::open_page(&devtools).await)
+}
+
+/// Close the page, then stop the gateway, then the daemon.
+async fn stop(page: Cdp, gw: Gateway, server: Server) {
+    drop(page);
+    gw.stop().await;
+    server.shutdown().await.unwrap();
+}
+
 async fn daemon(port: u16) -> Server {
-    let mut cfg = ServerConfig::default();
-    cfg.zenoh.listen = vec![format!("tcp/127.0.0.1:{port}")];
-    Server::start(&cfg, ServerOptions::default())
-        .await
-        .expect("daemon starts")
+    serve(&daemon_config(port)).await
+}
+
+/// A daemon on `port` and the gateway towards it, tilts and spawns allowed.
+async fn daemon_and_gateway(port: u16) -> (Server, Gateway) {
+    let server = daemon(port).await;
+    (server, gateway(port, "tilt,spawn").await)
 }
 
 async fn gateway(port: u16, allow: &str) -> Gateway {
@@ -270,28 +288,8 @@ struct Watch {
 }
 
 async fn watch(s: &zenoh::Session, keys: &Keys) -> Watch {
-    let (stx, snaps) = mpsc::unbounded_channel();
-    let (etx, events) = mpsc::unbounded_channel();
-    let decoder = std::sync::Mutex::new(SnapshotDecoder::new());
-    let a = s
-        .declare_subscriber(keys.poses())
-        .callback(move |x| {
-            let mut d = decoder.lock().unwrap();
-            if let Ok(Some(v)) = d.decode(&x.payload().to_bytes()) {
-                let _ = stx.send(v);
-            }
-        })
-        .await
-        .unwrap();
-    let b = s
-        .declare_subscriber(keys.events())
-        .callback(move |x| {
-            if let Ok(v) = decode::<Event>(&x.payload().to_bytes()) {
-                let _ = etx.send(v);
-            }
-        })
-        .await
-        .unwrap();
+    let (snaps, a) = subscribe_snapshots(s, keys.poses()).await;
+    let (events, b) = subscribe::<Event>(s, keys.events()).await;
     Watch {
         snaps,
         events,
@@ -451,9 +449,8 @@ fn base64_decode(s: &str) -> Vec<u8> {
 async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
     let _lock = BROWSER_LOCK.lock().await;
     let port = 17490;
-    let server = daemon(port).await;
+    let (server, gw) = daemon_and_gateway(port).await;
     let keys = server.keys().clone();
-    let gw = gateway(port, "tilt,spawn").await;
     assert!(gw.url().starts_with("https://127.0.0.1:"), "{}", gw.url());
     let fp = gw.fingerprint().unwrap().to_string();
     let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
@@ -461,8 +458,7 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
         .unwrap();
     let mut w = watch(&s, &keys).await;
 
-    let (_browser, devtools) = launch("draw").await;
-    let mut page = Cdp::open_page(&devtools).await;
+    let (_browser, mut page) = browser_page("draw").await;
     // the emulated motion sensors exist before the page asks for them
     let origin = gw.url().trim_end_matches('/').to_string();
     let granted = page
@@ -697,9 +693,7 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
     use std::sync::atomic::Ordering::Relaxed;
     assert!(c.commands.load(Relaxed) >= 10, "{c:?}");
     assert_eq!(c.refused.load(Relaxed), 0, "{c:?}");
-    drop(page);
-    gw.stop().await;
-    server.shutdown().await.unwrap();
+    stop(page, gw, server).await;
 }
 
 /// The page's hand-written decoder, run in Chromium, gives every hex example of
@@ -709,15 +703,12 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
 async fn the_page_decodes_every_documented_example() {
     let _lock = BROWSER_LOCK.lock().await;
     let port = 17491;
-    let server = daemon(port).await;
-    let gw = gateway(port, "tilt,spawn").await;
-    let (_browser, devtools) = launch("decode").await;
-    let mut page = Cdp::open_page(&devtools).await;
+    let (server, gw) = daemon_and_gateway(port).await;
+    let (_browser, mut page) = browser_page("decode").await;
     page.navigate(gw.url()).await;
     page.wait_for("!!window.tiltbox", 20).await;
 
-    let doc =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/protocol.md")).unwrap();
+    let doc = common::read_repo_file("docs/protocol.md");
     let examples = hex_examples(&doc);
     let mut count = 0;
     for (section, bytes) in &examples {
@@ -790,9 +781,7 @@ async fn the_page_decodes_every_documented_example() {
             .await;
         assert_ne!(r, json!("decoded"), "{bad}");
     }
-    drop(page);
-    gw.stop().await;
-    server.shutdown().await.unwrap();
+    stop(page, gw, server).await;
 }
 
 /// Garbage on the WebSocket (unknown tags, downstream tags, truncated or malformed payloads,
@@ -802,15 +791,13 @@ async fn the_page_decodes_every_documented_example() {
 async fn garbage_frames_are_refused_and_the_gateway_keeps_serving() {
     let _lock = BROWSER_LOCK.lock().await;
     let port = 17492;
-    let server = daemon(port).await;
+    let (server, gw) = daemon_and_gateway(port).await;
     let keys = server.keys().clone();
-    let gw = gateway(port, "tilt,spawn").await;
     let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
         .await
         .unwrap();
     let mut w = watch(&s, &keys).await;
-    let (_browser, devtools) = launch("garbage").await;
-    let mut page = Cdp::open_page(&devtools).await;
+    let (_browser, mut page) = browser_page("garbage").await;
     page.navigate(gw.url()).await;
     page.wait_for("!!(window.tiltbox && tiltbox.state.joined)", 20)
         .await;
@@ -903,9 +890,7 @@ async fn garbage_frames_are_refused_and_the_gateway_keeps_serving() {
         20,
     )
     .await;
-    drop(page);
-    gw.stop().await;
-    server.shutdown().await.unwrap();
+    stop(page, gw, server).await;
 }
 
 fn tag_type(tag: tiltbox::client::web::wire::Tag) -> &'static str {

@@ -107,22 +107,12 @@ mod tests {
     use crate::protocol::{decode, BodyInfo, BodyRef, Orientation, SceneState, Tilt};
 
     fn walls() -> WorldView {
-        let wall = |index, x: f32, y: f32, width, height| BodyInfo {
-            id: BodyRef {
+        let wall = |index, x, y, width, height| {
+            let id = BodyRef {
                 index,
                 generation: 0,
-            },
-            name: String::new(),
-            shape: ShapeSpec::Rect { width, height },
-            is_static: true,
-            colour: Colour::default(),
-            position: Vector::new(x, y),
-            angle: 0.0,
-            velocity: Vector::default(),
-            angular_velocity: 0.0,
-            mass: 0.0,
-            friction: 0.6,
-            restitution: 0.0,
+            };
+            BodyInfo::wall(id, ShapeSpec::Rect { width, height }, Vector::new(x, y))
         };
         WorldView::from_scene(SceneState {
             world: "bricks".into(),

@@ -5,6 +5,7 @@
 //!   pyramids, closed boxes, Falling Bricks, mixed shapes, the benchmark scenes).
 //! - [`accuracy`]: runners that run a case and return numbers (closed forms, reference runs,
 //!   the stiff and extreme suite) and the sweeps over step sizes and configurations.
+//! - [`machine`]: the CPU a measurement ran on.
 //! - `report` (feature `report`): charts and `docs/accuracy.md` from what the sweeps return.
 //!
 //! The side-by-side comparison with Box2D v3 and rapier2d is its own crate, `benchmarks/vs-peers`, built
@@ -12,5 +13,6 @@
 
 pub mod accuracy;
 pub mod cases;
+pub mod machine;
 #[cfg(feature = "report")]
 pub mod report;

@@ -5,46 +5,57 @@ use std::fmt;
 /// The default world name.
 pub const DEFAULT_WORLD: &str = "bricks";
 
-/// Which command key a message arrived on (the keys clients write to).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum CommandKey {
+/// Declares the command keys from one table, in wire order: each [`CommandKey`] variant with
+/// the last segment of its key, which is also the name of the [`Keys`] method that builds it.
+/// [`CommandKey::ALL`], [`CommandKey::suffix`] and those methods all come from the table.
+macro_rules! command_keys {
+    ($($(#[$doc:meta])* $variant:ident => $suffix:ident,)*) => {
+        /// Which command key a message arrived on (the keys clients write to).
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum CommandKey {
+            $($(#[$doc])* $variant,)*
+        }
+
+        impl CommandKey {
+            /// Every command key, in a fixed order (its index is [`CommandKey::index`]).
+            pub const ALL: [CommandKey; [$(CommandKey::$variant),*].len()] =
+                [$(CommandKey::$variant),*];
+
+            /// The last segment of the key, e.g. `spawn`.
+            pub fn suffix(self) -> &'static str {
+                match self {
+                    $(CommandKey::$variant => stringify!($suffix),)*
+                }
+            }
+        }
+
+        impl Keys {
+            $(
+                #[doc = concat!("`…/", stringify!($suffix), "`")]
+                pub fn $suffix(&self) -> String {
+                    self.command(CommandKey::$variant)
+                }
+            )*
+        }
+    };
+}
+
+command_keys! {
     /// `…/gravity`
-    Gravity,
+    Gravity => gravity,
     /// `…/tilt`
-    Tilt,
+    Tilt => tilt,
     /// `…/spawn`
-    Spawn,
+    Spawn => spawn,
     /// `…/remove`
-    Remove,
+    Remove => remove,
     /// `…/reset`
-    Reset,
+    Reset => reset,
     /// `…/velocity` (a kinematic body's velocity)
-    Velocity,
+    Velocity => velocity,
 }
 
 impl CommandKey {
-    /// Every command key, in a fixed order (its index is [`CommandKey::index`]).
-    pub const ALL: [CommandKey; 6] = [
-        CommandKey::Gravity,
-        CommandKey::Tilt,
-        CommandKey::Spawn,
-        CommandKey::Remove,
-        CommandKey::Reset,
-        CommandKey::Velocity,
-    ];
-
-    /// The last segment of the key, e.g. `spawn`.
-    pub fn suffix(self) -> &'static str {
-        match self {
-            CommandKey::Gravity => "gravity",
-            CommandKey::Tilt => "tilt",
-            CommandKey::Spawn => "spawn",
-            CommandKey::Remove => "remove",
-            CommandKey::Reset => "reset",
-            CommandKey::Velocity => "velocity",
-        }
-    }
-
     /// Position in [`CommandKey::ALL`].
     pub fn index(self) -> usize {
         self as usize
@@ -143,30 +154,6 @@ impl Keys {
     /// The key a command is written to.
     pub fn command(&self, key: CommandKey) -> String {
         self.key(key.suffix())
-    }
-    /// `…/gravity`
-    pub fn gravity(&self) -> String {
-        self.command(CommandKey::Gravity)
-    }
-    /// `…/tilt`
-    pub fn tilt(&self) -> String {
-        self.command(CommandKey::Tilt)
-    }
-    /// `…/spawn`
-    pub fn spawn(&self) -> String {
-        self.command(CommandKey::Spawn)
-    }
-    /// `…/remove`
-    pub fn remove(&self) -> String {
-        self.command(CommandKey::Remove)
-    }
-    /// `…/reset`
-    pub fn reset(&self) -> String {
-        self.command(CommandKey::Reset)
-    }
-    /// `…/velocity`
-    pub fn velocity(&self) -> String {
-        self.command(CommandKey::Velocity)
     }
 }
 

@@ -275,6 +275,28 @@ pub struct BodyInfo {
     pub restitution: f32,
 }
 
+#[cfg(test)]
+impl BodyInfo {
+    /// For tests: a body `id` of `shape` at rest at `position` (m), as the daemon describes a
+    /// static wall: unnamed, grey, unturned, mass 0, friction 0.6, restitution 0.
+    pub(crate) fn wall(id: BodyRef, shape: ShapeSpec, position: Vector) -> BodyInfo {
+        BodyInfo {
+            id,
+            name: String::new(),
+            shape,
+            is_static: true,
+            colour: Colour::default(),
+            position,
+            angle: 0.0,
+            velocity: Vector::default(),
+            angular_velocity: 0.0,
+            mass: 0.0,
+            friction: 0.6,
+            restitution: 0.0,
+        }
+    }
+}
+
 /// What an [`Event`] reports.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum EventKind {

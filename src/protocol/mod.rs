@@ -185,25 +185,17 @@ mod tests {
     }
 
     fn info() -> BodyInfo {
+        let id = BodyRef {
+            index: 300,
+            generation: 2,
+        };
+        let shape = ShapeSpec::Rect {
+            width: 10.0,
+            height: 1.0,
+        };
         BodyInfo {
-            id: BodyRef {
-                index: 300,
-                generation: 2,
-            },
             name: "wall".into(),
-            shape: ShapeSpec::Rect {
-                width: 10.0,
-                height: 1.0,
-            },
-            is_static: true,
-            colour: Colour::default(),
-            position: Vector::new(0.0, -0.5),
-            angle: 0.0,
-            velocity: Vector::default(),
-            angular_velocity: 0.0,
-            mass: 0.0,
-            friction: 0.6,
-            restitution: 0.0,
+            ..BodyInfo::wall(id, shape, Vector::new(0.0, -0.5))
         }
     }
 

@@ -187,75 +187,97 @@ impl ShapeEntry {
     }
 }
 
-/// One `[[body]]` table.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct BodyEntry {
-    name: Option<String>,
-    shape: ShapeEntry,
-    position: [Real; 2],
-    #[serde(default)]
-    angle: Real,
-    #[serde(default)]
-    velocity: [Real; 2],
-    #[serde(default)]
-    angular_velocity: Real,
-    density: Option<Real>,
-    mass: Option<Real>,
-    #[serde(default, rename = "static")]
-    is_static: bool,
-    #[serde(default)]
-    kinematic: bool,
-    #[serde(default = "default_friction")]
-    friction: Real,
-    #[serde(default)]
-    restitution: Real,
-    #[serde(alias = "color")]
-    colour: Option<String>,
+/// Declares an entry table (`[[body]]`, `[[stack]]`, `[[pyramid]]`): the fields given, then
+/// the material every entry ends with, `friction`, `restitution` and `colour` (or `color`).
+/// (serde lists the fields in this order when it refuses an unknown one.)
+macro_rules! entry_table {
+    ($(#[$doc:meta])* struct $entry:ident { $($fields:tt)* }) => {
+        $(#[$doc])*
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct $entry {
+            $($fields)*
+            #[serde(default = "default_friction")]
+            friction: Real,
+            #[serde(default)]
+            restitution: Real,
+            #[serde(alias = "color")]
+            colour: Option<String>,
+        }
+    };
 }
 
-/// One `[[stack]]` table: `count` boxes of side `size`, bottom one resting on y = `base_y`.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct StackEntry {
-    name: Option<String>,
-    count: u32,
-    size: Real,
-    #[serde(default)]
-    x: Real,
-    #[serde(default)]
-    base_y: Real,
-    #[serde(default)]
-    gap: Real,
-    #[serde(default = "default_density")]
-    density: Real,
-    #[serde(default = "default_friction")]
-    friction: Real,
-    #[serde(default)]
-    restitution: Real,
-    #[serde(alias = "color")]
-    colour: Option<String>,
+entry_table! {
+    /// One `[[body]]` table.
+    struct BodyEntry {
+        name: Option<String>,
+        shape: ShapeEntry,
+        position: [Real; 2],
+        #[serde(default)]
+        angle: Real,
+        #[serde(default)]
+        velocity: [Real; 2],
+        #[serde(default)]
+        angular_velocity: Real,
+        density: Option<Real>,
+        mass: Option<Real>,
+        #[serde(default, rename = "static")]
+        is_static: bool,
+        #[serde(default)]
+        kinematic: bool,
+    }
 }
 
-/// One `[[pyramid]]` table: `base` boxes of side `size` in the bottom row, one fewer per row.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct PyramidEntry {
-    name: Option<String>,
-    base: u32,
-    size: Real,
-    #[serde(default)]
-    x: Real,
-    #[serde(default)]
-    base_y: Real,
-    #[serde(default = "default_density")]
-    density: Real,
-    #[serde(default = "default_friction")]
-    friction: Real,
-    #[serde(default)]
-    restitution: Real,
-    #[serde(alias = "color")]
-    colour: Option<String>,
+/// Declares the entry table of a box generator: `name`, its count field, then the fields
+/// [`Generated`] reads, with the generator's own spacing fields (if any) after `base_y`. Also
+/// gives the entry its [`Generated`] view.
+macro_rules! generator_entry {
+    (
+        $(#[$doc:meta])*
+        $entry:ident { $count:ident; $($(#[$attr:meta])* $spacing:ident: $ty:ty),* }
+    ) => {
+        entry_table! {
+            $(#[$doc])*
+            struct $entry {
+                name: Option<String>,
+                $count: u32,
+                size: Real,
+                #[serde(default)]
+                x: Real,
+                #[serde(default)]
+                base_y: Real,
+                $($(#[$attr])* $spacing: $ty,)*
+                #[serde(default = "default_density")]
+                density: Real,
+            }
+        }
+
+        impl $entry {
+            /// The fields every generator has, as written.
+            fn generated(&self) -> Generated<'_> {
+                Generated {
+                    size: self.size,
+                    x: self.x,
+                    base_y: self.base_y,
+                    density: self.density,
+                    friction: self.friction,
+                    restitution: self.restitution,
+                    colour: self.colour.as_deref(),
+                }
+            }
+        }
+    };
+}
+
+generator_entry! {
+    /// One `[[stack]]` table: `count` boxes of side `size`, bottom one resting on y = `base_y`,
+    /// `gap` apart.
+    StackEntry { count; #[serde(default)] gap: Real }
+}
+
+generator_entry! {
+    /// One `[[pyramid]]` table: `base` boxes of side `size` in the bottom row, one fewer per row.
+    PyramidEntry { base; }
 }
 
 /// Which array a table came from.
@@ -639,15 +661,31 @@ struct Generated<'a> {
 }
 
 impl Generated<'_> {
-    /// Check the numbers (size, x, base_y, density, friction, restitution, in that order),
-    /// naming the generator `at`.
-    fn check(&self, at: &str) -> Result<(), SceneError> {
+    /// Check the generator `at` before it adds `total` boxes to `bodies`, in this order: its
+    /// `count` field (`count`, `base`) is at least 1; the numbers (size, x, base_y, density,
+    /// friction, restitution, then the generator's own `spacing` lengths, each >= 0); its
+    /// colour; room in the scene. Returns the colour of its boxes.
+    fn check(
+        &self,
+        at: &str,
+        count: (&str, u32),
+        spacing: &[(&'static str, Real)],
+        total: u64,
+        bodies: &[SceneBody],
+    ) -> Result<Colour, SceneError> {
+        at_least_one(at, count.0, count.1)?;
         check(at, positive("size", self.size))?;
         check(at, finite("x", self.x))?;
         check(at, finite("base_y", self.base_y))?;
         check(at, positive("density", self.density))?;
         check(at, non_negative("friction", self.friction))?;
-        check(at, unit_interval("restitution", self.restitution))
+        check(at, unit_interval("restitution", self.restitution))?;
+        for &(field, length) in spacing {
+            check(at, non_negative(field, length))?;
+        }
+        let colour = parse_colour(at, self.colour)?;
+        reserve(bodies, total)?;
+        Ok(colour)
     }
 
     /// Validate one box at `position` named `name` in `colour`, and add it.
@@ -675,21 +713,6 @@ impl Generated<'_> {
     }
 }
 
-/// The [`Generated`] fields of a `[[stack]]` or `[[pyramid]]` entry (the same names in both).
-macro_rules! generated {
-    ($entry:expr) => {
-        Generated {
-            size: $entry.size,
-            x: $entry.x,
-            base_y: $entry.base_y,
-            density: $entry.density,
-            friction: $entry.friction,
-            restitution: $entry.restitution,
-            colour: $entry.colour.as_deref(),
-        }
-    };
-}
-
 /// A generator's count (`count`, `base`) must be at least 1.
 fn at_least_one(at: &str, field: &str, count: u32) -> Result<(), SceneError> {
     if count == 0 {
@@ -706,12 +729,14 @@ fn at_least_one(at: &str, field: &str, count: u32) -> Result<(), SceneError> {
 impl StackEntry {
     /// Box i (from 0 at the bottom) is centred at (x, base_y + size/2 + i (size + gap)).
     fn expand(self, at: &str, bodies: &mut Vec<SceneBody>) -> Result<(), SceneError> {
-        at_least_one(at, "count", self.count)?;
-        let boxes = generated!(self);
-        boxes.check(at)?;
-        check(at, non_negative("gap", self.gap))?;
-        let colour = parse_colour(at, boxes.colour)?;
-        reserve(bodies, self.count as u64)?;
+        let boxes = self.generated();
+        let colour = boxes.check(
+            at,
+            ("count", self.count),
+            &[("gap", self.gap)],
+            self.count as u64,
+            bodies,
+        )?;
         let prefix = self.name.as_deref().unwrap_or("stack");
         for i in 0..self.count {
             let y = self.base_y + 0.5 * self.size + i as Real * (self.size + self.gap);
@@ -730,12 +755,9 @@ impl PyramidEntry {
     /// Row r (from 0 at the bottom) has base - r boxes, centred on x, at y = base_y + (r + 1/2) size;
     /// box c of the row is at x - (base - r - 1) size / 2 + c size (Box2D's benchmark layout).
     fn expand(self, at: &str, bodies: &mut Vec<SceneBody>) -> Result<(), SceneError> {
-        at_least_one(at, "base", self.base)?;
-        let boxes = generated!(self);
-        boxes.check(at)?;
-        let colour = parse_colour(at, boxes.colour)?;
+        let boxes = self.generated();
         let base = self.base as u64;
-        reserve(bodies, base * (base + 1) / 2)?;
+        let colour = boxes.check(at, ("base", self.base), &[], base * (base + 1) / 2, bodies)?;
         let prefix = self.name.as_deref().unwrap_or("pyramid");
         for row in 0..self.base {
             let count = self.base - row;

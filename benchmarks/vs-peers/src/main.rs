@@ -48,7 +48,9 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::time::Instant;
+use tiltbox::measure::accuracy::max_penetration;
 use tiltbox::measure::cases::{benchmark_setups, Setup};
+use tiltbox::measure::machine::cpu_model;
 use tiltbox::physics::{BodyDef, MassSpec, Mixing, Settings, Shape, Vec2, World};
 
 // ---------------------------------------------------------------------------------------------
@@ -224,14 +226,7 @@ impl Engine for Tiltbox {
         self.world.step(self.dt as _).expect("tiltbox step failed");
     }
     fn max_penetration(&self) -> f64 {
-        self.world
-            .contacts()
-            .flat_map(|c| {
-                let n = c.count;
-                c.points.into_iter().take(n)
-            })
-            .map(|p| -(p.separation as f64))
-            .fold(0.0, f64::max)
+        max_penetration(&self.world)
     }
     fn contact_pairs(&self) -> usize {
         self.world.contact_count()
@@ -1201,15 +1196,7 @@ fn load_average() -> String {
 
 /// CPU model (from /proc/cpuinfo) and the number of CPUs this process may use.
 pub(crate) fn machine() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
+    let cpu = cpu_model();
     let n = std::thread::available_parallelism().map_or(0, |n| n.get());
     format!("{cpu}, nproc {n}")
 }

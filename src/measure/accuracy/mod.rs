@@ -249,8 +249,8 @@ pub(crate) fn run_steps(
     true
 }
 
-/// Deepest overlap among the current contacts (m, >= 0).
-pub(crate) fn max_penetration(world: &World) -> f64 {
+/// Deepest overlap among the current contacts (m, >= 0; 0 with no contact).
+pub fn max_penetration(world: &World) -> f64 {
     world
         .contacts()
         .flat_map(|c| {

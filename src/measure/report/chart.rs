@@ -38,8 +38,24 @@ fn color_for(label: &str, index: usize) -> RGBColor {
 /// Smallest error drawn on a log axis; exact (zero) errors are drawn here.
 pub const ERROR_FLOOR: f64 = 1e-9;
 
-fn plot_err<E: std::fmt::Debug>(e: E) -> io::Error {
+/// A plotters error as an I/O error, `chart: ` and what plotters said.
+pub(super) fn plot_err<E: std::fmt::Debug>(e: E) -> io::Error {
     io::Error::other(format!("chart: {e:?}"))
+}
+
+/// Draw `chart`'s legend at `position` in the report's style: white, framed, 13 px text.
+pub(super) fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> io::Result<()> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 13))
+        .draw()
+        .map_err(plot_err)
 }
 
 /// Draw `sweep` as error against run time per simulated second, log-log, to `path`.
@@ -161,14 +177,7 @@ pub fn chart_with_peers(
             .label("diverged (drawn at the top edge)")
             .legend(|(x, y)| Cross::new((x + 9, y), 5, RED.stroke_width(3)));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::LowerLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 13))
-        .draw()
-        .map_err(plot_err)?;
+    legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
     root.present().map_err(plot_err)?;
     Ok(())
 }

@@ -6,19 +6,12 @@ use super::chart::{chart_file, ERROR_FLOOR};
 use super::Report;
 use crate::measure::accuracy::sweep::{configurations, repeats, step_sizes};
 use crate::measure::accuracy::{config_label, extreme, fmt_num, Measurement, Outcome, Verdict};
+use crate::measure::machine::cpu_model;
 use crate::physics::{Real, Settings};
 use std::fmt::Write as _;
 
 fn machine() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
+    let cpu = cpu_model();
     let cores = std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(1);

@@ -7,6 +7,7 @@
 //! report does not sweep for tiltbox (the jittered stack, mass ratios) from the CSV alone, and
 //! [`section`] is the markdown that says where the points come from.
 
+use super::chart::legend;
 use plotters::coord::{combinators::LogCoord, Shift};
 use plotters::prelude::*;
 use std::fmt::Write as _;
@@ -254,15 +255,7 @@ fn draw_extra(
         .draw()
         .map_err(err)?;
     draw(&mut chart, points)?;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 13))
-        .draw()
-        .map_err(err)?;
-    Ok(())
+    legend(&mut chart, SeriesLabelPosition::UpperRight)
 }
 
 /// The markdown section: where the points come from, the CSV-only charts, and every point.

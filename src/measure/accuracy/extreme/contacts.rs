@@ -142,18 +142,12 @@ pub fn deep_overlap(settings: &Settings) -> Verdict {
         .collect();
     let mut speed: f64 = 0.0;
     let mut outside: f64 = 0.0;
-    let ok = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(3.0, DT_60),
-        Breakdown::BlownUp(100.0),
-        |w, _| {
-            speed = speed.max(max_speed(w));
-            for &id in &ids {
-                outside = outside.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
-            }
-        },
-    );
+    let ok = run_60hz(&mut w, 3.0, Breakdown::BlownUp(100.0), |w, _| {
+        speed = speed.max(max_speed(w));
+        for &id in &ids {
+            outside = outside.max(outside_box(pos(w, id), 10.0, 10.0, 0.0));
+        }
+    });
     let pen = max_penetration(&w);
     let slop = settings.linear_slop as f64;
     // At the end every box must be fully inside, give or take the allowed overlap.

@@ -15,15 +15,9 @@ pub fn tiny_bodies(settings: &Settings) -> Verdict {
     let top = ids[2];
     let p0 = pos(&w, top);
     let mut drift: f64 = 0.0;
-    let ok = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(5.0, DT_60),
-        Breakdown::BlownUp(100.0),
-        |w, _| {
-            drift = drift.max((pos(w, top).x - p0.x).abs() as f64);
-        },
-    );
+    let ok = run_60hz(&mut w, 5.0, Breakdown::BlownUp(100.0), |w, _| {
+        drift = drift.max((pos(w, top).x - p0.x).abs() as f64);
+    });
     let sinking = (p0.y - pos(&w, top).y) as f64;
     let speed = max_speed(&w);
     let slop = settings.linear_slop as f64;
@@ -55,15 +49,9 @@ pub fn large_bodies(settings: &Settings) -> Verdict {
         .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(10.0, 5.5)))
         .unwrap();
     let mut pen: f64 = 0.0;
-    let ok = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(5.0, DT_60),
-        Breakdown::BlownUp(1000.0),
-        |w, _| {
-            pen = pen.max(max_penetration(w));
-        },
-    );
+    let ok = run_60hz(&mut w, 5.0, Breakdown::BlownUp(1000.0), |w, _| {
+        pen = pen.max(max_penetration(w));
+    });
     let s = pos(&w, slab);
     let b = pos(&w, small);
     let tilt = w.body(slab).unwrap().angle().abs() as f64;

@@ -2,7 +2,7 @@
 //! are often made from tiles) and as one chain (issue 17).
 
 use super::*;
-use crate::measure::accuracy::{new_world, run_steps, steps_for, Breakdown, Verdict, DT_60};
+use crate::measure::accuracy::{new_world, Breakdown, Verdict};
 use crate::physics::segment::chain_bodies;
 use crate::physics::{vec2, BodyDef, BodyId, Real, Settings, Shape, World};
 
@@ -38,19 +38,13 @@ fn slide(mut w: World) -> Slide {
         lowest: f64::INFINITY,
         ok: true,
     };
-    s.ok = run_steps(
-        &mut w,
-        DT_60,
-        steps_for(SECONDS as f64, DT_60),
-        Breakdown::BlownUp(100.0),
-        |w, _| {
-            let Some(b) = w.body(id) else { return };
-            let dv = ((b.linear_velocity().x - SPEED) / SPEED).abs() as f64;
-            s.speed_change = s.speed_change.max(dv);
-            s.tilt = s.tilt.max(b.angle().abs() as f64);
-            s.lowest = s.lowest.min(b.position().y as f64);
-        },
-    );
+    s.ok = run_60hz(&mut w, SECONDS as f64, Breakdown::BlownUp(100.0), |w, _| {
+        let Some(b) = w.body(id) else { return };
+        let dv = ((b.linear_velocity().x - SPEED) / SPEED).abs() as f64;
+        s.speed_change = s.speed_change.max(dv);
+        s.tilt = s.tilt.max(b.angle().abs() as f64);
+        s.lowest = s.lowest.min(b.position().y as f64);
+    });
     s
 }
 

@@ -1,8 +1,8 @@
 //! How the per-body paths of the daemon scale with the number of bodies: a scene file read
-//! and built, spawning and removing through the daemon's command path, a pose keyframe, the `…/scene`
-//! reply, a checkpoint written and read back, and a journal read and replayed. Each should
-//! cost the same per body at 10k, 50k and 100k bodies (the last column: per-body time at N
-//! over per-body time at 10k; 1.0 is linear, 5 or 10 would be quadratic).
+//! and built, spawning and removing through the daemon's command path, a pose keyframe, the
+//! `…/scene` reply, a checkpoint written and read back, and a journal read and replayed. Each
+//! should cost the same per body at 10k, 50k and 100k bodies (the last column: per-body time
+//! at N over per-body time at 10k; 1.0 is linear, 5 or 10 would be quadratic).
 //!
 //! ```text
 //! cargo run --release --example scaling             # all three sizes (about a minute once built)
@@ -15,7 +15,9 @@
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
-use tiltbox::protocol::{encode, BodyRef, CommandKey, Remove, ShapeSpec, Spawn, SpawnBody, Vector};
+use tiltbox::protocol::{
+    encode, BodyRef, CommandKey, EventKind, Remove, ShapeSpec, Spawn, SpawnBody, Vector,
+};
 use tiltbox::scene::Scene;
 use tiltbox::service::journal::{replay, Journal, JournalWriter};
 use tiltbox::service::{
@@ -90,6 +92,20 @@ fn spawn_payloads(n: usize) -> Vec<Vec<u8>> {
         .collect()
 }
 
+/// Parse and apply every payload as a `key` command, as the daemon's tick thread does; each
+/// must be accepted (an `Added` or `Removed` event, not a rejection).
+fn apply_all(sim: &mut Simulation, key: CommandKey, payloads: &[Vec<u8>], c: &ServerConfig) {
+    for p in payloads {
+        let command = parse_command(key, p, &c.limits);
+        let event = sim.apply(Incoming { key, command });
+        let accepted = matches!(
+            event.as_ref().map(|e| &e.kind),
+            Some(EventKind::Added { .. } | EventKind::Removed { .. })
+        );
+        assert!(accepted, "{event:?}");
+    }
+}
+
 struct Row {
     path: &'static str,
     times: Vec<Duration>,
@@ -143,17 +159,7 @@ fn main() {
         record(
             "spawned, 64 a command (parse + apply)",
             best(empty, |mut sim| {
-                for p in &payloads {
-                    let command = parse_command(CommandKey::Spawn, p, &c.limits);
-                    let event = sim.apply(Incoming {
-                        key: CommandKey::Spawn,
-                        command,
-                    });
-                    assert!(
-                        matches!(event, Some(ref e) if matches!(e.kind, tiltbox::protocol::EventKind::Added { .. })),
-                        "{event:?}"
-                    );
-                }
+                apply_all(&mut sim, CommandKey::Spawn, &payloads, &c);
                 sim
             }),
         );
@@ -182,17 +188,7 @@ fn main() {
             best(
                 || Simulation::new(&c, SceneSource::Given(Box::new(scene.clone()))).expect("sim"),
                 |mut sim| {
-                    for p in &removals {
-                        let command = parse_command(CommandKey::Remove, p, &c.limits);
-                        let event = sim.apply(Incoming {
-                            key: CommandKey::Remove,
-                            command,
-                        });
-                        assert!(
-                            matches!(event, Some(ref e) if matches!(e.kind, tiltbox::protocol::EventKind::Removed { .. })),
-                            "{event:?}"
-                        );
-                    }
+                    apply_all(&mut sim, CommandKey::Remove, &removals, &c);
                     sim
                 },
             ),

@@ -368,4 +368,10 @@ pub struct Stats {
     pub commands_rejected: u64,
     /// Steps skipped since start because the loop fell too far behind.
     pub steps_dropped: u64,
+    /// Command samples the daemon's subscribers received since this process started (each
+    /// ends applied, rejected or dropped). Appended: older readers stop before it.
+    pub commands_received: u64,
+    /// Commands dropped since this process started because the command queue was full
+    /// (reported in aggregate by `Rejected` events; not in `commands_rejected`).
+    pub commands_dropped: u64,
 }

@@ -310,6 +310,8 @@ mod tests {
             commands_applied: 3,
             commands_rejected: 1,
             steps_dropped: 0,
+            commands_received: 6,
+            commands_dropped: 2,
         });
     }
 

@@ -62,11 +62,29 @@ fn example_sim() -> Simulation {
 fn the_documented_snapshots_are_real_and_exact() {
     let mut sim = example_sim();
     let (mut key_bytes, mut delta_bytes) = (Vec::new(), Vec::new());
+    // The moving body's true x (the engine's own f32), as the prose states it after each step.
+    let moving_x = |sim: &Simulation| {
+        sim.world()
+            .bodies()
+            .map(|b| b.position().x)
+            .fold(f32::MIN as tiltbox::physics::Real, |a, x| a.max(x)) as f32
+    };
     sim.step().unwrap();
     let key = sim.snapshot_into(&mut key_bytes).clone();
+    let x1 = moving_x(&sim);
     assert!(key.is_keyframe() && key.frame == 1 && key.poses.len() == 2);
     sim.step().unwrap();
     let delta = sim.snapshot_into(&mut delta_bytes).clone();
+    let x2 = moving_x(&sim);
+    for prose in [
+        format!("the true x {x1} within 1/2048"),
+        format!("the true {x2} within 1/2048"),
+    ] {
+        assert!(
+            doc().contains(&prose),
+            "docs/protocol.md must say {prose:?}"
+        );
+    }
     assert!(!delta.is_keyframe() && delta.frame == 2 && delta.reference == 1);
     assert_eq!(delta.poses.len(), 1, "only the moving body: {delta:?}");
 

@@ -81,6 +81,7 @@ pub enum ShapeSpec {
     /// daemon moves the body to the centroid.
     Polygon {
         /// Vertices, counter-clockwise, metres.
+        #[serde(deserialize_with = "super::bounded::vertices")]
         vertices: Vec<Vector>,
     },
     /// Variant 4: a line segment from `a` to `b` (m, body frame) grown by `radius` (m, may be
@@ -232,6 +233,7 @@ impl SpawnBody {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Spawn {
     /// The bodies, at least one.
+    #[serde(deserialize_with = "super::bounded::spawn_bodies")]
     pub bodies: Vec<SpawnBody>,
 }
 

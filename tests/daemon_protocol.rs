@@ -435,3 +435,46 @@ fn the_shipped_zenoh_configs_load() {
         c.zenoh_config().unwrap_or_else(|e| panic!("{f}: {e}"));
     }
 }
+
+/// docs/protocol.md: an accepted gravity or tilt yields no event (the new gravity is in the
+/// next snapshot); a refused one yields a `Rejected` event; an empty `Remove` is refused.
+#[test]
+fn accepted_gravity_and_tilt_yield_no_event_and_an_empty_remove_is_refused() {
+    let mut sim = example_sim();
+    let limits = ServerConfig::default().limits;
+    let apply = |sim: &mut Simulation, key: CommandKey, bytes: Vec<u8>| {
+        sim.apply(Incoming {
+            key,
+            command: tiltbox::service::parse_command(key, &bytes, &limits),
+        })
+    };
+    let g = encode(&SetGravity { x: 1.0, y: -5.0 }).unwrap();
+    assert_eq!(apply(&mut sim, CommandKey::Gravity, g), None);
+    let t = encode(&Tilt::Accelerometer {
+        x: 0.0,
+        y: -9.0,
+        z: 0.0,
+    })
+    .unwrap();
+    assert_eq!(apply(&mut sim, CommandKey::Tilt, t), None);
+    assert_eq!(sim.applied(), 2);
+    sim.step().unwrap();
+    let mut bytes = Vec::new();
+    let frame = sim.snapshot_into(&mut bytes).clone();
+    // gravity = (-a.x, -a.y) (protocol.md, Tilt)
+    assert_eq!(frame.gravity, Vector::new(0.0, 9.0), "{frame:?}");
+    let g = encode(&SetGravity { x: 1000.0, y: 0.0 }).unwrap();
+    let refused = apply(&mut sim, CommandKey::Gravity, g).expect("a Rejected event");
+    assert!(matches!(refused.kind, EventKind::Rejected { .. }));
+    let empty = encode(&Remove { ids: vec![] }).unwrap();
+    match apply(&mut sim, CommandKey::Remove, empty).map(|e| e.kind) {
+        Some(EventKind::Rejected { reason, .. }) => {
+            assert_eq!(reason, "ids is empty: nothing to remove");
+            assert!(
+                doc().contains("ids is empty: nothing to"),
+                "the doc quotes it"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -59,6 +59,7 @@ fn example_sim() -> Simulation {
 }
 
 #[test]
+#[allow(clippy::unnecessary_cast)] // Real -> f32 matters with the `f64` feature.
 fn the_documented_snapshots_are_real_and_exact() {
     let mut sim = example_sim();
     let (mut key_bytes, mut delta_bytes) = (Vec::new(), Vec::new());

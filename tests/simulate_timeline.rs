@@ -4,6 +4,7 @@
 //! nothing printed), and a journal recorded by a real daemon over Zenoh replays offline to
 //! the daemon's own final checkpoint, bit for bit.
 #![cfg(all(feature = "cli", feature = "net"))]
+#![allow(clippy::unnecessary_cast)] // Real -> f32 casts matter with the `f64` feature.
 
 mod common;
 

@@ -34,8 +34,10 @@ pub fn timeline(
 ) -> Result<ExitCode, Failure> {
     // The daemon's defaults, at this dt; the body limit raised to what the scene and the
     // timeline's spawns could reach (a scripted run is not a public server).
-    let mut config = ServerConfig::default();
-    config.tick_hz = 1.0 / plan.dt;
+    let mut config = ServerConfig {
+        tick_hz: 1.0 / plan.dt,
+        ..Default::default()
+    };
     config.validate().map_err(|e| {
         Failure::Usage(format!(
             "--dt {} with --timeline: the daemon's {e} (tick_hz = 1 / dt)",

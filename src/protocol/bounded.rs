@@ -56,22 +56,47 @@ pub(super) fn spawn_bodies<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<SpawnB
 }
 
 /// Deserialize a polygon's vertices, refusing more than [`MAX_VERTICES`] before reading any.
+///
+/// A binary format (postcard) is read as its bytes are laid out - the count (a varint), then
+/// the vertices - so the count is known even when it claims more than the payload holds
+/// (postcard's own sequence access hides such a count). A human-readable format (TOML, for
+/// `simulate --timeline`) is read as a list.
 pub(super) fn vertices<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Vector>, D::Error> {
-    struct Vertices;
-    impl<'de> Visitor<'de> for Vertices {
+    struct Prefixed;
+    impl<'de> Visitor<'de> for Prefixed {
         type Value = Vec<Vector>;
         fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-            write!(f, "3 to {MAX_VERTICES} vertices")
+            write!(f, "a count, then 3 to {MAX_VERTICES} vertices")
         }
         fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Vec<Vector>, A::Error> {
-            if let Some(n) = seq.size_hint().filter(|&n| n > MAX_VERTICES) {
+            let missing = || de::Error::custom("the vertex count is missing");
+            let n: u64 = seq.next_element()?.ok_or_else(missing)?;
+            let n = usize::try_from(n).unwrap_or(usize::MAX);
+            if n > MAX_VERTICES {
                 let body = BODY_INDEX.with(Cell::get);
                 REFUSED.with(|c| c.set(Some((body, n))));
                 return Err(de::Error::custom(format!(
                     "shape.vertices must hold 3 to {MAX_VERTICES} points, got {n}"
                 )));
             }
-            let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(MAX_VERTICES));
+            let mut out = Vec::with_capacity(n);
+            for i in 0..n {
+                out.push(
+                    seq.next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(i, &self))?,
+                );
+            }
+            Ok(out)
+        }
+    }
+    struct Listed;
+    impl<'de> Visitor<'de> for Listed {
+        type Value = Vec<Vector>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            write!(f, "3 to {MAX_VERTICES} vertices")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Vec<Vector>, A::Error> {
+            let mut out = Vec::with_capacity(MAX_VERTICES);
             while let Some(v) = seq.next_element()? {
                 if out.len() == MAX_VERTICES {
                     return Err(de::Error::custom(format!(
@@ -83,7 +108,12 @@ pub(super) fn vertices<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Vector>, D
             Ok(out)
         }
     }
-    d.deserialize_seq(Vertices)
+    if d.is_human_readable() {
+        d.deserialize_seq(Listed)
+    } else {
+        // The count and up to MAX_VERTICES vertices, read one by one.
+        d.deserialize_tuple(MAX_VERTICES + 1, Prefixed)
+    }
 }
 
 #[cfg(test)]

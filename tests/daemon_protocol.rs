@@ -48,14 +48,33 @@ fn example_sim() -> Simulation {
 }
 
 #[test]
+#[allow(clippy::unnecessary_cast)] // Real -> f32 matters with the `f64` feature.
 fn the_documented_snapshots_are_real_and_exact() {
     let mut sim = example_sim();
     let (mut key_bytes, mut delta_bytes) = (Vec::new(), Vec::new());
+    // The moving body's true x (the engine's own f32), as the prose states it after each step.
+    let moving_x = |sim: &Simulation| {
+        sim.world()
+            .bodies()
+            .map(|b| b.position().x)
+            .fold(f32::MIN as tiltbox::physics::Real, |a, x| a.max(x)) as f32
+    };
     sim.step().unwrap();
     let key = sim.snapshot_into(&mut key_bytes).clone();
+    let x1 = moving_x(&sim);
     assert!(key.is_keyframe() && key.frame == 1 && key.poses.len() == 2);
     sim.step().unwrap();
     let delta = sim.snapshot_into(&mut delta_bytes).clone();
+    let x2 = moving_x(&sim);
+    for prose in [
+        format!("the true x {x1} within 1/2048"),
+        format!("the true {x2} within 1/2048"),
+    ] {
+        assert!(
+            doc().contains(&prose),
+            "docs/protocol.md must say {prose:?}"
+        );
+    }
     assert!(!delta.is_keyframe() && delta.frame == 2 && delta.reference == 1);
     assert_eq!(delta.poses.len(), 1, "only the moving body: {delta:?}");
 
@@ -395,5 +414,48 @@ fn the_shipped_zenoh_configs_load() {
         c.zenoh.config_file = Some(path.into());
         c.validate().unwrap();
         c.zenoh_config().unwrap_or_else(|e| panic!("{f}: {e}"));
+    }
+}
+
+/// docs/protocol.md: an accepted gravity or tilt yields no event (the new gravity is in the
+/// next snapshot); a refused one yields a `Rejected` event; an empty `Remove` is refused.
+#[test]
+fn accepted_gravity_and_tilt_yield_no_event_and_an_empty_remove_is_refused() {
+    let mut sim = example_sim();
+    let limits = ServerConfig::default().limits;
+    let apply = |sim: &mut Simulation, key: CommandKey, bytes: Vec<u8>| {
+        sim.apply(Incoming {
+            key,
+            command: tiltbox::service::parse_command(key, &bytes, &limits),
+        })
+    };
+    let g = encode(&SetGravity { x: 1.0, y: -5.0 }).unwrap();
+    assert_eq!(apply(&mut sim, CommandKey::Gravity, g), None);
+    let t = encode(&Tilt::Accelerometer {
+        x: 0.0,
+        y: -9.0,
+        z: 0.0,
+    })
+    .unwrap();
+    assert_eq!(apply(&mut sim, CommandKey::Tilt, t), None);
+    assert_eq!(sim.applied(), 2);
+    sim.step().unwrap();
+    let mut bytes = Vec::new();
+    let frame = sim.snapshot_into(&mut bytes).clone();
+    // gravity = (-a.x, -a.y) (protocol.md, Tilt)
+    assert_eq!(frame.gravity, Vector::new(0.0, 9.0), "{frame:?}");
+    let g = encode(&SetGravity { x: 1000.0, y: 0.0 }).unwrap();
+    let refused = apply(&mut sim, CommandKey::Gravity, g).expect("a Rejected event");
+    assert!(matches!(refused.kind, EventKind::Rejected { .. }));
+    let empty = encode(&Remove { ids: vec![] }).unwrap();
+    match apply(&mut sim, CommandKey::Remove, empty).map(|e| e.kind) {
+        Some(EventKind::Rejected { reason, .. }) => {
+            assert_eq!(reason, "ids is empty: nothing to remove");
+            assert!(
+                doc().contains("ids is empty: nothing to"),
+                "the doc quotes it"
+            );
+        }
+        other => panic!("{other:?}"),
     }
 }

@@ -460,6 +460,8 @@ fn the_intake_channel_is_bounded_under_a_flood() {
     let dropped: u64 = dropped.iter().map(|d| d.load(Ordering::Relaxed)).sum();
     assert_eq!(queued, 16);
     assert_eq!(dropped, 5_000 - 16);
+    // every sample handed over is counted as received: queued + dropped
+    assert_eq!(intake.received().load(Ordering::Relaxed), 5_000);
     // oversized payloads are refused before decoding
     let big = vec![0u8; Limits::default().max_payload_bytes as usize + 1];
     let e = parse_command(CommandKey::Spawn, &big, &Limits::default()).unwrap_err();

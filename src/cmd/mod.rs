@@ -9,3 +9,5 @@ pub mod report;
 #[cfg(feature = "net")]
 pub mod serve;
 pub mod simulate;
+#[cfg(feature = "net")]
+mod simulate_scheduled;

@@ -1,13 +1,16 @@
-//! `tiltbox simulate`: step a scene headless and print the dynamic bodies' poses.
+//! `tiltbox simulate`: step a scene headless and print the dynamic bodies' poses; with
+//! `--timeline` or `--journal`, through the daemon's own simulation and command code
+//! (`simulate_scheduled.rs`).
 
 use anyhow::{bail, Context};
 use clap::ValueEnum;
 use serde::Serialize;
+use std::borrow::Cow;
 use std::io::{self, BufWriter, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use tiltbox::cli::Failure;
-use tiltbox::physics::{BodyId, Real, SolverKind, World};
+use tiltbox::physics::{Body, BodyId, Real, SolverKind, World};
 use tiltbox::scene::{Scene, SceneError};
 
 /// The most steps one run may take (seconds / dt), so a typo cannot hang the terminal.
@@ -16,9 +19,10 @@ const MAX_STEPS: f64 = 1e5;
 /// Arguments of `tiltbox simulate`.
 #[derive(clap::Args, Debug)]
 pub struct SimulateArgs {
-    /// Scene file (TOML; see docs/scenes.md), e.g. config/scenes/falling_bricks.toml.
-    #[arg(value_name = "SCENE")]
-    pub scene: PathBuf,
+    /// Scene file (TOML; see docs/scenes.md), e.g. config/scenes/falling_bricks.toml. With
+    /// --journal it replaces the scene recorded in the journal.
+    #[arg(value_name = "SCENE", required_unless_present = "journal")]
+    pub scene: Option<PathBuf>,
     /// Simulated time to run, in seconds (at most 100,000 steps of --dt).
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub seconds: f64,
@@ -34,6 +38,14 @@ pub struct SimulateArgs {
     /// Override the scene's solver.
     #[arg(long, value_enum)]
     pub solver: Option<SolverArg>,
+    /// Commands at given simulated times (TOML `[[at]]` tables: gravity, tilt, spawn,
+    /// remove; docs/scenes.md), validated and applied as the daemon applies commands.
+    #[arg(long, value_name = "FILE", conflicts_with = "journal")]
+    pub timeline: Option<PathBuf>,
+    /// Replay a journal written by `tiltbox serve --record LOG`: its config, scene (unless
+    /// SCENE is given) and commands at their recorded frames; prints as the run went.
+    #[arg(long, value_name = "LOG", conflicts_with_all = ["seconds", "dt", "solver"])]
+    pub journal: Option<PathBuf>,
 }
 
 /// How frames are printed.
@@ -65,11 +77,11 @@ impl From<SolverArg> for SolverKind {
 }
 
 /// The checked run plan.
-struct Plan {
-    steps: u64,
+pub(super) struct Plan {
+    pub(super) steps: u64,
     /// The step as asked for (s); the engine steps by it rounded to `Real`.
-    dt: f64,
-    every: u64,
+    pub(super) dt: f64,
+    pub(super) every: u64,
 }
 
 /// Check the flags, naming the flag and the value on refusal.
@@ -116,19 +128,38 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode, Failure> {
     // A bad flag or a scene that cannot be used is a bad value: exit 2, as everywhere.
     let usage = |e: anyhow::Error| Failure::Usage(format!("{e:#}"));
     let plan = plan(&args).map_err(usage)?;
-    let mut scene = Scene::load(&args.scene)
-        .map_err(|e| match e {
-            // already names the file
-            SceneError::Io { .. } => anyhow::Error::new(e),
-            e => anyhow::Error::new(e).context(format!("scene {}", args.scene.display())),
-        })
-        .map_err(usage)?;
+    let scene = match &args.scene {
+        Some(path) => Some(load_scene(path).map_err(usage)?),
+        None => None,
+    };
+    if let Some(log) = &args.journal {
+        #[cfg(feature = "net")]
+        return super::simulate_scheduled::journal(log, scene, plan.every, args.format);
+        #[cfg(not(feature = "net"))]
+        return Err(Failure::Usage(format!(
+            "--journal {}: this build has no `net` feature (the daemon's code)",
+            log.display()
+        )));
+    }
+    let (mut scene, scene_path) = (
+        scene.expect("clap requires SCENE without --journal"),
+        args.scene.clone().unwrap_or_default(),
+    );
     if let Some(solver) = args.solver {
         scene.settings.solver = solver.into();
     }
+    if let Some(timeline) = &args.timeline {
+        #[cfg(feature = "net")]
+        return super::simulate_scheduled::timeline(scene, timeline, &plan, args.format);
+        #[cfg(not(feature = "net"))]
+        return Err(Failure::Usage(format!(
+            "--timeline {}: this build has no `net` feature (the daemon's code)",
+            timeline.display()
+        )));
+    }
     let (mut world, ids) = scene
         .build_world()
-        .with_context(|| format!("scene {}", args.scene.display()))
+        .with_context(|| format!("scene {}", scene_path.display()))
         .map_err(usage)?;
     let tracked: Vec<(BodyId, &str)> = scene
         .dynamic_bodies()
@@ -139,12 +170,26 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode, Failure> {
     let mut out = BufWriter::new(stdout.lock());
     let result = simulate(&mut world, &tracked, &plan, args.format, &mut out)
         .and_then(|()| out.flush().context("writing to stdout"));
+    finish(result)
+}
+
+/// The exit of a run that printed: success, also when the reader went away (`| head`).
+pub(super) fn finish(result: anyhow::Result<()>) -> Result<ExitCode, Failure> {
     match result {
         Ok(()) => Ok(ExitCode::SUCCESS),
         // The reader went away (`| head`): that ends the run, it is not a failure.
         Err(e) if is_broken_pipe(&e) => Ok(ExitCode::SUCCESS),
         Err(e) => Err(e.into()),
     }
+}
+
+/// Load a scene file; the error names the file.
+fn load_scene(path: &std::path::Path) -> anyhow::Result<Scene> {
+    Scene::load(path).map_err(|e| match e {
+        // already names the file
+        SceneError::Io { .. } => anyhow::Error::new(e),
+        e => anyhow::Error::new(e).context(format!("scene {}", path.display())),
+    })
 }
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {
@@ -163,12 +208,6 @@ fn simulate(
     format: Format,
     out: &mut impl Write,
 ) -> anyhow::Result<()> {
-    let name_width = tracked
-        .iter()
-        .map(|(_, n)| n.chars().count())
-        .max()
-        .unwrap_or(0)
-        .max(4);
     for frame in 0..=plan.steps {
         if frame > 0 {
             world
@@ -176,26 +215,43 @@ fn simulate(
                 .with_context(|| format!("step {frame}"))?;
         }
         if frame % plan.every == 0 || frame == plan.steps {
-            // frame x dt as asked for, rather than the engine's sum of rounded steps, to the
-            // nanosecond (3 x 0.1 prints 0.3, not 0.30000000000000004)
-            let time = (frame as f64 * plan.dt * 1e9).round() / 1e9;
-            let rows = rows(world, tracked);
-            match format {
-                Format::Jsonl => {
-                    let line = FrameJson {
-                        frame,
-                        time,
-                        bodies: rows,
-                    };
-                    serde_json::to_writer(&mut *out, &line)
-                        .map_err(io::Error::from)
-                        .and_then(|()| writeln!(out))
-                        .context("writing to stdout")?;
-                }
-                Format::Table => {
-                    write_table(out, frame, time, &rows, name_width).context("writing to stdout")?
-                }
-            }
+            print_frame(out, format, frame, plan.dt, &rows(world, tracked))?;
+        }
+    }
+    Ok(())
+}
+
+/// Print one frame's rows in `format`.
+pub(super) fn print_frame(
+    out: &mut impl Write,
+    format: Format,
+    frame: u64,
+    dt: f64,
+    rows: &[Row<'_>],
+) -> anyhow::Result<()> {
+    // frame x dt as asked for, rather than the engine's sum of rounded steps, to the
+    // nanosecond (3 x 0.1 prints 0.3, not 0.30000000000000004)
+    let time = (frame as f64 * dt * 1e9).round() / 1e9;
+    match format {
+        Format::Jsonl => {
+            let line = FrameJson {
+                frame,
+                time,
+                bodies: rows,
+            };
+            serde_json::to_writer(&mut *out, &line)
+                .map_err(io::Error::from)
+                .and_then(|()| writeln!(out))
+                .context("writing to stdout")?;
+        }
+        Format::Table => {
+            let name_width = rows
+                .iter()
+                .map(|r| r.name.chars().count())
+                .max()
+                .unwrap_or(0)
+                .max(4);
+            write_table(out, frame, time, rows, name_width).context("writing to stdout")?
         }
     }
     Ok(())
@@ -203,18 +259,18 @@ fn simulate(
 
 /// One printed frame in `jsonl`.
 #[derive(Serialize)]
-struct FrameJson<'a> {
+struct FrameJson<'a, 'r> {
     frame: u64,
     /// Simulated time, s.
     time: f64,
-    bodies: Vec<Row<'a>>,
+    bodies: &'r [Row<'a>],
 }
 
 /// One dynamic body's state: position (m), angle (rad), velocity (m/s), angular velocity (rad/s).
 #[derive(Serialize)]
-struct Row<'a> {
+pub(super) struct Row<'a> {
     id: String,
-    name: &'a str,
+    name: Cow<'a, str>,
     x: Real,
     y: Real,
     angle: Real,
@@ -228,22 +284,24 @@ struct Row<'a> {
 fn rows<'a>(world: &World, tracked: &[(BodyId, &'a str)]) -> Vec<Row<'a>> {
     tracked
         .iter()
-        .filter_map(|&(id, name)| {
-            let b = world.body(id)?;
-            let (p, v) = (b.position(), b.linear_velocity());
-            Some(Row {
-                id: id.to_string(),
-                name,
-                x: p.x,
-                y: p.y,
-                angle: b.angle(),
-                vx: v.x,
-                vy: v.y,
-                omega: b.angular_velocity(),
-                asleep: !b.is_awake(),
-            })
-        })
+        .filter_map(|&(id, name)| Some(row(world.body(id)?, Cow::Borrowed(name))))
         .collect()
+}
+
+/// One body's row.
+pub(super) fn row<'a>(b: &Body, name: Cow<'a, str>) -> Row<'a> {
+    let (p, v) = (b.position(), b.linear_velocity());
+    Row {
+        id: b.id().to_string(),
+        name,
+        x: p.x,
+        y: p.y,
+        angle: b.angle(),
+        vx: v.x,
+        vy: v.y,
+        omega: b.angular_velocity(),
+        asleep: !b.is_awake(),
+    }
 }
 
 fn write_table(

@@ -81,6 +81,7 @@ pub enum ShapeSpec {
     /// daemon moves the body to the centroid.
     Polygon {
         /// Vertices, counter-clockwise, metres.
+        #[serde(deserialize_with = "super::bounded::vertices")]
         vertices: Vec<Vector>,
     },
     /// Variant 4: a line segment from `a` to `b` (m, body frame) grown by `radius` (m, may be
@@ -232,6 +233,7 @@ impl SpawnBody {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Spawn {
     /// The bodies, at least one.
+    #[serde(deserialize_with = "super::bounded::spawn_bodies")]
     pub bodies: Vec<SpawnBody>,
 }
 
@@ -390,4 +392,10 @@ pub struct Stats {
     pub commands_rejected: u64,
     /// Steps skipped since start because the loop fell too far behind.
     pub steps_dropped: u64,
+    /// Command samples the daemon's subscribers received since this process started (each
+    /// ends applied, rejected or dropped). Appended: older readers stop before it.
+    pub commands_received: u64,
+    /// Commands dropped since this process started because the command queue was full
+    /// (reported in aggregate by `Rejected` events; not in `commands_rejected`).
+    pub commands_dropped: u64,
 }

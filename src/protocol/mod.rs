@@ -8,6 +8,7 @@
 //!
 //! [`decode`] never panics: it returns a [`DecodeError`] saying what was wrong.
 
+mod bounded;
 pub mod keys;
 pub mod messages;
 pub mod snapshot;
@@ -71,6 +72,16 @@ pub enum DecodeError {
         /// The message expected.
         message: &'static str,
     },
+    /// A polygon's vertex count above the limit, refused as soon as its length was read
+    /// (the vertices themselves are not read, so a count larger than the payload is named
+    /// as such, not as a truncated payload).
+    #[error("{}shape.vertices must hold 3 to {} points, got {count}", .body.map(|i| format!("bodies[{i}]: ")).unwrap_or_default(), crate::physics::convex::MAX_VERTICES)]
+    TooManyVertices {
+        /// Index of the spawn body, when the polygon was in a spawn.
+        body: Option<usize>,
+        /// The vertex count the payload claims.
+        count: usize,
+    },
     /// A field had bytes that are not a valid value of its type.
     #[error("malformed {message}: {what}")]
     Malformed {
@@ -132,8 +143,12 @@ pub fn decode<M: Message>(bytes: &[u8]) -> Result<M, DecodeError> {
     if version != VERSION {
         return Err(DecodeError::Version { found: version });
     }
+    bounded::reset();
     let (msg, rest) = postcard::take_from_bytes::<M>(body).map_err(|e| {
         use postcard::Error as P;
+        if let Some((body, count)) = bounded::take_refused() {
+            return DecodeError::TooManyVertices { body, count };
+        }
         let malformed = |what| DecodeError::Malformed { message, what };
         match e {
             P::DeserializeUnexpectedEnd => DecodeError::Truncated { message },
@@ -302,6 +317,8 @@ mod tests {
             commands_applied: 3,
             commands_rejected: 1,
             steps_dropped: 0,
+            commands_received: 6,
+            commands_dropped: 2,
         });
     }
 

@@ -113,6 +113,7 @@ pub struct Intake {
     tx: SyncSender<Incoming>,
     limits: Arc<Limits>,
     dropped: DroppedCounts,
+    received: Arc<AtomicU64>,
 }
 
 impl Intake {
@@ -123,12 +124,20 @@ impl Intake {
             tx,
             limits: Arc::new(limits),
             dropped,
+            received: Arc::default(),
         }
+    }
+
+    /// How many samples [`Intake::handle`] has been given (every one is then queued or
+    /// counted as dropped): the `commands_received` of `…/stats`.
+    pub fn received(&self) -> Arc<AtomicU64> {
+        self.received.clone()
     }
 
     /// Decode, validate and queue. Never blocks: a full channel is counted and reported by the
     /// tick thread as a rejection.
     pub fn handle(&self, key: CommandKey, payload: &[u8]) {
+        self.received.fetch_add(1, Ordering::Relaxed);
         let command = parse_command(key, payload, &self.limits);
         match self.tx.try_send(Incoming { key, command }) {
             Ok(()) => {}

@@ -407,6 +407,17 @@ impl Journal {
     }
 }
 
+impl Journal {
+    /// The last frame the log reaches (its `End` record, else its last `Frame` record), or
+    /// `None` if it records no step.
+    pub fn last_frame(&self) -> Option<u64> {
+        self.records.iter().rev().find_map(|r| match r {
+            Record::Frame { frame, .. } | Record::End { frame } => Some(*frame),
+            Record::Command { .. } => None,
+        })
+    }
+}
+
 /// What a replay found.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ReplayReport {
@@ -435,6 +446,17 @@ pub struct ReplayReport {
 pub fn replay(
     journal: &Journal,
     scene: Option<SceneSource>,
+    on_frame: impl FnMut(&Simulation),
+) -> Result<ReplayReport, JournalError> {
+    replay_with(journal, scene, |_| {}, on_frame)
+}
+
+/// [`replay`], with `on_start` seeing the starting Simulation before anything is applied or
+/// stepped (`tiltbox simulate --journal` prints it).
+pub fn replay_with(
+    journal: &Journal,
+    scene: Option<SceneSource>,
+    on_start: impl FnOnce(&Simulation),
     mut on_frame: impl FnMut(&Simulation),
 ) -> Result<ReplayReport, JournalError> {
     let config = journal.config()?;
@@ -447,6 +469,7 @@ pub fn replay(
         }
         None => Simulation::new(&config, source).map_err(start)?,
     };
+    on_start(&sim);
     let mut report = ReplayReport {
         start_frame: sim.frame(),
         truncated: journal.truncated,

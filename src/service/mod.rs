@@ -15,6 +15,8 @@
 //! - `bench`: the `bench-net` measurement ([`bench_net`]).
 //! - [`checkpoint`] and [`journal`]: the daemon's files (checkpoints and resume; the command
 //!   journal and deterministic replay), whose errors are [`FileError`]s.
+//! - [`timeline`]: commands scheduled at simulated times for `tiltbox simulate`, validated
+//!   and applied as the daemon's are.
 
 mod bench;
 pub mod checkpoint;
@@ -26,6 +28,7 @@ mod net;
 mod scene_query;
 mod sim;
 mod tick;
+pub mod timeline;
 mod wire;
 
 pub use bench::{bench_net, gas_scene, BenchReport};

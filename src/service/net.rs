@@ -110,21 +110,17 @@ pub struct ServerOptions {
     pub on_publish: Option<PublishHook>,
 }
 
-enum Outgoing {
-    Event(Vec<u8>),
-    Stats(Vec<u8>),
-}
-
 struct ZenohOutputs {
     poses: Publisher<'static>,
-    tx: tokio::sync::mpsc::Sender<Outgoing>,
+    tx: tokio::sync::mpsc::Sender<Vec<u8>>,
+    stats_tx: tokio::sync::mpsc::Sender<Vec<u8>>,
     on_publish: Option<PublishHook>,
 }
 
 impl ZenohOutputs {
-    fn queue(&mut self, what: &str, msg: Outgoing) {
-        if self.tx.try_send(msg).is_err() {
-            tracing::warn!("{what} dropped: the publisher task is behind or gone");
+    fn queue(tx: &tokio::sync::mpsc::Sender<Vec<u8>>, what: &str, payload: Vec<u8>) {
+        if tx.try_send(payload).is_err() {
+            tracing::warn!("{what} dropped: its publisher task is behind or gone");
         }
     }
 }
@@ -140,10 +136,10 @@ impl Outputs for ZenohOutputs {
         }
     }
     fn event(&mut self, payload: Vec<u8>) {
-        self.queue("event", Outgoing::Event(payload));
+        Self::queue(&self.tx, "event", payload);
     }
     fn stats(&mut self, payload: Vec<u8>) {
-        self.queue("stats", Outgoing::Stats(payload));
+        Self::queue(&self.stats_tx, "stats", payload);
     }
 }
 
@@ -227,7 +223,7 @@ impl Server {
             .map_err(zerr("poses publisher"))?;
         let events = session
             .declare_publisher(keys.events())
-            .congestion_control(CongestionControl::Block)
+            .congestion_control(CongestionControl::Drop)
             .await
             .map_err(zerr("events publisher"))?;
         let stats = session
@@ -235,26 +231,35 @@ impl Server {
             .await
             .map_err(zerr("stats publisher"))?;
 
-        // Events and stats are put from a task, so a congested link never blocks the loop.
-        let (out_tx, mut out_rx) = tokio::sync::mpsc::channel::<Outgoing>(1024);
-        let publisher_task = tokio::spawn(async move {
-            while let Some(msg) = out_rx.recv().await {
-                let (publisher, payload) = match msg {
-                    Outgoing::Event(p) => (&events, p),
-                    Outgoing::Stats(p) => (&stats, p),
-                };
-                if let Err(e) = publisher.put(payload).await {
-                    tracing::warn!("cannot publish on {}: {e}", publisher.key_expr());
+        // Events and stats are put from tasks, so a congested link never blocks the loop; each
+        // its own, so an event put blocked by a stalled subscriber (`Block` waits up to 5 s
+        // for its link) does not hold the stats back.
+        let (out_tx, mut out_rx) = tokio::sync::mpsc::channel::<Vec<u8>>(1024);
+        let (stats_tx, mut stats_rx) = tokio::sync::mpsc::channel::<Vec<u8>>(4);
+        let events_task = tokio::spawn(async move {
+            while let Some(payload) = out_rx.recv().await {
+                if let Err(e) = events.put(payload).await {
+                    tracing::warn!("cannot publish on {}: {e}", events.key_expr());
                 }
             }
             let _ = events.undeclare().await;
+        });
+        let stats_task = tokio::spawn(async move {
+            while let Some(payload) = stats_rx.recv().await {
+                if let Err(e) = stats.put(payload).await {
+                    tracing::warn!("cannot publish on {}: {e}", stats.key_expr());
+                }
+            }
             let _ = stats.undeclare().await;
+        });
+        let publisher_task = tokio::spawn(async move {
+            let _ = tokio::join!(events_task, stats_task);
         });
 
         // The channels between Zenoh callbacks and the tick thread.
         let capacity = config.command_queue;
         let (tx, rx) = sync_channel::<Incoming>(capacity as usize);
-        let shared = Shared::default();
+        let mut shared = Shared::default();
         let stop = Arc::new(AtomicBool::new(false));
         // The queryable: the callback only hands the query to a task, which asks the tick
         // thread for the state (built only then) and replies to every query that came in
@@ -300,6 +305,7 @@ impl Server {
 
         // The command subscribers.
         let intake = Intake::new(tx, config.limits.clone(), shared.dropped.clone());
+        shared.received = intake.received();
         let mut subscribers = Vec::new();
         for key in CommandKey::ALL {
             let intake = intake.clone();
@@ -322,6 +328,7 @@ impl Server {
             inner: ZenohOutputs {
                 poses,
                 tx: out_tx,
+                stats_tx,
                 on_publish: options.on_publish.clone(),
             },
             journal,
@@ -376,8 +383,13 @@ impl Server {
             .map_err(|e| ServiceError::Thread(e.to_string()))?;
         let (outputs, summary) =
             joined.map_err(|_| ServiceError::Thread("the tick thread panicked".into()))?;
-        let ZenohOutputs { poses, tx, .. } = outputs.inner;
-        drop(tx);
+        let ZenohOutputs {
+            poses,
+            tx,
+            stats_tx,
+            ..
+        } = outputs.inner;
+        drop((tx, stats_tx));
         let _ = poses.undeclare().await;
         if tokio::time::timeout(Duration::from_millis(500), self.publisher_task)
             .await

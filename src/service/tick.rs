@@ -82,6 +82,8 @@ impl<O: Outputs> Outputs for Recording<O> {
 pub(crate) struct Shared {
     /// Commands a full channel refused, per key: reported as rejections.
     pub(crate) dropped: DroppedCounts,
+    /// Command samples the subscribers received ([`super::command::Intake::received`]).
+    pub(crate) received: Arc<std::sync::atomic::AtomicU64>,
     /// Late joiners waiting for the full state.
     pub(crate) scene_queries: Arc<SceneQueries>,
 }
@@ -118,6 +120,15 @@ pub struct RunSummary {
     pub frames: u64,
     /// Steps dropped because the loop fell behind.
     pub steps_dropped: u64,
+    /// Commands dropped: refused by a full command channel, or still queued when the loop
+    /// stopped.
+    pub commands_dropped: u64,
+    /// At the stop: command samples the subscribers received (`commands_received`).
+    pub commands_received: u64,
+    /// At the stop: commands applied since the start (`commands_applied`).
+    pub commands_applied: u64,
+    /// At the stop: commands rejected with an event since the start (`commands_rejected`).
+    pub commands_rejected: u64,
     /// Per tick: how long after its deadline it started (us); only with `record`.
     pub lateness_us: Vec<u32>,
     /// Per tick: `World::step` time (us); only with `record`.
@@ -197,6 +208,7 @@ pub(crate) fn run_shared<O: Outputs>(
         for key in CommandKey::ALL {
             let n = shared.dropped[key.index()].swap(0, Ordering::Relaxed);
             if n > 0 {
+                summary.commands_dropped += n;
                 let ev = sim.reject_dropped(key, n, cfg.command_capacity);
                 publish_event(&mut out, &ev);
             }
@@ -254,6 +266,8 @@ pub(crate) fn run_shared<O: Outputs>(
                 commands_applied: sim.applied(),
                 commands_rejected: sim.rejected(),
                 steps_dropped: summary.steps_dropped,
+                commands_received: shared.received.load(Ordering::Relaxed),
+                commands_dropped: summary.commands_dropped,
             };
             match encode(&stats) {
                 Ok(p) => out.stats(p),
@@ -264,6 +278,21 @@ pub(crate) fn run_shared<O: Outputs>(
             window.worst_lateness_us = 0;
         }
     }
+    // Every command ends counted: what is still queued (or was refused by the full channel
+    // since the last tick) will never be applied.
+    let unapplied = rx.try_iter().count() as u64
+        + shared
+            .dropped
+            .iter()
+            .map(|d| d.swap(0, Ordering::Relaxed))
+            .sum::<u64>();
+    if unapplied > 0 {
+        tracing::warn!("{unapplied} command(s) still queued at shutdown were dropped");
+    }
+    summary.commands_dropped += unapplied;
+    summary.commands_received = shared.received.load(Ordering::Relaxed);
+    summary.commands_applied = sim.applied();
+    summary.commands_rejected = sim.rejected();
     out.finished(&sim);
     tracing::info!(frames = summary.frames, "tick loop stopped");
     (out, summary)

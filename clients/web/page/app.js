@@ -156,7 +156,8 @@ const MESSAGES = {
   Stats: r => ({
     frame: r.u64(), bodies: r.u32(), awake: r.u32(), contacts: r.u32(), step_us_median: r.u32(),
     step_us_max: r.u32(), lateness_us_max: r.u32(), commands_applied: r.u64(),
-    commands_rejected: r.u64(), steps_dropped: r.u64(),
+    commands_rejected: r.u64(), steps_dropped: r.u64(), commands_received: r.u64(),
+    commands_dropped: r.u64(),
   }),
   SceneState: r => ({ world: r.string(), scene: r.string(), frame: r.u64(), time: r.f64(), gravity: vector(r), bodies: r.seq(bodyInfo) }),
   SetGravity: r => ({ x: r.f32(), y: r.f32() }),

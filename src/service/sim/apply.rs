@@ -11,6 +11,10 @@ use std::collections::HashSet;
 impl Simulation {
     fn reject(&mut self, key: CommandKey, reason: String) -> Event {
         self.rejected += 1;
+        self.rejected_event(key, reason)
+    }
+
+    fn rejected_event(&self, key: CommandKey, reason: String) -> Event {
         tracing::warn!(key = %self.keys.command(key), frame = self.next_frame(), "rejected: {reason}");
         Event {
             frame: self.next_frame(),
@@ -21,10 +25,11 @@ impl Simulation {
         }
     }
 
-    /// The rejection for `count` commands on `key` dropped because the command channel was full.
+    /// The `Rejected` event for `count` commands on `key` dropped because the command channel
+    /// was full. They are not counted in [`Simulation::rejected`]: the tick loop counts them
+    /// as dropped (`commands_dropped` in `…/stats`).
     pub fn reject_dropped(&mut self, key: CommandKey, count: u64, capacity: u32) -> Event {
-        self.rejected += count - 1; // reject() counts one
-        self.reject(
+        self.rejected_event(
             key,
             format!("command queue full (capacity {capacity}): {count} command(s) dropped"),
         )

@@ -214,9 +214,14 @@ impl Simulation {
     pub fn applied(&self) -> u64 {
         self.applied
     }
-    /// Commands rejected since the start, dropped ones included.
+    /// Commands rejected since the start, each with its `Rejected` event (commands a full
+    /// queue dropped are counted by the tick loop, not here).
     pub fn rejected(&self) -> u64 {
         self.rejected
+    }
+    /// The name `body` was given by its scene or its spawn (empty if none).
+    pub fn body_name(&self, body: &crate::physics::Body) -> String {
+        self.bodies.meta_of(body).name
     }
     /// Dynamic bodies that are awake.
     pub fn awake_count(&self) -> usize {

@@ -232,8 +232,9 @@ impl Server {
             .map_err(zerr("stats publisher"))?;
 
         // Events and stats are put from tasks, so a congested link never blocks the loop; each
-        // its own, so an event put blocked by a stalled subscriber (`Block` waits up to 5 s
-        // for its link) does not hold the stats back.
+        // its own, so a burst of events queued behind a slow link does not hold the stats
+        // back. (Events were put with `Block`, which waited up to 5 s for a stalled
+        // subscriber's link and froze the whole session: see docs/reliability.md.)
         let (out_tx, mut out_rx) = tokio::sync::mpsc::channel::<Vec<u8>>(1024);
         let (stats_tx, mut stats_rx) = tokio::sync::mpsc::channel::<Vec<u8>>(4);
         let events_task = tokio::spawn(async move {

@@ -7,7 +7,9 @@
 mod common;
 
 use common::bodies::random_brick as brick;
-use common::net::{daemon_config, open, spawn_loop, subscribe};
+use common::net::{
+    daemon_config, open, serve, spawn_and_tilt_until_added, spawn_loop, subscribe, WAIT,
+};
 use common::rng::Rng;
 use common::temp_dir;
 use std::sync::atomic::Ordering;
@@ -322,41 +324,13 @@ async fn the_daemon_records_a_journal_that_replays() {
     let path = dir.join("daemon.journal");
     let mut config = daemon_config(port);
     config.record = Some(path.clone());
-    let server = tiltbox::service::Server::start(&config, Default::default())
-        .await
-        .unwrap();
+    let server = serve(&config).await;
     let keys = server.keys().clone();
 
     let session = open(port).await;
     let (mut events, _sub) = subscribe::<Event>(&session, keys.events()).await;
     // Wait until the daemon hears us: put spawns until one is acknowledged.
-    let mut rng = Rng(7);
-    let deadline = Instant::now() + Duration::from_secs(5);
-    let mut added = 0;
-    while added < 3 {
-        assert!(Instant::now() < deadline, "no Added events");
-        let spawn = Spawn {
-            bodies: vec![brick(&mut rng)],
-        };
-        session
-            .put(keys.spawn(), encode(&spawn).unwrap())
-            .await
-            .unwrap();
-        let tilt = Tilt::Accelerometer {
-            x: rng.f(-5.0, 5.0),
-            y: -9.0,
-            z: 0.0,
-        };
-        session
-            .put(keys.tilt(), encode(&tilt).unwrap())
-            .await
-            .unwrap();
-        if let Ok(Some(e)) = tokio::time::timeout(Duration::from_millis(100), events.recv()).await {
-            if matches!(e.kind, EventKind::Added { .. }) {
-                added += 1;
-            }
-        }
-    }
+    spawn_and_tilt_until_added(&session, &keys, &mut events, &mut Rng(7), 3, WAIT).await;
     let summary = server.shutdown().await.unwrap();
     let journal = Journal::read(&path).unwrap();
     let report = replay(&journal, None, |_| {}).unwrap();

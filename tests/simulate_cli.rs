@@ -2,18 +2,12 @@
 
 #![cfg(feature = "cli")]
 
+mod common;
+
+use common::cli::tiltbox;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-
-fn tiltbox(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tiltbox"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .stdin(Stdio::null())
-        .output()
-        .expect("run tiltbox")
-}
 
 const BRICKS: &str = "config/scenes/falling_bricks.toml";
 

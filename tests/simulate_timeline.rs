@@ -8,26 +8,17 @@
 
 mod common;
 
-use common::bodies::random_brick;
-use common::net::{daemon_config, open, subscribe};
+use common::cli::tiltbox;
+use common::net::{daemon_config, open, serve, spawn_and_tilt_until_added, subscribe};
 use common::rng::Rng;
 use common::temp_dir;
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Output;
+use std::time::Duration;
 use tiltbox::physics::World;
 use tiltbox::protocol::*;
 use tiltbox::service::checkpoint;
-
-fn tiltbox(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tiltbox"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .stdin(Stdio::null())
-        .output()
-        .expect("run tiltbox")
-}
 
 fn jsonl(o: &Output) -> Vec<Value> {
     assert!(
@@ -41,6 +32,23 @@ fn jsonl(o: &Output) -> Vec<Value> {
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
         .collect()
+}
+
+/// `simulate SCENE --seconds 1 --timeline TIMELINE`, every `every`-th frame as JSON lines.
+fn one_second_with(scene: &str, timeline: &str, every: u32) -> Vec<Value> {
+    let every = every.to_string();
+    jsonl(&tiltbox(&[
+        "simulate",
+        scene,
+        "--seconds",
+        "1",
+        "--every",
+        &every,
+        "--format",
+        "jsonl",
+        "--timeline",
+        timeline,
+    ]))
 }
 
 /// One falling disc, nothing to land on.
@@ -75,19 +83,7 @@ fn a_gravity_flip_takes_effect_at_the_documented_frame() {
     // t = 0.5 s at dt = 1/60 is frame boundary 30 (0.5 / dt = 30.000000000000004, within
     // 1e-9 of 30): applied before frame 31 is stepped.
     let timeline = write(&dir, "flip.toml", "[[at]]\ntime = 0.5\ngravity = [0, 10]\n");
-    let o = tiltbox(&[
-        "simulate",
-        &scene,
-        "--seconds",
-        "1",
-        "--every",
-        "1",
-        "--format",
-        "jsonl",
-        "--timeline",
-        &timeline,
-    ]);
-    let frames = jsonl(&o);
+    let frames = one_second_with(&scene, &timeline, 1);
     let vy = |k: usize| body(&frames[k], "ball").unwrap()["vy"].as_f64().unwrap();
     // Semi-implicit Euler: v_k = sum of g_i dt. 30 steps at -10, then +10: at frame 30,
     // v = -10 x 30/60 = -5 m/s; at 60, 0; the first step after the flip adds +10/60.
@@ -122,19 +118,7 @@ time = 0.5
 remove = ["0v0"]
 "#,
     );
-    let o = tiltbox(&[
-        "simulate",
-        &scene,
-        "--seconds",
-        "1",
-        "--every",
-        "15",
-        "--format",
-        "jsonl",
-        "--timeline",
-        &timeline,
-    ]);
-    let frames = jsonl(&o);
+    let frames = one_second_with(&scene, &timeline, 15);
     let at = |frame: u64| frames.iter().find(|f| f["frame"] == frame).unwrap();
     assert!(body(at(15), "late").is_none(), "spawned before its time");
     let late = body(at(30), "late").expect("spawned at 0.25 s");
@@ -197,39 +181,12 @@ async fn a_recorded_daemon_run_is_reproduced_bit_for_bit_by_simulate_journal() {
     let mut config = daemon_config(port);
     config.record = Some(log.clone());
     config.checkpoint = Some(ckpt.clone());
-    let server = tiltbox::service::Server::start(&config, Default::default())
-        .await
-        .unwrap();
+    let server = serve(&config).await;
     let keys = server.keys().clone();
     let session = open(port).await;
     let (mut events, _sub) = subscribe::<Event>(&session, keys.events()).await;
-    let mut rng = Rng(11);
-    let deadline = Instant::now() + Duration::from_secs(10);
-    let mut added = 0;
-    while added < 4 {
-        assert!(Instant::now() < deadline, "no Added events");
-        let spawn = Spawn {
-            bodies: vec![random_brick(&mut rng)],
-        };
-        session
-            .put(keys.spawn(), encode(&spawn).unwrap())
-            .await
-            .unwrap();
-        let tilt = Tilt::Accelerometer {
-            x: rng.f(-5.0, 5.0),
-            y: -9.0,
-            z: 0.0,
-        };
-        session
-            .put(keys.tilt(), encode(&tilt).unwrap())
-            .await
-            .unwrap();
-        if let Ok(Some(e)) = tokio::time::timeout(Duration::from_millis(150), events.recv()).await {
-            if matches!(e.kind, EventKind::Added { .. }) {
-                added += 1;
-            }
-        }
-    }
+    let within = Duration::from_secs(10);
+    spawn_and_tilt_until_added(&session, &keys, &mut events, &mut Rng(11), 4, within).await;
     // Let it settle a little with the last tilt, so some bodies may sleep.
     tokio::time::sleep(Duration::from_millis(500)).await;
     let summary = server.shutdown().await.unwrap();

@@ -4,11 +4,14 @@
 //! - [`rng`]: a small deterministic generator, so random inputs are the same every run;
 //! - `net` (feature `net`): a daemon on a loopback port, Zenoh peers towards it, typed
 //!   subscriptions and the `…/scene` query; `bodies`: bodies to spawn;
-//! - `scene` (feature `scene`): scene files and scene text built for the tests.
+//! - `scene` (feature `scene`): scene files and scene text built for the tests;
+//! - `cli` (feature `cli`): the `tiltbox` binary run as a user runs it.
 #![allow(dead_code)]
 
 #[cfg(feature = "net")]
 pub mod bodies;
+#[cfg(feature = "cli")]
+pub mod cli;
 #[cfg(feature = "net")]
 pub mod net;
 pub mod rng;

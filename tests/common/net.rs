@@ -1,12 +1,17 @@
 //! A daemon on a loopback port and Zenoh peers towards it. Every test uses its own port, so
 //! tests in one process never see each other (multicast scouting is off everywhere).
 
+use super::bodies::random_brick;
+use super::rng::Rng;
 use std::sync::atomic::AtomicBool;
 use std::sync::mpsc::Receiver;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use tiltbox::protocol::{decode, Keys, Message, SceneState, Snapshot, SnapshotDecoder};
+use tiltbox::protocol::{
+    decode, encode, Event, EventKind, Keys, Message, SceneState, Snapshot, SnapshotDecoder, Spawn,
+    Tilt,
+};
 use tiltbox::service::{
     run_loop, Incoming, Outputs, RunSummary, Server, ServerConfig, ServerOptions, Simulation,
     TickConfig,
@@ -97,6 +102,45 @@ pub async fn subscribe_snapshots(
         .await
         .unwrap();
     (rx, sub)
+}
+
+/// Put a random brick on `…/spawn` and a random tilt on `…/tilt`, again and again, until
+/// `added` `Added` events have come back on `events` (the daemon hears this session and has
+/// applied spawns), or fail after `within`. Returns the commands put.
+pub async fn spawn_and_tilt_until_added(
+    session: &Session,
+    keys: &Keys,
+    events: &mut UnboundedReceiver<Event>,
+    rng: &mut Rng,
+    added: usize,
+    within: Duration,
+) -> usize {
+    let deadline = Instant::now() + within;
+    let (mut seen, mut puts) = (0, 0);
+    while seen < added {
+        assert!(Instant::now() < deadline, "no Added events");
+        let spawn = Spawn {
+            bodies: vec![random_brick(rng)],
+        };
+        let tilt = Tilt::Accelerometer {
+            x: rng.f(-5.0, 5.0),
+            y: -9.0,
+            z: 0.0,
+        };
+        for (key, payload) in [
+            (keys.spawn(), encode(&spawn).unwrap()),
+            (keys.tilt(), encode(&tilt).unwrap()),
+        ] {
+            session.put(key, payload).await.unwrap();
+            puts += 1;
+        }
+        if let Ok(Some(e)) = tokio::time::timeout(Duration::from_millis(150), events.recv()).await {
+            if matches!(e.kind, EventKind::Added { .. }) {
+                seen += 1;
+            }
+        }
+    }
+    puts
 }
 
 /// The next message from `rx` within [`WAIT`].

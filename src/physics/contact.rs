@@ -30,7 +30,8 @@ pub(crate) struct ContactPoint {
     /// Largest normal impulse applied in this step (N s): restitution only acts where the
     /// contact actually pushed.
     pub max_normal_impulse: Real,
-    /// Lever arms, precomputed once per step: rA x n, rB x n, rA x t, rB x t, rA . n, rB . n.
+    /// Lever arms, precomputed once per step: rA x n, rB x n, rA x t, rB x t, rA . n, rB . n,
+    /// rA . t, rB . t.
     /// With them a point's normal velocity is (vB - vA) . n + wB (rB x n) - wA (rA x n), and
     /// an impulse's torque is lambda (r x n): no cross products in the inner loop.
     pub arms: Arms,
@@ -41,6 +42,15 @@ pub(crate) struct ContactPoint {
     /// Soft step: separation minus the anchors' contribution, so the current separation is
     /// (dpB - dpA + qB rB - qA rA) . n + adjusted_separation.
     pub adjusted_separation: Real,
+    /// Soft step: how far B's surface has slipped along the tangent over A's at this point
+    /// since the point stuck (m), carried from step to step while static friction holds; 0
+    /// for a new point or one that slid (the friction anchor).
+    pub slip: Real,
+    /// Soft step: static friction held this point at the end of the last step.
+    pub stuck: bool,
+    /// Soft step: `slip` minus the anchors' contribution, so the current slip is
+    /// (dpB - dpA + qB rB - qA rA) . t + adjusted_slip.
+    pub adjusted_slip: Real,
     /// Normal relative velocity before the solve (m/s): the approach speed restitution reverses.
     pub relative_velocity: Real,
     /// Sequential solver: the normal velocity with which a speculative point closed its gap
@@ -59,19 +69,21 @@ pub(crate) struct Arms {
     pub rt_b: Real,
     pub ra_n: Real,
     pub rb_n: Real,
+    pub ra_t: Real,
+    pub rb_t: Real,
 }
 
 impl Arms {
-    /// The six arms as words, in field order (for saved states and lane packing).
+    /// The eight arms as words, in field order (for saved states and lane packing).
     #[inline]
-    pub fn to_words(self) -> [Real; 6] {
+    pub fn to_words(self) -> [Real; 8] {
         [
-            self.rn_a, self.rn_b, self.rt_a, self.rt_b, self.ra_n, self.rb_n,
+            self.rn_a, self.rn_b, self.rt_a, self.rt_b, self.ra_n, self.rb_n, self.ra_t, self.rb_t,
         ]
     }
 
     /// The inverse of [`Arms::to_words`].
-    pub fn from_words([rn_a, rn_b, rt_a, rt_b, ra_n, rb_n]: [Real; 6]) -> Arms {
+    pub fn from_words([rn_a, rn_b, rt_a, rt_b, ra_n, rb_n, ra_t, rb_t]: [Real; 8]) -> Arms {
         Arms {
             rn_a,
             rn_b,
@@ -79,6 +91,8 @@ impl Arms {
             rt_b,
             ra_n,
             rb_n,
+            ra_t,
+            rb_t,
         }
     }
 
@@ -93,6 +107,8 @@ impl Arms {
             rt_b: cross(rb, t),
             ra_n: ra.dot(n),
             rb_n: rb.dot(n),
+            ra_t: ra.dot(t),
+            rb_t: rb.dot(t),
         }
     }
 }

@@ -24,7 +24,8 @@ use std::thread::JoinHandle;
 
 /// Bumped whenever [`SimState`] (or anything in it, e.g. the engine's `Settings`) changes shape.
 /// 4: bodies record whether they are kinematic, shapes may be segments (issue 17).
-pub const FORMAT_VERSION: u32 = 4;
+/// 5: contact points carry their friction anchor (slip, and the tangent arms).
+pub const FORMAT_VERSION: u32 = 5;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

@@ -3,6 +3,7 @@
 //! Both solvers work on [`SolverBody`]: a compact copy of what the inner loops touch
 //! (velocities, inverse masses, and how far each body has moved during the step).
 
+pub(crate) mod lanes;
 pub(crate) mod sequential;
 pub(crate) mod soft_step;
 pub(crate) mod wide;

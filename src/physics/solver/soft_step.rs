@@ -147,6 +147,30 @@ pub(crate) fn solve(
         }
     }
     wide.store(contacts);
+    // Carry each point's slip to the next step while static friction holds it: a point that
+    // ends the step inside the friction cone (and pushing) sticks. Only a step that also began
+    // stuck adds to the slip, so the anchor undoes creep, never the end of a slide; a point
+    // that slides starts over from where it stops.
+    // A moving kinematic body is fixed in the solver (its motion is not in `dp`), so slip
+    // against it cannot be measured: such contacts are never anchored.
+    let moving_fixed = |s: &SolverBody| s.inv_mass == 0.0 && (s.v != Vec2::ZERO || s.w != 0.0);
+    for c in contacts.iter_mut() {
+        let t = c.tangent();
+        let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
+        let dp_t = (b.dp - a.dp).dot(t);
+        let friction = c.friction;
+        let measurable = !moving_fixed(a) && !moving_fixed(b);
+        for p in &mut c.points[..c.count] {
+            let max_f = friction * p.normal_impulse;
+            let stuck = measurable && max_f > 0.0 && p.tangent_impulse.abs() < STICK * max_f;
+            p.slip = if stuck && p.stuck {
+                current_slip(a, b, p, dp_t)
+            } else {
+                0.0
+            };
+            p.stuck = stuck;
+        }
+    }
     restitution(bodies, contacts, settings.restitution_threshold);
     for c in contacts.iter_mut() {
         for p in &mut c.points[..c.count] {
@@ -229,6 +253,10 @@ impl Stiffness {
 /// factor (0.98: to half in 34 steps, about 0.6 s at 60 Hz).
 const HERTZ_DECAY: Real = 0.98;
 
+/// A point whose friction impulse is under this fraction of the Coulomb limit sticks: its
+/// slip is kept for the next step's friction anchor.
+const STICK: Real = 0.99;
+
 /// Effective masses, adjusted separations, approach speeds and springs, once per step.
 fn prepare(
     bodies: &mut [SolverBody],
@@ -244,6 +272,7 @@ fn prepare(
             p.arms = Arms::new(p.anchor_a, p.anchor_b, n, t);
             point_masses(a, b, p, n, t);
             p.adjusted_separation = p.separation - (p.arms.rb_n - p.arms.ra_n);
+            p.adjusted_slip = p.slip - (p.arms.rb_t - p.arms.ra_t);
             p.relative_velocity = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
             p.max_normal_impulse = 0.0;
             p.total_normal_impulse = 0.0;
@@ -327,15 +356,36 @@ fn solve_contact(
         if c.friction == 0.0 {
             return;
         }
+        let dp_t = (b.dp - a.dp).dot(t);
         for p in &mut c.points[..c.count] {
             let vt = relative_velocity(a, b, t, p.arms.rt_a, p.arms.rt_b);
             let max_f = c.friction * p.normal_impulse;
-            let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);
+            // The friction anchor: with the bias, static friction also undoes the slip of a
+            // point that began the step stuck, at the normal spring's rate (the relax passes then take the
+            // velocity this adds back out, as they do the normal's).
+            let bias = if use_bias && p.stuck {
+                (sf.mass_scale * sf.bias_rate * current_slip(a, b, p, dp_t))
+                    .clamp(-max_push_out, max_push_out)
+            } else {
+                0.0
+            };
+            let impulse = -p.tangent_mass * (vt + bias);
+            let total = (p.tangent_impulse + impulse).clamp(-max_f, max_f);
             let applied = total - p.tangent_impulse;
             p.tangent_impulse = total;
             apply_along(a, b, t, p.arms.rt_a, p.arms.rt_b, applied);
         }
     }
+}
+
+/// A point's slip along the tangent now: the slip at the start of the step plus how far the
+/// bodies moved this step, as the separation is found (`(q r) . t = c (r . t) + s (r x t)`).
+#[inline]
+fn current_slip(a: &SolverBody, b: &SolverBody, p: &ContactPoint, dp_t: Real) -> Real {
+    let arms = &p.arms;
+    let rot_b = b.dq.c * arms.rb_t + b.dq.s * arms.rt_b;
+    let rot_a = a.dq.c * arms.ra_t + a.dq.s * arms.rt_a;
+    dp_t + rot_b - rot_a + p.adjusted_slip
 }
 
 /// Add `impulse` (N s) to a point's accumulated normal impulse, clamped so that the total

@@ -1,14 +1,17 @@
-//! The soft step's inner loops, four contacts at a time.
+//! The soft step's inner loops, four or eight contacts at a time.
 //!
 //! Contacts are first coloured so that no two contacts of one colour share a dynamic body
 //! (greedy, in key order, so the result is deterministic; static bodies may be shared since
 //! nothing writes to them). Within a colour the contacts are independent, so they are packed
-//! four to a bundle and solved in the lanes of one `Lanes` value: the same arithmetic as the
-//! scalar soft step, with every `if` turned into a lane-wise select. Two-point contacts with a
+//! four to a bundle and solved in the lanes of one `Lanes` value (eight to a bundle in
+//! [`Lanes8`] where the processor has AVX2): the same arithmetic as the scalar soft step, with
+//! every `if` turned into a lane-wise select. A contact's arithmetic does not depend on its
+//! bundle's width or neighbours, so both widths give the same World bit for bit. Two-point contacts with a
 //! well-conditioned block are solved by the 2x2 LCP; the others (one point, or nearly
 //! coincident points) one point after the other, in bundles of their own. Contacts beyond the
 //! last colour are solved by the scalar code after the bundles.
 
+use super::lanes::{eight_lanes_available, Lanes8, Wide};
 use super::SolverBody;
 use crate::physics::contact::Contact;
 use crate::physics::math::{Lanes, Real};
@@ -25,57 +28,62 @@ enum Kind {
     Points,
 }
 
-/// Per-point data of four contacts, lane i being contact i of the bundle.
-#[derive(Clone, Copy, Debug, Default)]
-struct PointLanes {
-    rn_a: Lanes,
-    rn_b: Lanes,
-    rt_a: Lanes,
-    rt_b: Lanes,
-    ra_n: Lanes,
-    rb_n: Lanes,
-    adjusted_separation: Lanes,
-    normal_mass: Lanes,
-    tangent_mass: Lanes,
-    normal_impulse: Lanes,
-    tangent_impulse: Lanes,
-    total_normal_impulse: Lanes,
-    max_normal_impulse: Lanes,
+/// Per-point data of a bundle's contacts, lane i being contact i of the bundle.
+#[derive(Clone, Copy, Debug)]
+struct PointLanes<L> {
+    rn_a: L,
+    rn_b: L,
+    rt_a: L,
+    rt_b: L,
+    ra_n: L,
+    rb_n: L,
+    ra_t: L,
+    rb_t: L,
+    adjusted_separation: L,
+    adjusted_slip: L,
+    /// 1 where the point began the step stuck (its slip is undone), 0 elsewhere.
+    anchor: L,
+    normal_mass: L,
+    tangent_mass: L,
+    normal_impulse: L,
+    tangent_impulse: L,
+    total_normal_impulse: L,
+    max_normal_impulse: L,
 }
 
-/// Four contacts packed for the lanes.
+/// Up to `L::WIDTH` contacts packed for the lanes.
 #[derive(Clone, Copy, Debug)]
-struct Bundle {
+struct Bundle<L: Wide> {
     kind: Kind,
     /// Contact index per lane; `u32::MAX` for an empty lane.
-    contact: [u32; 4],
+    contact: L::Index,
     /// Solver-body indices of A and B per lane (the fixed dummy body for empty lanes).
-    a: [u32; 4],
-    b: [u32; 4],
-    nx: Lanes,
-    ny: Lanes,
-    friction: Lanes,
-    bias_rate: Lanes,
-    mass_scale: Lanes,
-    impulse_scale: Lanes,
-    k00: Lanes,
-    k01: Lanes,
-    k11: Lanes,
-    i00: Lanes,
-    i01: Lanes,
-    i11: Lanes,
+    a: L::Index,
+    b: L::Index,
+    nx: L,
+    ny: L,
+    friction: L,
+    bias_rate: L,
+    mass_scale: L,
+    impulse_scale: L,
+    k00: L,
+    k01: L,
+    k11: L,
+    i00: L,
+    i01: L,
+    i11: L,
     /// Inverse masses and inertias of A and B per lane (zero for static bodies and empty lanes).
-    inv_mass_a: Lanes,
-    inv_i_a: Lanes,
-    inv_mass_b: Lanes,
-    inv_i_b: Lanes,
-    p: [PointLanes; 2],
+    inv_mass_a: L,
+    inv_i_a: L,
+    inv_mass_b: L,
+    inv_i_b: L,
+    p: [PointLanes<L>; 2],
 }
 
-impl Bundle {
+impl<L: Wide> Bundle<L> {
     /// Both sides' body lanes (with this step's motion when `motion`).
-    #[inline]
-    fn gather(&self, bodies: &[SolverBody], motion: bool) -> (BodyLanes, BodyLanes) {
+    #[inline(always)]
+    fn gather(&self, bodies: &[SolverBody], motion: bool) -> (BodyLanes<L>, BodyLanes<L>) {
         (
             BodyLanes::gather(bodies, &self.a, self.inv_mass_a, self.inv_i_a, motion),
             BodyLanes::gather(bodies, &self.b, self.inv_mass_b, self.inv_i_b, motion),
@@ -83,17 +91,40 @@ impl Bundle {
     }
 
     /// Write both sides' velocities back.
-    #[inline]
-    fn scatter(&self, bodies: &mut [SolverBody], a: &BodyLanes, b: &BodyLanes) {
+    #[inline(always)]
+    fn scatter(&self, bodies: &mut [SolverBody], a: &BodyLanes<L>, b: &BodyLanes<L>) {
         a.scatter(bodies, &self.a);
         b.scatter(bodies, &self.b);
+    }
+}
+
+/// How many contacts a bundle holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Width {
+    /// Four ([`Lanes`]: SSE2 on x86-64).
+    Four,
+    /// Eight ([`Lanes8`]), compiled for AVX2 and run where the processor has it.
+    Eight,
+}
+
+impl Width {
+    /// The widest this machine runs: eight lanes with AVX2, four otherwise.
+    pub fn detect() -> Width {
+        if eight_lanes_available() {
+            Width::Eight
+        } else {
+            Width::Four
+        }
     }
 }
 
 /// Buffers for the wide solve, kept by the World so a steady step does not allocate.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct WideSolver {
-    bundles: Vec<Bundle>,
+    /// Four-lane bundles (used at [`Width::Four`]).
+    bundles4: Vec<Bundle<Lanes>>,
+    /// Eight-lane bundles (used at [`Width::Eight`]).
+    bundles8: Vec<Bundle<Lanes8>>,
     /// Colour mask per solver body: bit c set when a contact of colour c uses the body.
     colour_masks: Vec<u32>,
     /// Contact indices per (colour, kind), flattened as colour * 2 + kind.
@@ -103,34 +134,38 @@ pub(crate) struct WideSolver {
     /// Colours to try before a contact overflows ([`COLOURS`]; tests lower it to force the
     /// scalar path).
     pub colours: Option<usize>,
+    /// Bundle width; `None` picks [`Width::detect`] at each build (tests set it to compare).
+    pub width: Option<Width>,
+    /// The width of the bundles built last.
+    built: Option<Width>,
 }
 
-/// The body state a kernel reads for four lanes.
-struct BodyLanes {
-    vx: Lanes,
-    vy: Lanes,
-    w: Lanes,
-    dpx: Lanes,
-    dpy: Lanes,
-    qc: Lanes,
-    qs: Lanes,
-    inv_mass: Lanes,
-    inv_inertia: Lanes,
+/// The body state a kernel reads for a bundle's lanes.
+struct BodyLanes<L> {
+    vx: L,
+    vy: L,
+    w: L,
+    dpx: L,
+    dpy: L,
+    qc: L,
+    qs: L,
+    inv_mass: L,
+    inv_inertia: L,
 }
 
-impl BodyLanes {
-    /// Load four bodies' velocities (and, with `motion`, how far they moved this step). The
-    /// inverse masses do not change within a step: they come packed in the bundle.
-    #[inline]
+impl<L: Wide> BodyLanes<L> {
+    /// Load the lanes' bodies' velocities (and, with `motion`, how far they moved this step).
+    /// The inverse masses do not change within a step: they come packed in the bundle.
+    #[inline(always)]
     fn gather(
         bodies: &[SolverBody],
-        idx: &[u32; 4],
-        inv_mass: Lanes,
-        inv_inertia: Lanes,
+        idx: &L::Index,
+        inv_mass: L,
+        inv_inertia: L,
         motion: bool,
-    ) -> BodyLanes {
-        let b = idx.map(|i| &bodies[i as usize]);
-        let lanes = |f: fn(&SolverBody) -> Real| Lanes::new(f(b[0]), f(b[1]), f(b[2]), f(b[3]));
+    ) -> BodyLanes<L> {
+        let idx = idx.as_ref();
+        let lanes = |f: fn(&SolverBody) -> Real| L::from_fn(|i| f(&bodies[idx[i] as usize]));
         let (dpx, dpy, qc, qs) = if motion {
             (
                 lanes(|s| s.dp.x),
@@ -139,7 +174,7 @@ impl BodyLanes {
                 lanes(|s| s.dq.s),
             )
         } else {
-            (Lanes::ZERO, Lanes::ZERO, Lanes::ONE, Lanes::ZERO)
+            (L::ZERO, L::ZERO, L::ONE, L::ZERO)
         };
         BodyLanes {
             vx: lanes(|s| s.v.x),
@@ -156,29 +191,28 @@ impl BodyLanes {
 
     /// Write velocities back, for dynamic bodies only (static ones were not changed and may
     /// appear in several lanes).
-    #[inline]
-    fn scatter(&self, bodies: &mut [SolverBody], idx: &[u32; 4]) {
-        let (vx, vy, w) = (self.vx.to_array(), self.vy.to_array(), self.w.to_array());
-        for lane in 0..4 {
-            let body = &mut bodies[idx[lane] as usize];
+    #[inline(always)]
+    fn scatter(&self, bodies: &mut [SolverBody], idx: &L::Index) {
+        for (lane, &i) in idx.as_ref().iter().enumerate() {
+            let body = &mut bodies[i as usize];
             if body.inv_mass > 0.0 {
-                body.v.x = vx[lane];
-                body.v.y = vy[lane];
-                body.w = w[lane];
+                body.v.x = self.vx.lane(lane);
+                body.v.y = self.vy.lane(lane);
+                body.w = self.w.lane(lane);
             }
         }
     }
 
     /// Apply impulse lambda along (dx, dy) with arms rd_a, rd_b: B gets +, A gets -.
-    #[inline]
+    #[inline(always)]
     fn apply(
-        a: &mut BodyLanes,
-        b: &mut BodyLanes,
-        dx: Lanes,
-        dy: Lanes,
-        rd_a: Lanes,
-        rd_b: Lanes,
-        lambda: Lanes,
+        a: &mut BodyLanes<L>,
+        b: &mut BodyLanes<L>,
+        dx: L,
+        dy: L,
+        rd_a: L,
+        rd_b: L,
+        lambda: L,
     ) {
         a.vx -= a.inv_mass * lambda * dx;
         a.vy -= a.inv_mass * lambda * dy;
@@ -189,15 +223,8 @@ impl BodyLanes {
     }
 
     /// Relative velocity of B over A along (dx, dy) at arms rd_a, rd_b.
-    #[inline]
-    fn relative(
-        a: &BodyLanes,
-        b: &BodyLanes,
-        dx: Lanes,
-        dy: Lanes,
-        rd_a: Lanes,
-        rd_b: Lanes,
-    ) -> Lanes {
+    #[inline(always)]
+    fn relative(a: &BodyLanes<L>, b: &BodyLanes<L>, dx: L, dy: L, rd_a: L, rd_b: L) -> L {
         (b.vx - a.vx) * dx + (b.vy - a.vy) * dy + b.w * rd_b - a.w * rd_a
     }
 }
@@ -250,43 +277,38 @@ impl WideSolver {
             self.by_colour[colour * 2 + kind].push(i as u32);
         }
 
-        self.bundles.clear();
-        for (slot, list) in self.by_colour.iter().enumerate() {
-            let kind = if slot % 2 == 0 {
-                Kind::Block
-            } else {
-                Kind::Points
-            };
-            for chunk in list.chunks(4) {
-                self.bundles
-                    .push(pack(kind, chunk, contacts, bodies, dummy));
-            }
+        // Eight lanes only where the processor runs them (a test may ask for them anywhere).
+        let width = match self.width.unwrap_or_else(Width::detect) {
+            Width::Eight if !eight_lanes_available() => Width::Four,
+            width => width,
+        };
+        self.built = Some(width);
+        match width {
+            Width::Four => pack_all(&mut self.bundles4, &self.by_colour, contacts, bodies, dummy),
+            Width::Eight => pack_all(&mut self.bundles8, &self.by_colour, contacts, bodies, dummy),
         }
     }
 
     /// Apply each contact's accumulated impulses (the warm start of a substep).
     pub fn warm_start(&mut self, bodies: &mut [SolverBody]) {
-        for bundle in &mut self.bundles {
-            let (mut a, mut b) = bundle.gather(bodies, false);
-            let (nx, ny) = (bundle.nx, bundle.ny);
-            let (tx, ty) = (ny, -nx);
-            for p in &mut bundle.p {
-                p.total_normal_impulse += p.normal_impulse;
-                BodyLanes::apply(&mut a, &mut b, nx, ny, p.rn_a, p.rn_b, p.normal_impulse);
-                BodyLanes::apply(&mut a, &mut b, tx, ty, p.rt_a, p.rt_b, p.tangent_impulse);
-            }
-            bundle.scatter(bodies, &a, &b);
+        match self.built {
+            Some(Width::Eight) => eight::warm_start(&mut self.bundles8, bodies),
+            _ => warm_start_bundles(&mut self.bundles4, bodies),
         }
     }
 
     /// Zero the accumulated impulses (warm starting off).
     pub fn clear_impulses(&mut self) {
-        for bundle in &mut self.bundles {
-            for p in &mut bundle.p {
-                p.normal_impulse = Lanes::ZERO;
-                p.tangent_impulse = Lanes::ZERO;
+        fn clear<L: Wide>(bundles: &mut [Bundle<L>]) {
+            for bundle in bundles {
+                for p in &mut bundle.p {
+                    p.normal_impulse = L::ZERO;
+                    p.tangent_impulse = L::ZERO;
+                }
             }
         }
+        clear(&mut self.bundles4);
+        clear(&mut self.bundles8);
     }
 
     /// One pass over every bundle, with the soft bias (`use_bias`) or the relax pass without.
@@ -297,113 +319,256 @@ impl WideSolver {
         use_bias: bool,
         max_push_out: Real,
     ) {
-        let inv_h = Lanes::splat(inv_h);
-        let push_out = Lanes::splat(-max_push_out);
-        for bundle in &mut self.bundles {
-            let (mut a, mut b) = bundle.gather(bodies, true);
-            let (nx, ny) = (bundle.nx, bundle.ny);
-            let dp_n = (b.dpx - a.dpx) * nx + (b.dpy - a.dpy) * ny;
-
-            // Per point: (bias, mass scale, impulse scale), as in the scalar soft step.
-            // By reference: mapping the array by value copied both points' lanes (416 bytes)
-            // every pass, a fifth of the whole step in a profile of pyramid_20.
-            let coeff = |p: &PointLanes| {
-                let s = dp_n + (b.qc * p.rb_n + b.qs * p.rn_b) - (a.qc * p.ra_n + a.qs * p.rn_a)
-                    + p.adjusted_separation;
-                let speculative = s.cmpgt(Lanes::ZERO);
-                let (soft_bias, soft_ms, soft_is) = if use_bias {
-                    (
-                        (bundle.mass_scale * bundle.bias_rate * s).max(push_out),
-                        bundle.mass_scale,
-                        bundle.impulse_scale,
-                    )
-                } else {
-                    (Lanes::ZERO, Lanes::ONE, Lanes::ZERO)
-                };
-                (
-                    Lanes::select(speculative, s * inv_h, soft_bias),
-                    Lanes::select(speculative, Lanes::ONE, soft_ms),
-                    Lanes::select(speculative, Lanes::ZERO, soft_is),
-                )
-            };
-            let coeffs = [coeff(&bundle.p[0]), coeff(&bundle.p[1])];
-
-            match bundle.kind {
-                Kind::Block => {
-                    let [p0, p1] = &bundle.p;
-                    let (l0, l1) = (p0.normal_impulse, p1.normal_impulse);
-                    let (rn_a0, rn_b0, rn_a1, rn_b1) = (p0.rn_a, p0.rn_b, p1.rn_a, p1.rn_b);
-                    let kl0 = bundle.k00 * l0 + bundle.k01 * l1;
-                    let kl1 = bundle.k01 * l0 + bundle.k11 * l1;
-                    let vn0 = BodyLanes::relative(&a, &b, nx, ny, rn_a0, rn_b0);
-                    let vn1 = BodyLanes::relative(&a, &b, nx, ny, rn_a1, rn_b1);
-                    // rhs = vn - K lambda - target, target = impulse_scale (vn - K lambda) - bias.
-                    let r0 = vn0 - kl0 - (coeffs[0].2 * (vn0 - kl0) - coeffs[0].0);
-                    let r1 = vn1 - kl1 - (coeffs[1].2 * (vn1 - kl1) - coeffs[1].0);
-                    let (x0, x1) = block_lcp(bundle, r0, r1, l0, l1);
-                    let (d0, d1) = (x0 - l0, x1 - l1);
-                    let d = d0 + d1;
-                    a.vx -= a.inv_mass * d * nx;
-                    a.vy -= a.inv_mass * d * ny;
-                    a.w -= a.inv_inertia * (d0 * rn_a0 + d1 * rn_a1);
-                    b.vx += b.inv_mass * d * nx;
-                    b.vy += b.inv_mass * d * ny;
-                    b.w += b.inv_inertia * (d0 * rn_b0 + d1 * rn_b1);
-                    for (p, (x, dx)) in bundle.p.iter_mut().zip([(x0, d0), (x1, d1)]) {
-                        p.normal_impulse = x;
-                        p.max_normal_impulse = p.max_normal_impulse.max(dx);
-                        p.total_normal_impulse += dx;
-                    }
-                }
-                Kind::Points => {
-                    for (p, &(bias, mass_scale, impulse_scale)) in
-                        bundle.p.iter_mut().zip(coeffs.iter())
-                    {
-                        let vn = BodyLanes::relative(&a, &b, nx, ny, p.rn_a, p.rn_b);
-                        let impulse = -p.normal_mass * (mass_scale * vn + bias)
-                            - impulse_scale * p.normal_impulse;
-                        let total = (p.normal_impulse + impulse).max(Lanes::ZERO);
-                        let applied = total - p.normal_impulse;
-                        p.normal_impulse = total;
-                        p.max_normal_impulse = p.max_normal_impulse.max(applied);
-                        p.total_normal_impulse += applied;
-                        BodyLanes::apply(&mut a, &mut b, nx, ny, p.rn_a, p.rn_b, applied);
-                    }
-                }
+        match self.built {
+            Some(Width::Eight) => {
+                eight::solve(&mut self.bundles8, bodies, inv_h, use_bias, max_push_out)
             }
-
-            // Friction, one point after the other; skipped when no lane has any.
-            let (tx, ty) = (ny, -nx);
-            if bundle.friction.cmpgt(Lanes::ZERO).any() {
-                for p in &mut bundle.p {
-                    let vt = BodyLanes::relative(&a, &b, tx, ty, p.rt_a, p.rt_b);
-                    let max_f = bundle.friction * p.normal_impulse;
-                    let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);
-                    let applied = total - p.tangent_impulse;
-                    p.tangent_impulse = total;
-                    BodyLanes::apply(&mut a, &mut b, tx, ty, p.rt_a, p.rt_b, applied);
-                }
-            }
-
-            bundle.scatter(bodies, &a, &b);
+            _ => solve_bundles(&mut self.bundles4, bodies, inv_h, use_bias, max_push_out),
         }
     }
 
     /// Copy the lanes' impulses back to the contacts (for restitution, warm starting next
     /// step, and what `World::contacts` reports).
     pub fn store(&self, contacts: &mut [Contact]) {
-        for bundle in &self.bundles {
-            for lane in 0..4 {
-                let Some(c) = contacts.get_mut(bundle.contact[lane] as usize) else {
-                    continue;
-                };
-                for (j, p) in c.points[..c.count].iter_mut().enumerate() {
-                    let src = &bundle.p[j];
-                    p.normal_impulse = src.normal_impulse.to_array()[lane];
-                    p.tangent_impulse = src.tangent_impulse.to_array()[lane];
-                    p.total_normal_impulse = src.total_normal_impulse.to_array()[lane];
-                    p.max_normal_impulse = src.max_normal_impulse.to_array()[lane];
+        match self.built {
+            Some(Width::Eight) => store_bundles(&self.bundles8, contacts),
+            _ => store_bundles(&self.bundles4, contacts),
+        }
+    }
+}
+
+/// The eight-lane kernels: compiled for AVX2 on x86-64, where [`WideSolver::build`] makes
+/// eight-lane bundles only if the processor has it; elsewhere never chosen (the portable
+/// `Lanes8` keeps them compiling).
+mod eight {
+    use super::{solve_bundles, warm_start_bundles, Bundle, Lanes8, Real, SolverBody};
+
+    /// [`warm_start_bundles`] on eight lanes.
+    pub(super) fn warm_start(bundles: &mut [Bundle<Lanes8>], bodies: &mut [SolverBody]) {
+        #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+        // SAFETY: eight-lane bundles exist only where the processor has AVX2.
+        unsafe {
+            warm_start_avx2(bundles, bodies)
+        }
+        #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
+        warm_start_bundles(bundles, bodies)
+    }
+
+    /// [`solve_bundles`] on eight lanes.
+    pub(super) fn solve(
+        bundles: &mut [Bundle<Lanes8>],
+        bodies: &mut [SolverBody],
+        inv_h: Real,
+        use_bias: bool,
+        max_push_out: Real,
+    ) {
+        #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+        // SAFETY: as above.
+        unsafe {
+            solve_avx2(bundles, bodies, inv_h, use_bias, max_push_out)
+        }
+        #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
+        solve_bundles(bundles, bodies, inv_h, use_bias, max_push_out)
+    }
+
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+    #[target_feature(enable = "avx2")]
+    unsafe fn warm_start_avx2(bundles: &mut [Bundle<Lanes8>], bodies: &mut [SolverBody]) {
+        warm_start_bundles(bundles, bodies);
+    }
+
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+    #[target_feature(enable = "avx2")]
+    unsafe fn solve_avx2(
+        bundles: &mut [Bundle<Lanes8>],
+        bodies: &mut [SolverBody],
+        inv_h: Real,
+        use_bias: bool,
+        max_push_out: Real,
+    ) {
+        solve_bundles(bundles, bodies, inv_h, use_bias, max_push_out);
+    }
+}
+
+/// Apply each contact's accumulated impulses (the warm start of a substep).
+#[inline(always)]
+fn warm_start_bundles<L: Wide>(bundles: &mut [Bundle<L>], bodies: &mut [SolverBody]) {
+    for bundle in bundles {
+        let (mut a, mut b) = bundle.gather(bodies, false);
+        let (nx, ny) = (bundle.nx, bundle.ny);
+        let (tx, ty) = (ny, -nx);
+        for p in &mut bundle.p {
+            p.total_normal_impulse += p.normal_impulse;
+            BodyLanes::apply(&mut a, &mut b, nx, ny, p.rn_a, p.rn_b, p.normal_impulse);
+            BodyLanes::apply(&mut a, &mut b, tx, ty, p.rt_a, p.rt_b, p.tangent_impulse);
+        }
+        bundle.scatter(bodies, &a, &b);
+    }
+}
+
+/// One pass over every bundle, with the soft bias (`use_bias`) or the relax pass without.
+#[inline(always)]
+fn solve_bundles<L: Wide>(
+    bundles: &mut [Bundle<L>],
+    bodies: &mut [SolverBody],
+    inv_h: Real,
+    use_bias: bool,
+    max_push_out: Real,
+) {
+    let inv_h = L::splat(inv_h);
+    let push_out = L::splat(-max_push_out);
+    for bundle in bundles {
+        let (mut a, mut b) = bundle.gather(bodies, true);
+        let (nx, ny) = (bundle.nx, bundle.ny);
+        let dp_n = (b.dpx - a.dpx) * nx + (b.dpy - a.dpy) * ny;
+
+        let coeffs = [
+            coefficients(
+                bundle,
+                &bundle.p[0],
+                &a,
+                &b,
+                dp_n,
+                inv_h,
+                use_bias,
+                push_out,
+            ),
+            coefficients(
+                bundle,
+                &bundle.p[1],
+                &a,
+                &b,
+                dp_n,
+                inv_h,
+                use_bias,
+                push_out,
+            ),
+        ];
+
+        match bundle.kind {
+            Kind::Block => {
+                let [p0, p1] = &bundle.p;
+                let (l0, l1) = (p0.normal_impulse, p1.normal_impulse);
+                let (rn_a0, rn_b0, rn_a1, rn_b1) = (p0.rn_a, p0.rn_b, p1.rn_a, p1.rn_b);
+                let kl0 = bundle.k00 * l0 + bundle.k01 * l1;
+                let kl1 = bundle.k01 * l0 + bundle.k11 * l1;
+                let vn0 = BodyLanes::relative(&a, &b, nx, ny, rn_a0, rn_b0);
+                let vn1 = BodyLanes::relative(&a, &b, nx, ny, rn_a1, rn_b1);
+                // rhs = vn - K lambda - target, target = impulse_scale (vn - K lambda) - bias.
+                let r0 = vn0 - kl0 - (coeffs[0].2 * (vn0 - kl0) - coeffs[0].0);
+                let r1 = vn1 - kl1 - (coeffs[1].2 * (vn1 - kl1) - coeffs[1].0);
+                let (x0, x1) = block_lcp(bundle, r0, r1, l0, l1);
+                let (d0, d1) = (x0 - l0, x1 - l1);
+                let d = d0 + d1;
+                a.vx -= a.inv_mass * d * nx;
+                a.vy -= a.inv_mass * d * ny;
+                a.w -= a.inv_inertia * (d0 * rn_a0 + d1 * rn_a1);
+                b.vx += b.inv_mass * d * nx;
+                b.vy += b.inv_mass * d * ny;
+                b.w += b.inv_inertia * (d0 * rn_b0 + d1 * rn_b1);
+                for (p, (x, dx)) in bundle.p.iter_mut().zip([(x0, d0), (x1, d1)]) {
+                    p.normal_impulse = x;
+                    p.max_normal_impulse = p.max_normal_impulse.max(dx);
+                    p.total_normal_impulse += dx;
                 }
+            }
+            Kind::Points => {
+                for (p, &(bias, mass_scale, impulse_scale)) in
+                    bundle.p.iter_mut().zip(coeffs.iter())
+                {
+                    let vn = BodyLanes::relative(&a, &b, nx, ny, p.rn_a, p.rn_b);
+                    let impulse = -p.normal_mass * (mass_scale * vn + bias)
+                        - impulse_scale * p.normal_impulse;
+                    let total = (p.normal_impulse + impulse).max(L::ZERO);
+                    let applied = total - p.normal_impulse;
+                    p.normal_impulse = total;
+                    p.max_normal_impulse = p.max_normal_impulse.max(applied);
+                    p.total_normal_impulse += applied;
+                    BodyLanes::apply(&mut a, &mut b, nx, ny, p.rn_a, p.rn_b, applied);
+                }
+            }
+        }
+
+        // Friction, one point after the other; skipped when no lane has any. With the bias,
+        // static friction also undoes the slip of a point that began the step stuck (the
+        // friction anchor).
+        let (tx, ty) = (ny, -nx);
+        if L::any(bundle.friction.cmpgt(L::ZERO)) {
+            let dp_t = (b.dpx - a.dpx) * tx + (b.dpy - a.dpy) * ty;
+            for p in &mut bundle.p {
+                let vt = BodyLanes::relative(&a, &b, tx, ty, p.rt_a, p.rt_b);
+                let max_f = bundle.friction * p.normal_impulse;
+                let bias = if use_bias {
+                    let slip = dp_t + (b.qc * p.rb_t + b.qs * p.rt_b)
+                        - (a.qc * p.ra_t + a.qs * p.rt_a)
+                        + p.adjusted_slip;
+                    (p.anchor * bundle.mass_scale * bundle.bias_rate * slip)
+                        .clamp(push_out, -push_out)
+                } else {
+                    L::ZERO
+                };
+                let total = (p.tangent_impulse - p.tangent_mass * (vt + bias)).clamp(-max_f, max_f);
+                let applied = total - p.tangent_impulse;
+                p.tangent_impulse = total;
+                BodyLanes::apply(&mut a, &mut b, tx, ty, p.rt_a, p.rt_b, applied);
+            }
+        }
+
+        bundle.scatter(bodies, &a, &b);
+    }
+}
+
+/// A point's (bias, mass scale, impulse scale), as in the scalar soft step: the speculative
+/// bias `s / h` where the surfaces are apart, the soft spring's otherwise (none in a relax
+/// pass). `dp_n` is the pair's relative motion this step along the normal.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn coefficients<L: Wide>(
+    bundle: &Bundle<L>,
+    p: &PointLanes<L>,
+    a: &BodyLanes<L>,
+    b: &BodyLanes<L>,
+    dp_n: L,
+    inv_h: L,
+    use_bias: bool,
+    push_out: L,
+) -> (L, L, L) {
+    let s = dp_n + (b.qc * p.rb_n + b.qs * p.rn_b) - (a.qc * p.ra_n + a.qs * p.rn_a)
+        + p.adjusted_separation;
+    let speculative = s.cmpgt(L::ZERO);
+    let (soft_bias, soft_ms, soft_is) = if use_bias {
+        (
+            (bundle.mass_scale * bundle.bias_rate * s).max(push_out),
+            bundle.mass_scale,
+            bundle.impulse_scale,
+        )
+    } else {
+        (L::ZERO, L::ONE, L::ZERO)
+    };
+    (
+        L::select(speculative, s * inv_h, soft_bias),
+        L::select(speculative, L::ONE, soft_ms),
+        L::select(speculative, L::ZERO, soft_is),
+    )
+}
+
+/// Copy the lanes' impulses back to the contacts.
+fn store_bundles<L: Wide>(bundles: &[Bundle<L>], contacts: &mut [Contact]) {
+    for bundle in bundles {
+        for (lane, &ci) in bundle.contact.as_ref().iter().enumerate() {
+            let Some(c) = contacts.get_mut(ci as usize) else {
+                continue;
+            };
+            for (j, p) in c.points[..c.count].iter_mut().enumerate() {
+                let src = &bundle.p[j];
+                p.normal_impulse = src.normal_impulse.lane(lane);
+                p.tangent_impulse = src.tangent_impulse.lane(lane);
+                p.total_normal_impulse = src.total_normal_impulse.lane(lane);
+                p.max_normal_impulse = src.max_normal_impulse.lane(lane);
             }
         }
     }
@@ -411,9 +576,9 @@ impl WideSolver {
 
 /// The two-point LCP of `solve_block_lcp`, lane by lane: case 1 (both push), 2 (only point
 /// 0), 3 (only point 1), 4 (neither); a lane no case fits keeps its impulses.
-#[inline]
-fn block_lcp(bundle: &Bundle, r0: Lanes, r1: Lanes, l0: Lanes, l1: Lanes) -> (Lanes, Lanes) {
-    let zero = Lanes::ZERO;
+#[inline(always)]
+fn block_lcp<L: Wide>(bundle: &Bundle<L>, r0: L, r1: L, l0: L, l1: L) -> (L, L) {
+    let zero = L::ZERO;
     let x0_1 = -(bundle.i00 * r0 + bundle.i01 * r1);
     let x1_1 = -(bundle.i01 * r0 + bundle.i11 * r1);
     let case1 = x0_1.cmpge(zero) & x1_1.cmpge(zero);
@@ -422,50 +587,78 @@ fn block_lcp(bundle: &Bundle, r0: Lanes, r1: Lanes, l0: Lanes, l1: Lanes) -> (La
     let x1_3 = -r1 / bundle.k11;
     let case3 = x1_3.cmpge(zero) & (bundle.k01 * x1_3 + r0).cmpge(zero);
     let case4 = r0.cmpge(zero) & r1.cmpge(zero);
-    let x0 = Lanes::select(
+    let x0 = L::select(
         case1,
         x0_1,
-        Lanes::select(case2, x0_2, Lanes::select(case3 | case4, zero, l0)),
+        L::select(case2, x0_2, L::select(case3 | case4, zero, l0)),
     );
-    let x1 = Lanes::select(
+    let x1 = L::select(
         case1,
         x1_1,
-        Lanes::select(case2 | case4, zero, Lanes::select(case3, x1_3, l1)),
+        L::select(case2 | case4, zero, L::select(case3, x1_3, l1)),
     );
     (x0, x1)
 }
 
-/// Pack up to four contacts into one bundle; missing lanes are inert (fixed dummy bodies,
-/// zero masses and impulses, an identity block).
-fn pack(
+/// Pack every (colour, kind) list into bundles of `L::WIDTH`, in colour order.
+fn pack_all<L: Wide>(
+    bundles: &mut Vec<Bundle<L>>,
+    by_colour: &[Vec<u32>],
+    contacts: &[Contact],
+    bodies: &[SolverBody],
+    dummy: u32,
+) {
+    bundles.clear();
+    for (slot, list) in by_colour.iter().enumerate() {
+        let kind = if slot % 2 == 0 {
+            Kind::Block
+        } else {
+            Kind::Points
+        };
+        for chunk in list.chunks(L::WIDTH) {
+            bundles.push(pack(kind, chunk, contacts, bodies, dummy));
+        }
+    }
+}
+
+/// Fields of a bundle's header, in the order [`pack`] fills them.
+const HEADER_FIELDS: usize = 16;
+/// Fields of a bundle's point, in the order [`pack`] fills them.
+const POINT_FIELDS: usize = 17;
+
+/// Pack up to `L::WIDTH` contacts into one bundle; missing lanes are inert (fixed dummy
+/// bodies, zero masses and impulses, an identity block).
+fn pack<L: Wide>(
     kind: Kind,
     chunk: &[u32],
     contacts: &[Contact],
     bodies: &[SolverBody],
     dummy: u32,
-) -> Bundle {
-    let mut contact = [u32::MAX; 4];
-    let mut a = [dummy; 4];
-    let mut b = [dummy; 4];
+) -> Bundle<L> {
+    let mut contact = L::index_splat(u32::MAX);
+    let mut a = L::index_splat(dummy);
+    let mut b = L::index_splat(dummy);
     // Header fields: nx, ny, friction, bias_rate, mass_scale, impulse_scale, k00, k01, k11,
     // i00, i01, i11 (identity block for empty lanes so the LCP stays finite), then the inverse
-    // masses and inertias of A and B.
-    let mut f = [[0.0 as Real; 4]; 16];
-    for field in [6, 8, 9, 11] {
-        f[field] = [1.0; 4];
+    // masses and inertias of A and B. Lane-major: header[lane][field].
+    let mut header = [[0.0 as Real; HEADER_FIELDS]; 8];
+    let mut pts = [[[0.0 as Real; POINT_FIELDS]; 2]; 8];
+    for lane in header.iter_mut() {
+        for field in [6, 8, 9, 11] {
+            lane[field] = 1.0;
+        }
     }
-    let mut pts = [[[0.0 as Real; 4]; 13]; 2];
     for (lane, &ci) in chunk.iter().enumerate() {
         let c = &contacts[ci as usize];
-        contact[lane] = ci;
-        a[lane] = c.a;
-        b[lane] = c.b;
+        contact.as_mut()[lane] = ci;
+        a.as_mut()[lane] = c.a;
+        b.as_mut()[lane] = c.b;
         let sf = c.softness;
         let (k, inv) = match &c.block {
             Some(m) => (m.k, m.inv),
             None => ([[1.0, 0.0], [0.0, 1.0]], [[1.0, 0.0], [0.0, 1.0]]),
         };
-        let header = [
+        header[lane] = [
             c.normal.x,
             c.normal.y,
             c.friction,
@@ -483,14 +676,13 @@ fn pack(
             bodies[c.b as usize].inv_mass,
             bodies[c.b as usize].inv_inertia,
         ];
-        for (field, value) in f.iter_mut().zip(header) {
-            field[lane] = value;
-        }
         for (j, p) in c.points[..c.count].iter().enumerate() {
-            let mut values = [0.0; 13];
-            values[..6].copy_from_slice(&p.arms.to_words());
-            values[6..].copy_from_slice(&[
+            let v = &mut pts[lane][j];
+            v[..8].copy_from_slice(&p.arms.to_words());
+            v[8..].copy_from_slice(&[
                 p.adjusted_separation,
+                p.adjusted_slip,
+                if p.stuck { 1.0 } else { 0.0 },
                 p.normal_mass,
                 p.tangent_mass,
                 p.normal_impulse,
@@ -498,48 +690,52 @@ fn pack(
                 p.total_normal_impulse,
                 p.max_normal_impulse,
             ]);
-            for (field, value) in pts[j].iter_mut().zip(values) {
-                field[lane] = value;
-            }
         }
     }
-    let l = Lanes::from_array;
-    let point = |v: &[[Real; 4]; 13]| PointLanes {
-        rn_a: l(v[0]),
-        rn_b: l(v[1]),
-        rt_a: l(v[2]),
-        rt_b: l(v[3]),
-        ra_n: l(v[4]),
-        rb_n: l(v[5]),
-        adjusted_separation: l(v[6]),
-        normal_mass: l(v[7]),
-        tangent_mass: l(v[8]),
-        normal_impulse: l(v[9]),
-        tangent_impulse: l(v[10]),
-        total_normal_impulse: l(v[11]),
-        max_normal_impulse: l(v[12]),
+    let h = |field: usize| L::from_fn(|lane| header[lane][field]);
+    let point = |j: usize| {
+        let f = |field: usize| L::from_fn(|lane| pts[lane][j][field]);
+        PointLanes {
+            rn_a: f(0),
+            rn_b: f(1),
+            rt_a: f(2),
+            rt_b: f(3),
+            ra_n: f(4),
+            rb_n: f(5),
+            ra_t: f(6),
+            rb_t: f(7),
+            adjusted_separation: f(8),
+            adjusted_slip: f(9),
+            anchor: f(10),
+            normal_mass: f(11),
+            tangent_mass: f(12),
+            normal_impulse: f(13),
+            tangent_impulse: f(14),
+            total_normal_impulse: f(15),
+            max_normal_impulse: f(16),
+        }
     };
     Bundle {
         kind,
         contact,
         a,
         b,
-        nx: l(f[0]),
-        ny: l(f[1]),
-        friction: l(f[2]),
-        bias_rate: l(f[3]),
-        mass_scale: l(f[4]),
-        impulse_scale: l(f[5]),
-        k00: l(f[6]),
-        k01: l(f[7]),
-        k11: l(f[8]),
-        i00: l(f[9]),
-        i01: l(f[10]),
-        i11: l(f[11]),
-        inv_mass_a: l(f[12]),
-        inv_i_a: l(f[13]),
-        inv_mass_b: l(f[14]),
-        inv_i_b: l(f[15]),
-        p: [point(&pts[0]), point(&pts[1])],
+        nx: h(0),
+        ny: h(1),
+        friction: h(2),
+        bias_rate: h(3),
+        mass_scale: h(4),
+        impulse_scale: h(5),
+        k00: h(6),
+        k01: h(7),
+        k11: h(8),
+        i00: h(9),
+        i01: h(10),
+        i11: h(11),
+        inv_mass_a: h(12),
+        inv_i_a: h(13),
+        inv_mass_b: h(14),
+        inv_i_b: h(15),
+        p: [point(0), point(1)],
     }
 }

@@ -77,14 +77,17 @@ pub struct SlotState {
 pub struct PointState {
     /// Feature id.
     pub id: u16,
-    /// point.x, point.y, separation, anchor_a.x, anchor_a.y, anchor_b.x, anchor_b.y.
-    pub geometry: [Real; 7],
+    /// point.x, point.y, separation, anchor_a.x, anchor_a.y, anchor_b.x, anchor_b.y, slip.
+    pub geometry: [Real; 8],
     /// normal, tangent, total normal and max normal impulse.
     pub impulses: [Real; 4],
-    /// Lever arms: rn_a, rn_b, rt_a, rt_b, ra_n, rb_n.
-    pub arms: [Real; 6],
-    /// normal_mass, tangent_mass, adjusted_separation, relative_velocity, approach_velocity, bias.
-    pub solver: [Real; 6],
+    /// Lever arms: rn_a, rn_b, rt_a, rt_b, ra_n, rb_n, ra_t, rb_t.
+    pub arms: [Real; 8],
+    /// normal_mass, tangent_mass, adjusted_separation, relative_velocity, approach_velocity,
+    /// bias, adjusted_slip.
+    pub solver: [Real; 7],
+    /// Static friction held the point at the end of the last step (its slip counts).
+    pub stuck: bool,
 }
 
 /// A persistent contact.
@@ -161,6 +164,7 @@ fn contact_state(c: &Contact) -> ContactState {
                 p.anchor_a.y,
                 p.anchor_b.x,
                 p.anchor_b.y,
+                p.slip,
             ],
             impulses: [
                 p.normal_impulse,
@@ -176,7 +180,9 @@ fn contact_state(c: &Contact) -> ContactState {
                 p.relative_velocity,
                 p.approach_velocity,
                 p.bias,
+                p.adjusted_slip,
             ],
+            stuck: p.stuck,
         })
         .collect();
     ContactState {
@@ -266,6 +272,7 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             separation: g[2],
             anchor_a: Vec2::new(g[3], g[4]),
             anchor_b: Vec2::new(g[5], g[6]),
+            slip: g[7],
             normal_impulse: p.impulses[0],
             tangent_impulse: p.impulses[1],
             total_normal_impulse: p.impulses[2],
@@ -277,6 +284,8 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             relative_velocity: p.solver[3],
             approach_velocity: p.solver[4],
             bias: p.solver[5],
+            adjusted_slip: p.solver[6],
+            stuck: p.stuck,
             ..ContactPoint::default()
         };
     }

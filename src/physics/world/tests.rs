@@ -50,3 +50,110 @@ fn overflow_contacts_solve_like_the_wide_bundles() {
         assert!((a.angle() - b.angle()).abs() < 1e-3);
     }
 }
+
+/// A mixed pile falling into a box: boxes, discs, capsules and triangles of two densities,
+/// friction and restitution varied, so every kernel path (block, points, speculative,
+/// friction on and off) runs.
+fn mixed_pile() -> World {
+    let settings = Settings {
+        enable_sleep: false,
+        ..Settings::default()
+    };
+    let mut w = World::new(settings, vec2(0.0, -10.0)).unwrap();
+    w.add_body(&BodyDef::fixed(Shape::rect(12.0, 1.0), vec2(0.0, -0.5)))
+        .unwrap();
+    for x in [-6.5, 6.5] {
+        w.add_body(&BodyDef::fixed(Shape::rect(1.0, 10.0), vec2(x, 5.0)))
+            .unwrap();
+    }
+    let (triangle, _centroid) = crate::physics::convex::Polygon::new(&[
+        vec2(-0.3, -0.25),
+        vec2(0.3, -0.25),
+        vec2(0.0, 0.3),
+    ])
+    .unwrap();
+    let triangle = Shape::Polygon(Box::new(triangle));
+    for i in 0..120 {
+        let (col, row) = ((i % 12) as Real, (i / 12) as Real);
+        let shape = match i % 4 {
+            0 => Shape::rect(0.5, 0.4),
+            1 => Shape::circle(0.25),
+            2 => Shape::capsule(0.4, 0.15),
+            _ => triangle.clone(),
+        };
+        let def = BodyDef::dynamic(shape, vec2(-5.0 + 0.85 * col + 0.1 * row, 0.5 + 0.8 * row))
+            .with_density(if i % 3 == 0 { 3.0 } else { 1.0 })
+            .with_friction(if i % 5 == 0 { 0.0 } else { 0.6 })
+            .with_restitution(if i % 7 == 0 { 0.5 } else { 0.0 });
+        w.add_body(&def).unwrap();
+    }
+    w
+}
+
+/// Four-lane and eight-lane bundles give the same World bit for bit: a contact's arithmetic
+/// does not depend on which contacts share its bundle (`solver/lanes.rs`). On a machine
+/// without AVX2 the eight-lane kernels never run, and there is nothing to compare.
+#[test]
+fn four_and_eight_lanes_step_bit_identically() {
+    use crate::physics::solver::wide::Width;
+    if Width::detect() != Width::Eight {
+        eprintln!("no AVX2 here: only the four-lane kernels run on this machine");
+        return;
+    }
+    let mut four = mixed_pile();
+    let mut eight = mixed_pile();
+    four.wide.width = Some(Width::Four);
+    eight.wide.width = Some(Width::Eight);
+    let mut most_contacts = 0;
+    for step in 0..240 {
+        four.step(1.0 / 60.0).unwrap();
+        eight.step(1.0 / 60.0).unwrap();
+        most_contacts = most_contacts.max(four.contacts.len());
+        assert!(
+            four.state_bits().eq(eight.state_bits()),
+            "the widths differ after step {step}"
+        );
+    }
+    assert!(
+        most_contacts > 100,
+        "the pile must be in contact: {most_contacts}"
+    );
+}
+
+/// The friction anchor undoes a stuck point's slip: a box resting on the ground whose two
+/// contact points are told they have slipped 1 mm along the tangent (+x, box over ground)
+/// since they stuck is pulled back by that 1 mm, and stays there, since static friction
+/// (mu 0.6) holds it. Without the anchor nothing would move it (it is at rest).
+#[test]
+fn friction_anchor_pulls_a_stuck_box_back_by_its_slip() {
+    let settings = Settings {
+        enable_sleep: false,
+        ..Settings::default()
+    };
+    let mut w = World::new(settings, vec2(0.0, -10.0)).unwrap();
+    w.add_body(&BodyDef::fixed(Shape::rect(10.0, 1.0), vec2(0.0, -0.5)))
+        .unwrap();
+    let id = w
+        .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)))
+        .unwrap();
+    for _ in 0..60 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    let x0 = w.body(id).unwrap().position().x;
+    assert_eq!(w.contacts.len(), 1);
+    let c = &mut w.contacts[0];
+    assert_eq!(c.count, 2);
+    assert!(c.points.iter().all(|p| p.stuck), "a resting box sticks");
+    for p in &mut c.points {
+        p.slip = 0.001;
+    }
+    for _ in 0..60 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    let moved = w.body(id).unwrap().position().x - x0;
+    assert!(
+        (moved + 0.001).abs() < 1e-4,
+        "moved {moved} m, expected -0.001 m"
+    );
+    assert!(w.body(id).unwrap().linear_velocity().length() < 1e-3);
+}

@@ -1,0 +1,460 @@
+//! The wide solver's lanes: four or eight [`Real`]s worked on side by side.
+//!
+//! [`Wide`] is what the kernels in `wide.rs` ask of a lane type. Two types provide it:
+//! [`Lanes`] (glam's four-wide vector, SSE2 on x86-64) and [`Lanes8`] (eight lanes, written as
+//! plain per-lane loops that the compiler turns into AVX2 instructions inside the kernels
+//! compiled for AVX2). Every operation is the same IEEE operation lane by lane in both, and
+//! `max`/`min` follow SSE's rule (the second operand unless the first is strictly greater,
+//! resp. smaller), so a contact's arithmetic, and the World's result, does not depend on how
+//! many contacts share a bundle.
+
+use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, Neg, Sub, SubAssign};
+
+use crate::physics::math::{Lanes, Real};
+
+/// A lane type for the wide kernels: `WIDTH` independent [`Real`]s.
+pub(crate) trait Wide:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+{
+    /// How many lanes.
+    const WIDTH: usize;
+    /// Every lane 0.
+    const ZERO: Self;
+    /// Every lane 1.
+    const ONE: Self;
+    /// A lane-wise truth value, from a comparison.
+    type Mask: Copy + BitAnd<Output = Self::Mask> + BitOr<Output = Self::Mask>;
+    /// One `u32` per lane (contact and body indices).
+    type Index: Copy + AsRef<[u32]> + AsMut<[u32]>;
+    /// Every lane `x`.
+    fn splat(x: Real) -> Self;
+    /// Lane i is `f(i)`.
+    fn from_fn(f: impl FnMut(usize) -> Real) -> Self;
+    /// Every index lane `i`.
+    fn index_splat(i: u32) -> Self::Index;
+    /// Lane `i`.
+    fn lane(self, i: usize) -> Real;
+    /// Lane-wise `if self > rhs { self } else { rhs }` (SSE's `maxps`).
+    fn max(self, rhs: Self) -> Self;
+    /// Lane-wise `if self < rhs { self } else { rhs }` (SSE's `minps`).
+    fn min(self, rhs: Self) -> Self;
+    /// Lane-wise `self > rhs`.
+    fn cmpgt(self, rhs: Self) -> Self::Mask;
+    /// Lane-wise `self >= rhs`.
+    fn cmpge(self, rhs: Self) -> Self::Mask;
+    /// Lane-wise `if mask { if_true } else { if_false }`.
+    fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
+    /// Whether any lane of `mask` is true.
+    fn any(mask: Self::Mask) -> bool;
+
+    /// `self.max(lo).min(hi)`, as glam's `clamp`.
+    #[inline(always)]
+    fn clamp(self, lo: Self, hi: Self) -> Self {
+        self.max(lo).min(hi)
+    }
+}
+
+#[cfg(not(feature = "f64"))]
+type LanesMask = glam::BVec4A;
+#[cfg(feature = "f64")]
+type LanesMask = glam::BVec4;
+
+impl Wide for Lanes {
+    const WIDTH: usize = 4;
+    const ZERO: Self = Lanes::ZERO;
+    const ONE: Self = Lanes::ONE;
+    type Mask = LanesMask;
+    type Index = [u32; 4];
+    #[inline(always)]
+    fn splat(x: Real) -> Self {
+        Lanes::splat(x)
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> Real) -> Self {
+        Lanes::new(f(0), f(1), f(2), f(3))
+    }
+    #[inline(always)]
+    fn index_splat(i: u32) -> [u32; 4] {
+        [i; 4]
+    }
+    #[inline(always)]
+    fn lane(self, i: usize) -> Real {
+        self[i]
+    }
+    #[inline(always)]
+    fn max(self, rhs: Self) -> Self {
+        Lanes::max(self, rhs)
+    }
+    #[inline(always)]
+    fn min(self, rhs: Self) -> Self {
+        Lanes::min(self, rhs)
+    }
+    #[inline(always)]
+    fn cmpgt(self, rhs: Self) -> LanesMask {
+        Lanes::cmpgt(self, rhs)
+    }
+    #[inline(always)]
+    fn cmpge(self, rhs: Self) -> LanesMask {
+        Lanes::cmpge(self, rhs)
+    }
+    #[inline(always)]
+    fn select(mask: LanesMask, if_true: Self, if_false: Self) -> Self {
+        Lanes::select(mask, if_true, if_false)
+    }
+    #[inline(always)]
+    fn any(mask: LanesMask) -> bool {
+        mask.any()
+    }
+}
+
+/// Eight [`Real`]s side by side, 32-byte aligned.
+///
+/// On x86-64 (`f32`) one AVX register: each operation is one AVX instruction, so a `Lanes8`
+/// may only be worked on where [`eight_lanes_available`] said yes (the wide solver builds
+/// eight-lane bundles only then). Building one from numbers and reading its lanes back use no
+/// AVX instruction and are safe anywhere. Elsewhere a plain array, worked lane by lane.
+#[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub(crate) struct Lanes8(std::arch::x86_64::__m256);
+
+/// Eight lane-wise truth values (all bits set for true), as AVX comparisons give them.
+#[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub(crate) struct Mask8(std::arch::x86_64::__m256);
+
+#[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+mod avx {
+    //! `Lanes8` as AVX instructions. Every function here must run only on a processor with
+    //! AVX2 (see [`Lanes8`]); they are inlined into the kernels compiled for it.
+    use super::{Lanes8, Mask8, Wide};
+    use crate::physics::math::Real;
+    use std::arch::x86_64::*;
+    use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, Neg, Sub, SubAssign};
+
+    /// Lane-wise binary operator on `Lanes8` by one AVX instruction.
+    macro_rules! avx_op {
+        ($trait:ident, $method:ident, $intrinsic:ident) => {
+            impl $trait for Lanes8 {
+                type Output = Lanes8;
+                #[inline(always)]
+                fn $method(self, rhs: Lanes8) -> Lanes8 {
+                    // SAFETY: `Lanes8` is only worked on where AVX2 is available.
+                    Lanes8(unsafe { $intrinsic(self.0, rhs.0) })
+                }
+            }
+        };
+    }
+    avx_op!(Add, add, _mm256_add_ps);
+    avx_op!(Sub, sub, _mm256_sub_ps);
+    avx_op!(Mul, mul, _mm256_mul_ps);
+    avx_op!(Div, div, _mm256_div_ps);
+
+    impl AddAssign for Lanes8 {
+        #[inline(always)]
+        fn add_assign(&mut self, rhs: Lanes8) {
+            *self = *self + rhs;
+        }
+    }
+    impl SubAssign for Lanes8 {
+        #[inline(always)]
+        fn sub_assign(&mut self, rhs: Lanes8) {
+            *self = *self - rhs;
+        }
+    }
+    impl Neg for Lanes8 {
+        type Output = Lanes8;
+        /// Flip the sign bit, as glam does.
+        #[inline(always)]
+        fn neg(self) -> Lanes8 {
+            // SAFETY: as above.
+            Lanes8(unsafe { _mm256_xor_ps(self.0, _mm256_set1_ps(-0.0)) })
+        }
+    }
+    impl BitAnd for Mask8 {
+        type Output = Mask8;
+        #[inline(always)]
+        fn bitand(self, rhs: Mask8) -> Mask8 {
+            // SAFETY: as above.
+            Mask8(unsafe { _mm256_and_ps(self.0, rhs.0) })
+        }
+    }
+    impl BitOr for Mask8 {
+        type Output = Mask8;
+        #[inline(always)]
+        fn bitor(self, rhs: Mask8) -> Mask8 {
+            // SAFETY: as above.
+            Mask8(unsafe { _mm256_or_ps(self.0, rhs.0) })
+        }
+    }
+
+    impl Wide for Lanes8 {
+        const WIDTH: usize = 8;
+        // SAFETY (both): `__m256` is eight `f32`s, any bit pattern valid.
+        const ZERO: Self = Lanes8(unsafe { std::mem::transmute::<[f32; 8], __m256>([0.0; 8]) });
+        const ONE: Self = Lanes8(unsafe { std::mem::transmute::<[f32; 8], __m256>([1.0; 8]) });
+        type Mask = Mask8;
+        type Index = [u32; 8];
+        #[inline(always)]
+        fn splat(x: Real) -> Self {
+            Self::from_array([x; 8])
+        }
+        #[inline(always)]
+        fn from_fn(f: impl FnMut(usize) -> Real) -> Self {
+            Self::from_array(std::array::from_fn(f))
+        }
+        #[inline(always)]
+        fn index_splat(i: u32) -> [u32; 8] {
+            [i; 8]
+        }
+        #[inline(always)]
+        fn lane(self, i: usize) -> Real {
+            self.to_array()[i]
+        }
+        #[inline(always)]
+        fn max(self, rhs: Self) -> Self {
+            // SAFETY: as above. `maxps` returns the second operand unless the first is greater.
+            Lanes8(unsafe { _mm256_max_ps(self.0, rhs.0) })
+        }
+        #[inline(always)]
+        fn min(self, rhs: Self) -> Self {
+            // SAFETY: as above.
+            Lanes8(unsafe { _mm256_min_ps(self.0, rhs.0) })
+        }
+        #[inline(always)]
+        fn cmpgt(self, rhs: Self) -> Mask8 {
+            // SAFETY: as above. Ordered and quiet, as SSE's `cmpltps` with swapped operands.
+            Mask8(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, rhs.0) })
+        }
+        #[inline(always)]
+        fn cmpge(self, rhs: Self) -> Mask8 {
+            // SAFETY: as above.
+            Mask8(unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0, rhs.0) })
+        }
+        #[inline(always)]
+        fn select(mask: Mask8, if_true: Self, if_false: Self) -> Self {
+            // SAFETY: as above. Every mask lane is all ones or all zeros.
+            Lanes8(unsafe { _mm256_blendv_ps(if_false.0, if_true.0, mask.0) })
+        }
+        #[inline(always)]
+        fn any(mask: Mask8) -> bool {
+            // SAFETY: as above.
+            unsafe { _mm256_movemask_ps(mask.0) != 0 }
+        }
+    }
+
+    impl Lanes8 {
+        /// Eight numbers as lanes (no AVX instruction: a plain copy).
+        #[inline(always)]
+        pub fn from_array(a: [Real; 8]) -> Lanes8 {
+            // SAFETY: same size, any bit pattern valid.
+            Lanes8(unsafe { std::mem::transmute::<[f32; 8], __m256>(a) })
+        }
+        /// The lanes as numbers (no AVX instruction).
+        #[inline(always)]
+        pub fn to_array(self) -> [Real; 8] {
+            // SAFETY: as above.
+            unsafe { std::mem::transmute::<__m256, [f32; 8]>(self.0) }
+        }
+    }
+}
+
+#[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
+pub(crate) use portable::Lanes8;
+
+#[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
+mod portable {
+    //! `Lanes8` as a plain array where there is no AVX: never chosen by the solver there
+    //! ([`super::eight_lanes_available`] is false), kept so the kernels compile the same.
+    use super::Wide;
+    use crate::physics::math::Real;
+    use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, Neg, Sub, SubAssign};
+
+    /// Eight [`Real`]s side by side.
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct Lanes8([Real; 8]);
+
+    /// Eight lane-wise truth values.
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct Mask8([bool; 8]);
+
+    /// Lane-wise binary operator on `Lanes8`.
+    macro_rules! lanes8_op {
+        ($trait:ident, $method:ident, $op:tt) => {
+            impl $trait for Lanes8 {
+                type Output = Lanes8;
+                fn $method(self, rhs: Lanes8) -> Lanes8 {
+                    Lanes8(std::array::from_fn(|i| self.0[i] $op rhs.0[i]))
+                }
+            }
+        };
+    }
+    lanes8_op!(Add, add, +);
+    lanes8_op!(Sub, sub, -);
+    lanes8_op!(Mul, mul, *);
+    lanes8_op!(Div, div, /);
+
+    impl AddAssign for Lanes8 {
+        fn add_assign(&mut self, rhs: Lanes8) {
+            *self = *self + rhs;
+        }
+    }
+    impl SubAssign for Lanes8 {
+        fn sub_assign(&mut self, rhs: Lanes8) {
+            *self = *self - rhs;
+        }
+    }
+    impl Neg for Lanes8 {
+        type Output = Lanes8;
+        fn neg(self) -> Lanes8 {
+            Lanes8(self.0.map(|x| -x))
+        }
+    }
+    impl BitAnd for Mask8 {
+        type Output = Mask8;
+        fn bitand(self, rhs: Mask8) -> Mask8 {
+            Mask8(std::array::from_fn(|i| self.0[i] & rhs.0[i]))
+        }
+    }
+    impl BitOr for Mask8 {
+        type Output = Mask8;
+        fn bitor(self, rhs: Mask8) -> Mask8 {
+            Mask8(std::array::from_fn(|i| self.0[i] | rhs.0[i]))
+        }
+    }
+
+    impl Wide for Lanes8 {
+        const WIDTH: usize = 8;
+        const ZERO: Self = Lanes8([0.0; 8]);
+        const ONE: Self = Lanes8([1.0; 8]);
+        type Mask = Mask8;
+        type Index = [u32; 8];
+        fn splat(x: Real) -> Self {
+            Lanes8([x; 8])
+        }
+        fn from_fn(f: impl FnMut(usize) -> Real) -> Self {
+            Lanes8(std::array::from_fn(f))
+        }
+        fn index_splat(i: u32) -> [u32; 8] {
+            [i; 8]
+        }
+        fn lane(self, i: usize) -> Real {
+            self.0[i]
+        }
+        fn max(self, rhs: Self) -> Self {
+            Lanes8(std::array::from_fn(|i| {
+                if self.0[i] > rhs.0[i] {
+                    self.0[i]
+                } else {
+                    rhs.0[i]
+                }
+            }))
+        }
+        fn min(self, rhs: Self) -> Self {
+            Lanes8(std::array::from_fn(|i| {
+                if self.0[i] < rhs.0[i] {
+                    self.0[i]
+                } else {
+                    rhs.0[i]
+                }
+            }))
+        }
+        fn cmpgt(self, rhs: Self) -> Mask8 {
+            Mask8(std::array::from_fn(|i| self.0[i] > rhs.0[i]))
+        }
+        fn cmpge(self, rhs: Self) -> Mask8 {
+            Mask8(std::array::from_fn(|i| self.0[i] >= rhs.0[i]))
+        }
+        fn select(mask: Mask8, if_true: Self, if_false: Self) -> Self {
+            Lanes8(std::array::from_fn(|i| {
+                if mask.0[i] {
+                    if_true.0[i]
+                } else {
+                    if_false.0[i]
+                }
+            }))
+        }
+        fn any(mask: Mask8) -> bool {
+            mask.0.iter().any(|&m| m)
+        }
+    }
+}
+
+/// Whether this machine runs the eight-lane kernels compiled for AVX2. Not in `f64` builds:
+/// there glam's four lanes are scalar code whose `max` is Rust's, not SSE's, so the two widths
+/// could differ in the sign of a zero.
+pub(crate) fn eight_lanes_available() -> bool {
+    #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
+    {
+        false
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64", not(feature = "f64")))]
+mod tests {
+    use super::*;
+
+    /// The eight-lane operations agree bit for bit with glam's four lanes, signs of zero
+    /// included (the property the World's determinism across widths rests on).
+    #[test]
+    fn eight_lanes_match_glam_lane_by_lane() {
+        if !eight_lanes_available() {
+            eprintln!("no AVX2 here: the eight-lane kernels never run on this machine");
+            return;
+        }
+        let values: [Real; 8] = [0.0, -0.0, 1.5, -2.25, 1e-30, -7.0, 3.0, 1.5];
+        let other: [Real; 8] = [-0.0, 0.0, 1.5, 4.0, -1e-30, -7.5, -3.0, 2.0];
+        let a8 = Lanes8::from_array(values);
+        let b8 = Lanes8::from_array(other);
+        let nine = Lanes8::splat(9.0);
+        let eights: [Lanes8; 8] = [
+            a8 + b8,
+            a8 - b8,
+            a8 * b8,
+            a8 / (b8 + nine),
+            -a8,
+            Wide::max(a8, b8),
+            Wide::min(a8, b8),
+            Wide::select(Wide::cmpge(a8, b8), a8, -b8),
+        ];
+        for half in 0..2 {
+            let r = half * 4..half * 4 + 4;
+            let a4 = Lanes::from_slice(&values[r.clone()]);
+            let b4 = Lanes::from_slice(&other[r]);
+            let fours: [Lanes; 8] = [
+                a4 + b4,
+                a4 - b4,
+                a4 * b4,
+                a4 / (b4 + Lanes::splat(9.0)),
+                -a4,
+                Wide::max(a4, b4),
+                Wide::min(a4, b4),
+                Wide::select(Wide::cmpge(a4, b4), a4, -b4),
+            ];
+            for (k, (four, eight)) in fours.iter().zip(&eights).enumerate() {
+                for i in 0..4 {
+                    assert_eq!(
+                        four[i].to_bits(),
+                        eight.to_array()[half * 4 + i].to_bits(),
+                        "operation {k}, lane {}",
+                        half * 4 + i
+                    );
+                }
+            }
+        }
+        assert!(Lanes8::any(a8.cmpgt(b8)));
+        assert!(!Lanes8::any(a8.cmpgt(Lanes8::splat(10.0))));
+    }
+}

@@ -153,6 +153,13 @@ struct BodyLanes<L> {
     inv_inertia: L,
 }
 
+/// One field of the lanes' bodies. A closure, not a function pointer, so that it is inlined
+/// into the kernels (a pointer was called once per lane in a whole-program build).
+#[inline(always)]
+fn lanes<L: Wide>(bodies: &[SolverBody], idx: &[u32], field: impl Fn(&SolverBody) -> Real) -> L {
+    L::from_fn(|i| field(&bodies[idx[i] as usize]))
+}
+
 impl<L: Wide> BodyLanes<L> {
     /// Load the lanes' bodies' velocities (and, with `motion`, how far they moved this step).
     /// The inverse masses do not change within a step: they come packed in the bundle.
@@ -165,21 +172,20 @@ impl<L: Wide> BodyLanes<L> {
         motion: bool,
     ) -> BodyLanes<L> {
         let idx = idx.as_ref();
-        let lanes = |f: fn(&SolverBody) -> Real| L::from_fn(|i| f(&bodies[idx[i] as usize]));
         let (dpx, dpy, qc, qs) = if motion {
             (
-                lanes(|s| s.dp.x),
-                lanes(|s| s.dp.y),
-                lanes(|s| s.dq.c),
-                lanes(|s| s.dq.s),
+                lanes(bodies, idx, |s| s.dp.x),
+                lanes(bodies, idx, |s| s.dp.y),
+                lanes(bodies, idx, |s| s.dq.c),
+                lanes(bodies, idx, |s| s.dq.s),
             )
         } else {
             (L::ZERO, L::ZERO, L::ONE, L::ZERO)
         };
         BodyLanes {
-            vx: lanes(|s| s.v.x),
-            vy: lanes(|s| s.v.y),
-            w: lanes(|s| s.w),
+            vx: lanes(bodies, idx, |s| s.v.x),
+            vy: lanes(bodies, idx, |s| s.v.y),
+            w: lanes(bodies, idx, |s| s.w),
             dpx,
             dpy,
             qc,

@@ -33,6 +33,8 @@ pub(crate) trait Wide:
     type Mask: Copy + BitAnd<Output = Self::Mask> + BitOr<Output = Self::Mask>;
     /// One `u32` per lane (contact and body indices).
     type Index: Copy + AsRef<[u32]> + AsMut<[u32]>;
+    /// The lanes as plain numbers.
+    type Array: Copy + AsRef<[Real]>;
     /// Every lane `x`.
     fn splat(x: Real) -> Self;
     /// Lane i is `f(i)`.
@@ -41,6 +43,8 @@ pub(crate) trait Wide:
     fn index_splat(i: u32) -> Self::Index;
     /// Lane `i`.
     fn lane(self, i: usize) -> Real;
+    /// All lanes as plain numbers.
+    fn to_lanes(self) -> Self::Array;
     /// Lane-wise `if self > rhs { self } else { rhs }` (SSE's `maxps`).
     fn max(self, rhs: Self) -> Self;
     /// Lane-wise `if self < rhs { self } else { rhs }` (SSE's `minps`).
@@ -72,6 +76,7 @@ impl Wide for Lanes {
     const ONE: Self = Lanes::ONE;
     type Mask = LanesMask;
     type Index = [u32; 4];
+    type Array = [Real; 4];
     #[inline(always)]
     fn splat(x: Real) -> Self {
         Lanes::splat(x)
@@ -87,6 +92,10 @@ impl Wide for Lanes {
     #[inline(always)]
     fn lane(self, i: usize) -> Real {
         self[i]
+    }
+    #[inline(always)]
+    fn to_lanes(self) -> [Real; 4] {
+        self.to_array()
     }
     #[inline(always)]
     fn max(self, rhs: Self) -> Self {
@@ -203,6 +212,7 @@ mod avx {
         const ONE: Self = Lanes8(unsafe { std::mem::transmute::<[f32; 8], __m256>([1.0; 8]) });
         type Mask = Mask8;
         type Index = [u32; 8];
+        type Array = [Real; 8];
         #[inline(always)]
         fn splat(x: Real) -> Self {
             Self::from_array([x; 8])
@@ -220,6 +230,10 @@ mod avx {
         #[inline(always)]
         fn lane(self, i: usize) -> Real {
             self.to_array()[i]
+        }
+        #[inline(always)]
+        fn to_lanes(self) -> [Real; 8] {
+            self.to_array()
         }
         #[inline(always)]
         fn max(self, rhs: Self) -> Self {
@@ -339,6 +353,7 @@ mod portable {
         const ONE: Self = Lanes8([1.0; 8]);
         type Mask = Mask8;
         type Index = [u32; 8];
+        type Array = [Real; 8];
         fn splat(x: Real) -> Self {
             Lanes8([x; 8])
         }
@@ -350,6 +365,9 @@ mod portable {
         }
         fn lane(self, i: usize) -> Real {
             self.0[i]
+        }
+        fn to_lanes(self) -> [Real; 8] {
+            self.0
         }
         fn max(self, rhs: Self) -> Self {
             Lanes8(std::array::from_fn(|i| {

@@ -107,13 +107,13 @@ pub(crate) fn solve(
     // whose substep count changes (adaptive stiffness) warm starts with the same force.
     // Substep counts are powers of two in practice, which makes the scaling exact.
     let per_substep = 1.0 / substeps as Real;
-    for c in contacts.iter_mut() {
-        for p in &mut c.points[..c.count] {
-            p.normal_impulse *= per_substep;
-            p.tangent_impulse *= per_substep;
-        }
-    }
-    prepare(bodies, contacts, settings.warm_starting, &stiffness);
+    prepare(
+        bodies,
+        contacts,
+        settings.warm_starting,
+        per_substep,
+        &stiffness,
+    );
     // Most contacts are solved four at a time (see `wide`); the few the colouring could not
     // place are solved here one by one, after the bundles.
     wide.build(bodies, contacts);
@@ -147,20 +147,29 @@ pub(crate) fn solve(
         }
     }
     wide.store(contacts);
-    // Carry each point's slip to the next step while static friction holds it: a point that
-    // ends the step inside the friction cone (and pushing) sticks. Only a step that also began
-    // stuck adds to the slip, so the anchor undoes creep, never the end of a slide; a point
-    // that slides starts over from where it stops.
+    restitution(bodies, contacts, settings.restitution_threshold);
+    finish(bodies, contacts, substeps as Real, dt);
+}
+
+/// The end of a step, in one pass over the contacts: each point's friction anchor, its
+/// impulses back from per substep to per step, and the contact's load.
+fn finish(bodies: &[SolverBody], contacts: &mut [Contact], substeps: Real, dt: Real) {
     // A moving kinematic body is fixed in the solver (its motion is not in `dp`), so slip
     // against it cannot be measured: such contacts are never anchored.
     let moving_fixed = |s: &SolverBody| s.inv_mass == 0.0 && (s.v != Vec2::ZERO || s.w != 0.0);
+    let inv_dt = 1.0 / dt;
     for c in contacts.iter_mut() {
         let t = c.tangent();
         let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
         let dp_t = (b.dp - a.dp).dot(t);
         let friction = c.friction;
         let measurable = !moving_fixed(a) && !moving_fixed(b);
+        let mut force = 0.0;
         for p in &mut c.points[..c.count] {
+            // Carry the slip to the next step while static friction holds the point: one that
+            // ends the step inside the friction cone (and pushing) sticks. Only a step that
+            // also began stuck adds to the slip, so the anchor undoes creep, never the end of
+            // a slide; a point that slides starts over from where it stops.
             let max_f = friction * p.normal_impulse;
             let stuck = measurable && max_f > 0.0 && p.tangent_impulse.abs() < STICK * max_f;
             p.slip = if stuck && p.stuck {
@@ -169,26 +178,15 @@ pub(crate) fn solve(
                 0.0
             };
             p.stuck = stuck;
+            p.normal_impulse *= substeps;
+            p.tangent_impulse *= substeps;
+            force += p.total_normal_impulse;
         }
-    }
-    restitution(bodies, contacts, settings.restitution_threshold);
-    for c in contacts.iter_mut() {
-        for p in &mut c.points[..c.count] {
-            p.normal_impulse *= substeps as Real;
-            p.tangent_impulse *= substeps as Real;
-        }
-    }
-    // The force each contact carried, held so that a load that comes and goes does not switch
-    // an island's work on and off every step (`Settings::adaptive_stiffness`), and counted
-    // only when it lasted: the impact of a falling body is not a load to stiffen for.
-    let inv_dt = 1.0 / dt;
-    for c in contacts.iter_mut() {
-        let force: Real = c.points[..c.count]
-            .iter()
-            .map(|p| p.total_normal_impulse)
-            .sum::<Real>()
-            * inv_dt;
-        // A load must last two steps to count (an impact is one step's spike), then is held.
+        // The force the contact carried, held so that a load that comes and goes does not
+        // switch an island's work on and off every step (`Settings::adaptive_stiffness`), and
+        // counted only when it lasted two steps running: the impact of a falling body is a
+        // one-step spike, not a load to stiffen for.
+        let force = force * inv_dt;
         c.load = force.min(c.force).max(HERTZ_DECAY * c.load);
         c.force = force;
     }
@@ -257,11 +255,13 @@ const HERTZ_DECAY: Real = 0.98;
 /// slip is kept for the next step's friction anchor.
 const STICK: Real = 0.99;
 
-/// Effective masses, adjusted separations, approach speeds and springs, once per step.
+/// Effective masses, adjusted separations, approach speeds and springs, once per step; the
+/// impulses carried from the last step become per substep (`per_substep` = 1 / substeps).
 fn prepare(
     bodies: &mut [SolverBody],
     contacts: &mut [Contact],
     warm_starting: bool,
+    per_substep: Real,
     stiffness: &Stiffness,
 ) {
     for c in contacts.iter_mut() {
@@ -269,6 +269,8 @@ fn prepare(
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
         for p in &mut c.points[..c.count] {
+            p.normal_impulse *= per_substep;
+            p.tangent_impulse *= per_substep;
             p.arms = Arms::new(p.anchor_a, p.anchor_b, n, t);
             point_masses(a, b, p, n, t);
             p.adjusted_separation = p.separation - (p.arms.rb_n - p.arms.ra_n);

@@ -562,19 +562,28 @@ fn coefficients<L: Wide>(
     )
 }
 
-/// Copy the lanes' impulses back to the contacts.
+/// Copy the lanes' impulses back to the contacts. Each field's lanes are read out once per
+/// bundle, not once per lane.
 fn store_bundles<L: Wide>(bundles: &[Bundle<L>], contacts: &mut [Contact]) {
     for bundle in bundles {
+        let fields = bundle.p.each_ref().map(|p| {
+            [
+                p.normal_impulse,
+                p.tangent_impulse,
+                p.total_normal_impulse,
+                p.max_normal_impulse,
+            ]
+            .map(L::to_lanes)
+        });
         for (lane, &ci) in bundle.contact.as_ref().iter().enumerate() {
             let Some(c) = contacts.get_mut(ci as usize) else {
                 continue;
             };
-            for (j, p) in c.points[..c.count].iter_mut().enumerate() {
-                let src = &bundle.p[j];
-                p.normal_impulse = src.normal_impulse.lane(lane);
-                p.tangent_impulse = src.tangent_impulse.lane(lane);
-                p.total_normal_impulse = src.total_normal_impulse.lane(lane);
-                p.max_normal_impulse = src.max_normal_impulse.lane(lane);
+            for (p, [normal, tangent, total, max]) in c.points[..c.count].iter_mut().zip(&fields) {
+                p.normal_impulse = normal.as_ref()[lane];
+                p.tangent_impulse = tangent.as_ref()[lane];
+                p.total_normal_impulse = total.as_ref()[lane];
+                p.max_normal_impulse = max.as_ref()[lane];
             }
         }
     }

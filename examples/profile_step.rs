@@ -35,7 +35,7 @@ fn main() {
         .map(|b| b.position().y)
         .fold(f32::MIN as f64, |a, y| a.max(y as f64));
     println!(
-        "{name}: {} bodies, median {:.3} ms/step, min {:.3}, contacts {}, awake {}, top y {top:.2}",
+        "{name}: {} bodies, median {:.4} ms/step, min {:.4}, contacts {}, awake {}, top y {top:.2}",
         world.body_count(),
         times[times.len() / 2],
         times[0],

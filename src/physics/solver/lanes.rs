@@ -70,6 +70,18 @@ type LanesMask = glam::BVec4A;
 #[cfg(feature = "f64")]
 type LanesMask = glam::BVec4;
 
+/// `Wide`'s binary methods on glam's lanes: glam's own (SSE's `maxps`, `cmpgtps`, ...).
+macro_rules! forward_to_glam {
+    ($($name:ident -> $out:ty),*) => {
+        $(
+            #[inline(always)]
+            fn $name(self, rhs: Self) -> $out {
+                Lanes::$name(self, rhs)
+            }
+        )*
+    };
+}
+
 impl Wide for Lanes {
     const WIDTH: usize = 4;
     const ZERO: Self = Lanes::ZERO;
@@ -97,22 +109,7 @@ impl Wide for Lanes {
     fn to_lanes(self) -> [Real; 4] {
         self.to_array()
     }
-    #[inline(always)]
-    fn max(self, rhs: Self) -> Self {
-        Lanes::max(self, rhs)
-    }
-    #[inline(always)]
-    fn min(self, rhs: Self) -> Self {
-        Lanes::min(self, rhs)
-    }
-    #[inline(always)]
-    fn cmpgt(self, rhs: Self) -> LanesMask {
-        Lanes::cmpgt(self, rhs)
-    }
-    #[inline(always)]
-    fn cmpge(self, rhs: Self) -> LanesMask {
-        Lanes::cmpge(self, rhs)
-    }
+    forward_to_glam!(max -> Self, min -> Self, cmpgt -> LanesMask, cmpge -> LanesMask);
     #[inline(always)]
     fn select(mask: LanesMask, if_true: Self, if_false: Self) -> Self {
         Lanes::select(mask, if_true, if_false)
@@ -147,11 +144,13 @@ mod avx {
     use super::{Lanes8, Mask8, Wide};
     use crate::physics::math::Real;
     use std::arch::x86_64::*;
-    use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, Neg, Sub, SubAssign};
+    use std::ops::{
+        Add, AddAssign, BitAnd, BitOr, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign,
+    };
 
-    /// Lane-wise binary operator on `Lanes8` by one AVX instruction.
+    /// Lane-wise binary operator on `Lanes8` by one AVX instruction, and its assigning form.
     macro_rules! avx_op {
-        ($trait:ident, $method:ident, $intrinsic:ident) => {
+        ($trait:ident, $method:ident, $assign:ident, $assign_method:ident, $intrinsic:ident) => {
             impl $trait for Lanes8 {
                 type Output = Lanes8;
                 #[inline(always)]
@@ -160,25 +159,18 @@ mod avx {
                     Lanes8(unsafe { $intrinsic(self.0, rhs.0) })
                 }
             }
+            impl $assign for Lanes8 {
+                #[inline(always)]
+                fn $assign_method(&mut self, rhs: Lanes8) {
+                    *self = $trait::$method(*self, rhs);
+                }
+            }
         };
     }
-    avx_op!(Add, add, _mm256_add_ps);
-    avx_op!(Sub, sub, _mm256_sub_ps);
-    avx_op!(Mul, mul, _mm256_mul_ps);
-    avx_op!(Div, div, _mm256_div_ps);
-
-    impl AddAssign for Lanes8 {
-        #[inline(always)]
-        fn add_assign(&mut self, rhs: Lanes8) {
-            *self = *self + rhs;
-        }
-    }
-    impl SubAssign for Lanes8 {
-        #[inline(always)]
-        fn sub_assign(&mut self, rhs: Lanes8) {
-            *self = *self - rhs;
-        }
-    }
+    avx_op!(Add, add, AddAssign, add_assign, _mm256_add_ps);
+    avx_op!(Sub, sub, SubAssign, sub_assign, _mm256_sub_ps);
+    avx_op!(Mul, mul, MulAssign, mul_assign, _mm256_mul_ps);
+    avx_op!(Div, div, DivAssign, div_assign, _mm256_div_ps);
     impl Neg for Lanes8 {
         type Output = Lanes8;
         /// Flip the sign bit, as glam does.
@@ -292,7 +284,9 @@ mod portable {
     //! ([`super::eight_lanes_available`] is false), kept so the kernels compile the same.
     use super::Wide;
     use crate::physics::math::Real;
-    use std::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, Neg, Sub, SubAssign};
+    use std::ops::{
+        Add, AddAssign, BitAnd, BitOr, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign,
+    };
 
     /// Eight [`Real`]s side by side.
     #[derive(Clone, Copy, Debug)]
@@ -302,32 +296,26 @@ mod portable {
     #[derive(Clone, Copy, Debug)]
     pub(crate) struct Mask8([bool; 8]);
 
-    /// Lane-wise binary operator on `Lanes8`.
+    /// Lane-wise binary operator on `Lanes8`, and its assigning form.
     macro_rules! lanes8_op {
-        ($trait:ident, $method:ident, $op:tt) => {
+        ($trait:ident, $method:ident, $assign:ident, $assign_method:ident, $op:tt) => {
             impl $trait for Lanes8 {
                 type Output = Lanes8;
                 fn $method(self, rhs: Lanes8) -> Lanes8 {
                     Lanes8(std::array::from_fn(|i| self.0[i] $op rhs.0[i]))
                 }
             }
+            impl $assign for Lanes8 {
+                fn $assign_method(&mut self, rhs: Lanes8) {
+                    *self = *self $op rhs;
+                }
+            }
         };
     }
-    lanes8_op!(Add, add, +);
-    lanes8_op!(Sub, sub, -);
-    lanes8_op!(Mul, mul, *);
-    lanes8_op!(Div, div, /);
-
-    impl AddAssign for Lanes8 {
-        fn add_assign(&mut self, rhs: Lanes8) {
-            *self = *self + rhs;
-        }
-    }
-    impl SubAssign for Lanes8 {
-        fn sub_assign(&mut self, rhs: Lanes8) {
-            *self = *self - rhs;
-        }
-    }
+    lanes8_op!(Add, add, AddAssign, add_assign, +);
+    lanes8_op!(Sub, sub, SubAssign, sub_assign, -);
+    lanes8_op!(Mul, mul, MulAssign, mul_assign, *);
+    lanes8_op!(Div, div, DivAssign, div_assign, /);
     impl Neg for Lanes8 {
         type Output = Lanes8;
         fn neg(self) -> Lanes8 {

@@ -441,27 +441,14 @@ fn solve_bundles<L: Wide>(
         let (nx, ny) = (bundle.nx, bundle.ny);
         let dp_n = (b.dpx - a.dpx) * nx + (b.dpy - a.dpy) * ny;
 
+        let pass = Pass {
+            inv_h,
+            use_bias,
+            push_out,
+        };
         let coeffs = [
-            coefficients(
-                bundle,
-                &bundle.p[0],
-                &a,
-                &b,
-                dp_n,
-                inv_h,
-                use_bias,
-                push_out,
-            ),
-            coefficients(
-                bundle,
-                &bundle.p[1],
-                &a,
-                &b,
-                dp_n,
-                inv_h,
-                use_bias,
-                push_out,
-            ),
+            coefficients(bundle, &bundle.p[0], &a, &b, dp_n, &pass),
+            coefficients(bundle, &bundle.p[1], &a, &b, dp_n, &pass),
         ];
 
         match bundle.kind {
@@ -537,10 +524,18 @@ fn solve_bundles<L: Wide>(
     }
 }
 
+/// What a solve pass is: 1 / substep (1/s), biased or relax, and the push-out cap as a
+/// negative velocity (m/s).
+#[derive(Clone, Copy)]
+struct Pass<L> {
+    inv_h: L,
+    use_bias: bool,
+    push_out: L,
+}
+
 /// A point's (bias, mass scale, impulse scale), as in the scalar soft step: the speculative
 /// bias `s / h` where the surfaces are apart, the soft spring's otherwise (none in a relax
 /// pass). `dp_n` is the pair's relative motion this step along the normal.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn coefficients<L: Wide>(
     bundle: &Bundle<L>,
@@ -548,10 +543,13 @@ fn coefficients<L: Wide>(
     a: &BodyLanes<L>,
     b: &BodyLanes<L>,
     dp_n: L,
-    inv_h: L,
-    use_bias: bool,
-    push_out: L,
+    pass: &Pass<L>,
 ) -> (L, L, L) {
+    let Pass {
+        inv_h,
+        use_bias,
+        push_out,
+    } = *pass;
     let s = dp_n + (b.qc * p.rb_n + b.qs * p.rn_b) - (a.qc * p.ra_n + a.qs * p.rn_a)
         + p.adjusted_separation;
     let speculative = s.cmpgt(L::ZERO);

@@ -3,16 +3,23 @@
 use super::*;
 use crate::physics::{vec2, Shape};
 
-/// A 12 m plank on the ground with 40 small boxes resting on it: the plank has more
-/// contacts than the wide solver has colours, so some of them overflow to the scalar code.
-fn crowded_plank() -> World {
+/// A World on the defaults with sleep off (g = 10 m/s^2 down) and a fixed floor `width` m wide
+/// whose top is at y = 0.
+fn awake_world_on_floor(width: Real) -> World {
     let settings = Settings {
         enable_sleep: false,
         ..Settings::default()
     };
     let mut w = World::new(settings, vec2(0.0, -10.0)).unwrap();
-    w.add_body(&BodyDef::fixed(Shape::rect(40.0, 1.0), vec2(0.0, -0.5)))
+    w.add_body(&BodyDef::fixed(Shape::rect(width, 1.0), vec2(0.0, -0.5)))
         .unwrap();
+    w
+}
+
+/// A 12 m plank on the ground with 40 small boxes resting on it: the plank has more
+/// contacts than the wide solver has colours, so some of them overflow to the scalar code.
+fn crowded_plank() -> World {
+    let mut w = awake_world_on_floor(40.0);
     w.add_body(&BodyDef::dynamic(Shape::rect(12.0, 0.5), vec2(0.0, 0.25)))
         .unwrap();
     for i in 0..40 {
@@ -55,13 +62,7 @@ fn overflow_contacts_solve_like_the_wide_bundles() {
 /// friction and restitution varied, so every kernel path (block, points, speculative,
 /// friction on and off) runs.
 fn mixed_pile() -> World {
-    let settings = Settings {
-        enable_sleep: false,
-        ..Settings::default()
-    };
-    let mut w = World::new(settings, vec2(0.0, -10.0)).unwrap();
-    w.add_body(&BodyDef::fixed(Shape::rect(12.0, 1.0), vec2(0.0, -0.5)))
-        .unwrap();
+    let mut w = awake_world_on_floor(12.0);
     for x in [-6.5, 6.5] {
         w.add_body(&BodyDef::fixed(Shape::rect(1.0, 10.0), vec2(x, 5.0)))
             .unwrap();
@@ -126,13 +127,7 @@ fn four_and_eight_lanes_step_bit_identically() {
 /// (mu 0.6) holds it. Without the anchor nothing would move it (it is at rest).
 #[test]
 fn friction_anchor_pulls_a_stuck_box_back_by_its_slip() {
-    let settings = Settings {
-        enable_sleep: false,
-        ..Settings::default()
-    };
-    let mut w = World::new(settings, vec2(0.0, -10.0)).unwrap();
-    w.add_body(&BodyDef::fixed(Shape::rect(10.0, 1.0), vec2(0.0, -0.5)))
-        .unwrap();
+    let mut w = awake_world_on_floor(10.0);
     let id = w
         .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)))
         .unwrap();

@@ -136,6 +136,9 @@ pub(crate) struct Contact {
     pub count: usize,
     /// Soft step: this contact's spring for the current step.
     pub softness: Softness,
+    /// Soft step: how far the spring has crept under its load this step (m), added to each
+    /// point's separation in the biased pass (see `soft_step::creep`).
+    pub creep: Real,
     /// Soft step: the spring's frequency last step (Hz), carried over so that load-aware
     /// stiffening can let it fall only slowly (0 for a new contact).
     pub hertz: Real,

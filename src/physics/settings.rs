@@ -93,7 +93,7 @@ pub struct Settings {
     /// the weight of the lighter body it touches for two steps running is solved with 1.5
     /// times the substeps and contact stiffness; from 2.25 times that load (a spring's
     /// compression goes as load / omega^2), or where it joins bodies whose masses differ by
-    /// `stiff_load_ratio`, with twice the substeps and relax passes; where it joins
+    /// `stiff_load_ratio`, with 1.75 times the substeps; where it joins
     /// masses `extreme_mass_ratio` apart, with four times the substeps and stiffness and eight
     /// times the relax passes. Every other island keeps the base settings and pays nothing. Default **on**: with it the defaults pass every case of the stiff suite (jittered
     /// 20- and 50-box stacks, 100:1 and 1000:1 mass ratios both ways, the symmetric pyramid of

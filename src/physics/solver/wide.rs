@@ -71,6 +71,8 @@ struct Bundle<L: Wide> {
     bias_rate: L,
     mass_scale: L,
     impulse_scale: L,
+    /// How far the spring has crept (m; `Contact::creep`).
+    creep: L,
     k00: L,
     k01: L,
     k11: L,
@@ -555,7 +557,7 @@ fn coefficients<L: Wide>(
     let speculative = s.cmpgt(L::ZERO);
     let (soft_bias, soft_ms, soft_is) = if use_bias {
         (
-            (bundle.mass_scale * bundle.bias_rate * s).max(push_out),
+            (bundle.mass_scale * bundle.bias_rate * (s + bundle.creep)).max(push_out),
             bundle.mass_scale,
             bundle.impulse_scale,
         )
@@ -644,7 +646,7 @@ fn pack_all<L: Wide>(
 }
 
 /// Fields of a bundle's header, in the order [`pack`] fills them.
-const HEADER_FIELDS: usize = 16;
+const HEADER_FIELDS: usize = 17;
 /// Fields of a bundle's point, in the order [`pack`] fills them.
 const POINT_FIELDS: usize = 17;
 
@@ -660,13 +662,13 @@ fn pack<L: Wide>(
     let mut contact = L::index_splat(u32::MAX);
     let mut a = L::index_splat(dummy);
     let mut b = L::index_splat(dummy);
-    // Header fields: nx, ny, friction, bias_rate, mass_scale, impulse_scale, k00, k01, k11,
+    // Header fields: nx, ny, friction, bias_rate, mass_scale, impulse_scale, creep, k00, k01, k11,
     // i00, i01, i11 (identity block for empty lanes so the LCP stays finite), then the inverse
     // masses and inertias of A and B. Lane-major: header[lane][field].
     let mut header = [[0.0 as Real; HEADER_FIELDS]; 8];
     let mut pts = [[[0.0 as Real; POINT_FIELDS]; 2]; 8];
     for lane in header.iter_mut() {
-        for field in [6, 8, 9, 11] {
+        for field in [7, 9, 10, 12] {
             lane[field] = 1.0;
         }
     }
@@ -687,6 +689,7 @@ fn pack<L: Wide>(
             sf.bias_rate,
             sf.mass_scale,
             sf.impulse_scale,
+            c.creep,
             k[0][0],
             k[0][1],
             k[1][1],
@@ -748,16 +751,17 @@ fn pack<L: Wide>(
         bias_rate: h(3),
         mass_scale: h(4),
         impulse_scale: h(5),
-        k00: h(6),
-        k01: h(7),
-        k11: h(8),
-        i00: h(9),
-        i01: h(10),
-        i11: h(11),
-        inv_mass_a: h(12),
-        inv_i_a: h(13),
-        inv_mass_b: h(14),
-        inv_i_b: h(15),
+        creep: h(6),
+        k00: h(7),
+        k01: h(8),
+        k11: h(9),
+        i00: h(10),
+        i01: h(11),
+        i11: h(12),
+        inv_mass_a: h(13),
+        inv_i_a: h(14),
+        inv_mass_b: h(15),
+        inv_i_b: h(16),
         p: [point(0), point(1)],
     }
 }

@@ -107,6 +107,7 @@ impl World {
                 points: [ContactPoint::default(); 2],
                 count: manifold.count,
                 softness: Softness::RIGID,
+                creep: 0.0,
                 hertz: previous.map_or(0.0, |c| c.hertz),
                 load: previous.map_or(0.0, |c| c.load),
                 force: previous.map_or(0.0, |c| c.force),

@@ -7,7 +7,7 @@ impl World {
     /// Give every awake island a stiffness tier from its contacts: tier 1 (1.5 times the
     /// substeps) where a contact's lasting force is `stiff_load_ratio` times the lighter
     /// body's weight or more (a pyramid), or a touching contact is too new for its load to be
-    /// known; tier 2 (twice) where the load is [`LOADED_RANGE`] times that (a tall stack) or
+    /// known; tier 2 (1.75 times) where the load is [`LOADED_RANGE`] times that (a tall stack) or
     /// the two bodies' masses differ by `stiff_load_ratio`; tier 3 (four times) where the masses
     /// differ by `extreme_mass_ratio` or more.
     /// Fills `contact_tier` and `body_tier`; returns the highest tier (0: nothing needs more).
@@ -236,18 +236,30 @@ impl World {
 /// Adaptive stiffness: the base tier and the three above it.
 pub(super) const TIERS: usize = 4;
 
-/// Adaptive stiffness: substeps per tier in halves of `Settings::substeps` (1, 1.5, 2 and 4
-/// times); the contact hertz scales with them, since its ceiling is a quarter of the substep
-/// rate.
-pub(super) const SUBSTEP_HALVES: [u32; TIERS] = [2, 3, 4, 8];
+/// Adaptive stiffness: substeps per tier in quarters of `Settings::substeps` (1, 1.5, 1.75
+/// and 4 times: 4, 6, 7 and 16 at the default 4); the contact hertz scales with them, since
+/// its ceiling is a quarter of the substep rate. Tier 2 was twice the base until creep
+/// (`soft_step::creep`): with it, 7 substeps hold a jittered 50-box stack to 0.66 cm of drift
+/// (bound 5) and pyramid_30's top to 0.85 cm (bound 2); 6 do not (13 cm and 2.15 cm).
+pub(super) const SUBSTEP_QUARTERS: [u32; TIERS] = [4, 6, 7, 16];
 
 /// Adaptive stiffness: relax passes per tier, as multiples of `Settings::relax_iterations`.
-/// Tier 1 needs no more than the base since friction anchors hold stuck points (with them
-/// and one pass, pyramid_30's top moves 0.76 cm, bound 2; without them 1.53 cm; two passes
-/// cost pyramid_20 10 % more). Tier 2 keeps two: with one, pyramid_30's top walks 7.8 cm.
+/// Tiers 1 and 2 need no more than the base: friction anchors hold stuck points, and in tier
+/// 2 the springs' creep damps the slow bounce of a pyramid ([`CREEP`]). Without creep, tier
+/// 2 needed two passes (with one, pyramid_30's top walked 7.8 cm, bound 2).
 /// Tier 3 gets 8 (not 4) times: with 4, the 4 m box of 1000 kg on two 1 kg boxes overlapped
 /// 9.8 mm (bound 10) and slid 2.3 cm; with 8, 2.5 mm and 0.04 mm. Its islands are small.
-pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 1, 2, 8];
+pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 1, 1, 8];
+
+/// Adaptive stiffness: how much of last step's compression the springs creep by, per tier
+/// (`soft_step::creep`). With 0.5 in tiers 1 and 2, tier 2 holds on 7 substeps and one relax
+/// pass where it needed 8 and two (pyramid_30's top: 0.85 cm sideways, bound 2; 7.8 cm with
+/// one pass and no creep; 4.7 cm when only tier 2 creeps, as the pyramid passes through
+/// tier 1 while it settles). With 0.65 a 20-box stack's top sinks 2.14 cm (bound 2); with
+/// 0.35 pyramid_30's top moves 1.32 cm. Creep leaves a spring at rest 1.5 times softer, which
+/// the other tiers do not need: on the base settings a 10-box stack sank 1.04 cm (bound 1),
+/// and in tier 3 a 1000 kg box on 1 kg overlapped 8.8 mm instead of 5.5 (bound 10).
+pub(super) const CREEP: [Real; TIERS] = [0.0, 0.5, 0.5, 0.0];
 
 /// Adaptive stiffness: the loads tier 1 holds, as a multiple of `stiff_load_ratio`: 1.5^2,
 /// the square of its substep factor (the spring's compression is load / (m omega^2)).

@@ -310,6 +310,8 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
         points,
         count: s.points.len(),
         softness: Softness::from_words(s.softness),
+        // Found again by the next step's `prepare` before anything reads it.
+        creep: 0.0,
         hertz: s.hertz,
         load: s.load,
         force: s.force,

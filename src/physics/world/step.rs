@@ -1,6 +1,6 @@
 //! One step: the stages in order (contacts, solve, store, sleep) and the soft step's tiers.
 
-use super::islands::{RELAX_SCALE, SUBSTEP_HALVES, TIERS};
+use super::islands::{CREEP, RELAX_SCALE, SUBSTEP_QUARTERS, TIERS};
 use super::*;
 
 impl World {
@@ -56,7 +56,7 @@ impl World {
     }
 
     /// The soft step, with adaptive stiffness: islands whose load calls for it are solved apart,
-    /// with 2 or 4 times the substeps, relax passes and contact stiffness
+    /// with 1.5, 1.75 or 4 times the substeps and contact stiffness (and, at 4, more relax passes)
     /// (`Settings::adaptive_stiffness`); the rest, usually everything, in one solve as before.
     pub(super) fn solve_soft_step(&mut self, dt: Real, limits: Limits) {
         let top = if self.settings.adaptive_stiffness {
@@ -73,6 +73,7 @@ impl World {
                 &self.settings,
                 dt,
                 limits,
+                CREEP[0],
             );
             return;
         }
@@ -112,9 +113,9 @@ impl World {
             } else {
                 let t = tier as usize;
                 Settings {
-                    substeps: self.settings.substeps * SUBSTEP_HALVES[t] / 2,
+                    substeps: self.settings.substeps * SUBSTEP_QUARTERS[t] / 4,
                     relax_iterations: self.settings.relax_iterations * RELAX_SCALE[t],
-                    contact_hertz: self.settings.contact_hertz * SUBSTEP_HALVES[t] as Real / 2.0,
+                    contact_hertz: self.settings.contact_hertz * SUBSTEP_QUARTERS[t] as Real / 4.0,
                     ..self.settings.clone()
                 }
             };
@@ -139,6 +140,7 @@ impl World {
                 &settings,
                 dt,
                 limits,
+                CREEP[tier as usize],
             );
         }
         if split {

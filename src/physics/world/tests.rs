@@ -1,6 +1,7 @@
 //! The wide and scalar solves agree when contacts overflow the colouring.
 
 use super::*;
+use crate::physics::math::PI;
 use crate::physics::{vec2, Shape};
 
 /// A World on the defaults with sleep off (g = 10 m/s^2 down) and a fixed floor `width` m wide
@@ -151,4 +152,50 @@ fn friction_anchor_pulls_a_stuck_box_back_by_its_slip() {
         "moved {moved} m, expected -0.001 m"
     );
     assert!(w.body(id).unwrap().linear_velocity().length() < 1e-3);
+}
+
+/// How far a 1 m box of 1 kg resting on the floor has sunk (m), after 2 s on `settings`.
+fn rest_compression(settings: Settings) -> Real {
+    let mut w = World::new(settings, vec2(0.0, -10.0)).unwrap();
+    w.add_body(&BodyDef::fixed(Shape::rect(10.0, 1.0), vec2(0.0, -0.5)))
+        .unwrap();
+    let id = w
+        .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)))
+        .unwrap();
+    for _ in 0..120 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    0.5 - w.body(id).unwrap().position().y
+}
+
+/// Creep makes a spring at rest 1 + beta times softer (`soft_step::creep`), and only in the
+/// tiers that creep. A soft spring (omega = 2 pi f) carries the weight of a box resting on
+/// the floor at the compression g / omega^2, whatever the box's mass and size: its two
+/// points, solved as a block, push it up like one spring of stiffness m omega^2. A contact
+/// with the floor gets twice the contact hertz. On the base settings (tier 0: 4 substeps,
+/// 60 Hz) the box sinks exactly that; with `stiff_load_ratio` below 1 its own weight puts
+/// it in tier 1 (6 substeps, 90 Hz), where it sinks 1.5 times its spring's compression. The
+/// tolerance, 1 %, is f32 round-off on compressions of 5-20 micrometres at y = 0.5.
+#[test]
+fn creep_softens_a_resting_contact_by_one_plus_beta_in_the_creeping_tiers() {
+    let base = Settings {
+        enable_sleep: false,
+        ..Settings::default()
+    };
+    let compression = |hertz: Real| 10.0 / (2.0 * PI * 2.0 * hertz).powi(2);
+    let tier0 = rest_compression(base.clone());
+    let expected0 = compression(base.contact_hertz);
+    assert!(
+        (tier0 / expected0 - 1.0).abs() < 0.01,
+        "tier 0 sank {tier0} m, expected {expected0} m (no creep)"
+    );
+    let tier1 = rest_compression(Settings {
+        stiff_load_ratio: 0.9,
+        ..base.clone()
+    });
+    let expected1 = (1.0 + super::islands::CREEP[1]) * compression(1.5 * base.contact_hertz);
+    assert!(
+        (tier1 / expected1 - 1.0).abs() < 0.01,
+        "tier 1 sank {tier1} m, expected {expected1} m (creep 0.5)"
+    );
 }

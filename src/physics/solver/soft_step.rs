@@ -74,6 +74,13 @@ impl Softness {
     }
 }
 
+/// The work one solve does: the settings (the World's, or a tier's) and how much the springs
+/// creep (see [`creep`]; 0: none).
+pub(crate) struct Work<'a> {
+    pub settings: &'a Settings,
+    pub creep: Real,
+}
+
 /// Run one full step of `dt` seconds on `contacts` and the `moving` bodies (the bodies the
 /// contacts join must be among them).
 pub(crate) fn solve(
@@ -81,11 +88,11 @@ pub(crate) fn solve(
     moving: Moving,
     contacts: &mut [Contact],
     wide: &mut WideSolver,
-    settings: &Settings,
+    work: Work,
     dt: Real,
     limits: Limits,
-    creep: Real,
 ) {
+    let Work { settings, creep } = work;
     let substeps = settings.substeps.max(1);
     let h = dt / substeps as Real;
     let inv_h = 1.0 / h;

@@ -2,6 +2,7 @@
 
 use super::islands::{CREEP, RELAX_SCALE, SUBSTEP_QUARTERS, TIERS};
 use super::*;
+use crate::physics::solver::soft_step::Work;
 
 impl World {
     /// Advance the world by `dt` seconds.
@@ -70,10 +71,12 @@ impl World {
                 Moving::All,
                 &mut self.contacts,
                 &mut self.wide,
-                &self.settings,
+                Work {
+                    settings: &self.settings,
+                    creep: CREEP[0],
+                },
                 dt,
                 limits,
-                CREEP[0],
             );
             return;
         }
@@ -137,10 +140,12 @@ impl World {
                 },
                 contacts,
                 &mut self.wide,
-                &settings,
+                Work {
+                    settings: &settings,
+                    creep: CREEP[tier as usize],
+                },
                 dt,
                 limits,
-                CREEP[tier as usize],
             );
         }
         if split {

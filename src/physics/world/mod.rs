@@ -26,8 +26,6 @@ mod step;
 #[cfg(test)]
 mod tests;
 
-use islands::TIERS;
-
 /// One entry of the body array: a body, or a free slot remembering its generation.
 #[derive(Clone, Debug)]
 struct Slot {
@@ -60,11 +58,12 @@ pub struct World {
     solver_bodies: Vec<SolverBody>,
     wide: WideSolver,
     split_impulse: solver::sequential::SplitImpulse,
-    // Adaptive stiffness, reused every step: each contact's and each slot's tier, and the
-    // contacts and bodies of the tiers above the base while they are solved apart.
+    // Adaptive stiffness, reused every step: each contact's and each slot's tier, the
+    // contacts grouped by tier (or, after the solve, merged back into key order) while tiers
+    // are solved apart, and the bodies of the tier being solved.
     contact_tier: Vec<u8>,
     body_tier: Vec<u8>,
-    tier_contacts: [Vec<Contact>; TIERS],
+    tier_scratch: Vec<Contact>,
     tier_bodies: Vec<u32>,
     // Sleep bookkeeping, reused every step.
     wake_queue: Vec<u32>,
@@ -111,7 +110,7 @@ impl World {
             split_impulse: Default::default(),
             contact_tier: Vec::new(),
             body_tier: Vec::new(),
-            tier_contacts: Default::default(),
+            tier_scratch: Vec::new(),
             tier_bodies: Vec::new(),
             wake_queue: Vec::new(),
             island_parent: Vec::new(),

@@ -85,15 +85,24 @@ impl World {
             has_contacts[t as usize] = true;
         }
         // Usually every contact is in one tier (a stack, a pyramid, a pile): solve them where
-        // they are. Otherwise each tier's contacts are moved to a list of their own.
+        // they are. Otherwise the contacts are grouped by tier, each group still in key order,
+        // and each tier solves its own slice.
         let split = has_contacts.iter().filter(|&&h| h).count() > 1;
+        let mut ranges: [std::ops::Range<usize>; TIERS] = Default::default();
         if split {
-            for group in &mut self.tier_contacts {
-                group.clear();
+            self.tier_scratch.clear();
+            for (tier, range) in ranges.iter_mut().enumerate() {
+                let start = self.tier_scratch.len();
+                self.tier_scratch.extend(
+                    self.contacts
+                        .iter()
+                        .zip(&self.contact_tier)
+                        .filter(|&(_, &t)| t as usize == tier)
+                        .map(|(c, _)| *c),
+                );
+                *range = start..self.tier_scratch.len();
             }
-            for (c, &t) in self.contacts.iter().zip(&self.contact_tier) {
-                self.tier_contacts[t as usize].push(*c);
-            }
+            std::mem::swap(&mut self.contacts, &mut self.tier_scratch);
         }
         let dynamic = self
             .solver_bodies
@@ -123,7 +132,7 @@ impl World {
                 }
             };
             let contacts: &mut [Contact] = if split {
-                &mut self.tier_contacts[tier as usize]
+                &mut self.contacts[ranges[tier as usize].clone()]
             } else if has_contacts[tier as usize] {
                 &mut self.contacts
             } else {
@@ -149,12 +158,21 @@ impl World {
             );
         }
         if split {
-            // Back into one list sorted by key, as the next step's matching expects.
-            self.contacts.clear();
-            for group in &self.tier_contacts {
-                self.contacts.extend_from_slice(group);
+            // Back into one list in key order, as the next step's matching expects: a merge of
+            // the tiers' groups, each already in key order (no sort of 350-byte contacts).
+            self.tier_scratch.clear();
+            let mut heads = ranges.clone();
+            loop {
+                let next = heads
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, r)| !r.is_empty())
+                    .min_by_key(|(_, r)| self.contacts[r.start].key);
+                let Some((t, _)) = next else { break };
+                self.tier_scratch.push(self.contacts[heads[t].start]);
+                heads[t].start += 1;
             }
-            self.contacts.sort_unstable_by_key(|c| c.key);
+            std::mem::swap(&mut self.contacts, &mut self.tier_scratch);
         }
     }
 

@@ -320,9 +320,10 @@ fn prepare(
 /// One value for all the contact's points: per point, the creep also acted on the rocking of
 /// a two-point contact, and a jittered 20-box stack on the base settings was thrown over.
 /// The load is the contact's held load (`Contact::load`), so the one-step spike of an impact
-/// makes nothing creep. `inv_mass` is 1/mA + 1/mB (1/kg).
+/// makes nothing creep, and a contact younger than [`CREEP_FROM_AGE`] steps does not creep.
+/// `inv_mass` is 1/mA + 1/mB (1/kg).
 fn creep(c: &Contact, inv_mass: Real) -> Real {
-    if c.force <= 0.0 || inv_mass <= 0.0 {
+    if c.force <= 0.0 || inv_mass <= 0.0 || c.age < CREEP_FROM_AGE {
         return 0.0;
     }
     let steady = (c.load / c.force).min(1.0);
@@ -335,6 +336,15 @@ fn creep(c: &Contact, inv_mass: Real) -> Real {
         0.0
     }
 }
+
+/// Creep acts on contacts that have lasted this many steps. Contacts that creep while bodies
+/// are still landing let them sink and reach further: in many_boxes' falling pile 16 % more
+/// contacts were solved over the run, and the solve grew with them. From 4 steps the pile
+/// solves as many as without creep, pyramid_30's top moves 0.98 cm (bound 2) and the
+/// base-134 pyramid still stands (fastest body 0.23 m/s at the end, bound 0.5); from 8, 1.40
+/// cm and 0.30 m/s. Gating on static friction instead (every point stuck) toppled the
+/// base-134 pyramid.
+const CREEP_FROM_AGE: u8 = 4;
 
 /// Apply one contact's accumulated impulses at the start of a substep.
 fn warm_start(bodies: &mut [SolverBody], c: &mut Contact) {

@@ -253,10 +253,10 @@ pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 1, 1, 8];
 
 /// Adaptive stiffness: how much of last step's compression the springs creep by, per tier
 /// (`soft_step::creep`). With 0.5 in tiers 1 and 2, tier 2 holds on 7 substeps and one relax
-/// pass where it needed 8 and two (pyramid_30's top: 0.85 cm sideways, bound 2; 7.8 cm with
+/// pass where it needed 8 and two (pyramid_30's top: 0.98 cm sideways, bound 2; 7.8 cm with
 /// one pass and no creep; 4.7 cm when only tier 2 creeps, as the pyramid passes through
-/// tier 1 while it settles). With 0.65 a 20-box stack's top sinks 2.14 cm (bound 2); with
-/// 0.35 pyramid_30's top moves 1.32 cm. Creep leaves a spring at rest 1.5 times softer, which
+/// tier 1 while it settles). With 0.65 a 20-box stack's top sank 2.14 cm (bound 2); with
+/// 0.35 pyramid_30's top moved 1.32 cm. Creep leaves a spring at rest 1.5 times softer, which
 /// the other tiers do not need: on the base settings a 10-box stack sank 1.04 cm (bound 1),
 /// and in tier 3 a 1000 kg box on 1 kg overlapped 8.8 mm instead of 5.5 (bound 10).
 pub(super) const CREEP: [Real; TIERS] = [0.0, 0.5, 0.5, 0.0];

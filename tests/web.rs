@@ -339,7 +339,7 @@ impl Watch {
                     let turn = (p.angle - a + pi).rem_euclid(2.0 * pi) - pi;
                     (p.x - x).hypot(p.y - y) + 0.5 * turn.abs()
                 });
-                if moved.is_none_or(|d| d > STILL) {
+                if !matches!(moved, Some(d) if d <= STILL) {
                     still = false;
                 }
             }

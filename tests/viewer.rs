@@ -255,6 +255,23 @@ async fn plain_output_parses_back_to_the_poses_published() {
     let session = open(port).await;
     let (mut snapshots, _sub) = subscribe_snapshots(&session, keys.poses()).await;
     next(&mut snapshots).await;
+    // Keep the bricks moving while the viewer prints: left alone they sleep 2 s after the
+    // daemon starts, and on a busy machine the viewer's 40 frames could all come after that,
+    // leaving no poses to compare. Gravity turns a quarter turn a second.
+    let tilting = {
+        let (session, key) = (session.clone(), keys.gravity());
+        tokio::spawn(async move {
+            for i in 0u32.. {
+                let a = 0.157 * i as f32;
+                let g = SetGravity {
+                    x: 9.81 * a.sin(),
+                    y: -9.81 * a.cos(),
+                };
+                let _ = session.put(key.clone(), encode(&g).unwrap()).await;
+                tokio::time::sleep(Duration::from_millis(100)).await;
+            }
+        })
+    };
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_tiltbox-view"))
         .args(["--plain", "--count", "40", "--connect"])
@@ -274,6 +291,7 @@ async fn plain_output_parses_back_to_the_poses_published() {
         .await
         .expect("40 lines within 10 s")
         .unwrap();
+    tilting.abort();
     let status = child.wait().unwrap();
     assert!(status.success(), "{status}");
     assert_eq!(lines.len(), 40);

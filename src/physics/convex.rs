@@ -117,12 +117,53 @@ impl Polygon {
     /// The rectangle with half extents `h` (m), centred on the origin.
     /// Edges: 0 bottom, 1 right, 2 top, 3 left.
     pub(crate) fn rect(h: Vec2) -> Polygon {
-        Polygon::from_checked(&[
+        // Built directly: the normals are the axes exactly (normalising the edges would
+        // round them), and the narrow phase builds two of these per box pair every step.
+        let mut p = Polygon {
+            vertices: [Vec2::ZERO; MAX_VERTICES],
+            normals: [Vec2::ZERO; MAX_VERTICES],
+            count: 4,
+            radius: h.length(),
+        };
+        p.vertices[..4].copy_from_slice(&[
             Vec2::new(-h.x, -h.y),
             Vec2::new(h.x, -h.y),
             Vec2::new(h.x, h.y),
             Vec2::new(-h.x, h.y),
-        ])
+        ]);
+        p.normals[..4].copy_from_slice(&[
+            Vec2::new(0.0, -1.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(0.0, 1.0),
+            Vec2::new(-1.0, 0.0),
+        ]);
+        p
+    }
+
+    /// [`Polygon::rect`] moved by `xf`, built in place: the edge half-vectors rotated once
+    /// instead of four vertices and four normals.
+    pub(crate) fn rect_at(h: Vec2, xf: Transform) -> Polygon {
+        let (c, s) = (xf.q.c, xf.q.s);
+        let (ex, ey) = (Vec2::new(c * h.x, s * h.x), Vec2::new(-s * h.y, c * h.y));
+        let mut p = Polygon {
+            vertices: [Vec2::ZERO; MAX_VERTICES],
+            normals: [Vec2::ZERO; MAX_VERTICES],
+            count: 4,
+            radius: h.length(),
+        };
+        p.vertices[..4].copy_from_slice(&[
+            xf.p - ex - ey,
+            xf.p + ex - ey,
+            xf.p + ex + ey,
+            xf.p - ex + ey,
+        ]);
+        p.normals[..4].copy_from_slice(&[
+            Vec2::new(s, -c),
+            Vec2::new(c, s),
+            Vec2::new(-s, c),
+            Vec2::new(-c, -s),
+        ]);
+        p
     }
 
     /// The segment from (-half_length, 0) to (half_length, 0) as a two-sided "polygon": edge 0
@@ -222,7 +263,13 @@ impl Polygon {
 
     /// The polygon moved by `xf` (vertices transformed, normals rotated).
     pub(crate) fn transformed(&self, xf: Transform) -> Polygon {
-        let mut out = *self;
+        // Filled slot by slot rather than copied whole: only `count` of the eight are used.
+        let mut out = Polygon {
+            vertices: [Vec2::ZERO; MAX_VERTICES],
+            normals: [Vec2::ZERO; MAX_VERTICES],
+            count: self.count,
+            radius: self.radius,
+        };
         for i in 0..self.count {
             out.vertices[i] = xf.apply(self.vertices[i]);
             out.normals[i] = xf.q.rotate(self.normals[i]);
@@ -344,6 +391,42 @@ mod tests {
         // Square of side a: J = a^4 / 6.
         assert!((p.second_moment() - 1.0 / 6.0).abs() < 1e-6);
         assert_eq!(p.normals()[0], vec2(0.0, -1.0));
+    }
+
+    #[test]
+    fn a_rectangle_built_in_place_is_the_checked_polygon_moved() {
+        // The narrow phase's rectangle shortcuts against the general path: the checked
+        // polygon of the same corners, moved vertex by vertex. Tolerance: a few f32 ulps of
+        // the 3 m coordinates (the two round differently, 1e-6 relative).
+        let h = vec2(0.35, 1.2);
+        let corners = [
+            vec2(-h.x, -h.y),
+            vec2(h.x, -h.y),
+            vec2(h.x, h.y),
+            vec2(-h.x, h.y),
+        ];
+        let (checked, _) = Polygon::new(&corners).unwrap();
+        let rect = Polygon::rect(h);
+        // (`Polygon::new` recentres on the computed centroid, which rounds.)
+        for (v, w) in rect.vertices().iter().zip(checked.vertices()) {
+            assert!((*v - *w).length() < 1e-6, "{v} against {w}");
+        }
+        for (n, m) in rect.normals().iter().zip(checked.normals()) {
+            assert!((*n - *m).length() < 1e-6, "{n} against {m}");
+        }
+        assert!((rect.radius - h.length()).abs() < 1e-6);
+        for angle in [0.0, 0.3, -2.0, 3.0] {
+            let xf = Transform {
+                p: vec2(1.5, -2.5),
+                q: crate::physics::math::Rot::from_angle(angle),
+            };
+            let (fast, slow) = (Polygon::rect_at(h, xf), checked.transformed(xf));
+            assert_eq!(fast.count, 4);
+            for i in 0..4 {
+                assert!((fast.vertices[i] - slow.vertices[i]).length() < 3e-6);
+                assert!((fast.normals[i] - slow.normals[i]).length() < 1e-6);
+            }
+        }
     }
 
     #[test]

@@ -69,21 +69,20 @@ pub fn collide_polygons(
     margin: Real,
 ) -> Manifold {
     let rel = relative(xf_a, xf_b);
-    let pa = *a;
     let pb = b.transformed(rel);
     let reach = margin + ra + rb;
 
-    let (edge_a, sep_a) = max_separation(&pa, &pb);
+    let (edge_a, sep_a) = max_separation(a, &pb);
     if sep_a > reach {
         return Manifold::EMPTY;
     }
-    let (edge_b, sep_b) = max_separation(&pb, &pa);
+    let (edge_b, sep_b) = max_separation(&pb, a);
     if sep_b > reach {
         return Manifold::EMPTY;
     }
     let radii = Radii { a: ra, b: rb };
     clip_to_reference(
-        &pa,
+        a,
         &pb,
         (edge_a, sep_a),
         (edge_b, sep_b),
@@ -91,6 +90,16 @@ pub fn collide_polygons(
         xf_a,
         margin,
     )
+}
+
+/// The vertex after `i` on a polygon of `count` vertices (a compare, not a division).
+#[inline]
+fn next(i: usize, count: usize) -> usize {
+    if i + 1 == count {
+        0
+    } else {
+        i + 1
+    }
 }
 
 /// The radii the two cores are grown by (m).
@@ -189,7 +198,7 @@ pub fn collide_rects(
         return Manifold::EMPTY;
     }
     let pa = Polygon::rect(ha);
-    let pb = Polygon::rect(hb).transformed(rel);
+    let pb = Polygon::rect_at(hb, rel);
     let sharp = Radii { a: 0.0, b: 0.0 };
     clip_to_reference(
         &pa,
@@ -236,10 +245,10 @@ fn clip_to_reference(
     // reference normal.
     let n = reference.normals[ref_edge];
     let i1 = incident_edge(incident, n);
-    let i2 = (i1 + 1) % incident.count;
+    let i2 = next(i1, incident.count);
     let seg = [incident.vertices[i1], incident.vertices[i2]];
     let r1 = reference.vertices[ref_edge];
-    let r2 = reference.vertices[(ref_edge + 1) % reference.count];
+    let r2 = reference.vertices[next(ref_edge, reference.count)];
 
     // Cores that do not touch meet where their two edges are closest, along the line between
     // those points: one point, named by the vertex of each edge nearest it.
@@ -261,7 +270,7 @@ fn clip_to_reference(
         let v_ref = if s < 0.5 {
             ref_edge
         } else {
-            (ref_edge + 1) % reference.count
+            next(ref_edge, reference.count)
         };
         let v_inc = if t < 0.5 { i1 } else { i2 };
         let (va, vb, normal_in_a) = if flip {
@@ -302,7 +311,9 @@ fn clip_to_reference(
     // Side planes of the reference edge: its tangent t, bounded by its two end vertices. An
     // incident edge that lies wholly past one of them (by less than the corner test's slack:
     // a corner almost square to the reference face) still touches at its closest points.
-    let tangent = (r2 - r1).normalize();
+    // The edge runs counter-clockwise with the normal on its right: its direction is the
+    // normal turned a quarter left, already of unit length.
+    let tangent = Vec2::new(-n.y, n.x);
     let side_clipped = clip_segment(seg, -tangent, -tangent.dot(r1))
         .and_then(|seg| clip_segment(seg, tangent, tangent.dot(r2)));
     let Some(seg) = side_clipped else {
@@ -321,7 +332,7 @@ fn clip_to_reference(
     // reference edge's end vertex and its end (slot 1) towards the start vertex. A point is
     // named by that pair of vertices, written (A's vertex, B's vertex) whichever polygon is the
     // reference, so the id survives the reference face switching sides between steps.
-    let v_ref = [(ref_edge + 1) % reference.count, ref_edge];
+    let v_ref = [next(ref_edge, reference.count), ref_edge];
     let v_inc = [i1, i2];
     for (k, v) in seg.into_iter().enumerate() {
         let core = n.dot(v - r1);

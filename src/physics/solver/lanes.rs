@@ -43,6 +43,8 @@ pub(crate) trait Wide:
     fn index_splat(i: u32) -> Self::Index;
     /// Lane `i`.
     fn lane(self, i: usize) -> Real;
+    /// Set lane `i` to `x`, in place (packing writes each lane once, where it lives).
+    fn set_lane(&mut self, i: usize, x: Real);
     /// All lanes as plain numbers.
     fn to_lanes(self) -> Self::Array;
     /// Lane-wise `if self > rhs { self } else { rhs }` (SSE's `maxps`).
@@ -104,6 +106,10 @@ impl Wide for Lanes {
     #[inline(always)]
     fn lane(self, i: usize) -> Real {
         self[i]
+    }
+    #[inline(always)]
+    fn set_lane(&mut self, i: usize, x: Real) {
+        self[i] = x;
     }
     #[inline(always)]
     fn to_lanes(self) -> [Real; 4] {
@@ -222,6 +228,13 @@ mod avx {
         #[inline(always)]
         fn lane(self, i: usize) -> Real {
             self.to_array()[i]
+        }
+        #[inline(always)]
+        fn set_lane(&mut self, i: usize, x: Real) {
+            // SAFETY: `Lanes8` is a transparent `__m256`, which is eight `f32`s (and aligned
+            // for them); no AVX instruction is involved.
+            let lanes = unsafe { &mut *(self as *mut Lanes8).cast::<[f32; 8]>() };
+            lanes[i] = x;
         }
         #[inline(always)]
         fn to_lanes(self) -> [Real; 8] {
@@ -353,6 +366,9 @@ mod portable {
         }
         fn lane(self, i: usize) -> Real {
             self.0[i]
+        }
+        fn set_lane(&mut self, i: usize, x: Real) {
+            self.0[i] = x;
         }
         fn to_lanes(self) -> [Real; 8] {
             self.0

@@ -19,6 +19,7 @@ impl World {
             self.settings.extreme_mass_ratio,
         );
         self.contact_tier.clear();
+        self.contact_bodies.clear();
         let mut top = 0u8;
         for c in &self.contacts {
             let (ma, mb) = (
@@ -60,6 +61,7 @@ impl World {
             };
             top = top.max(tier);
             self.contact_tier.push(tier);
+            self.contact_bodies.push([c.a, c.b]);
         }
         if top == 0 {
             return 0;
@@ -69,14 +71,13 @@ impl World {
         let n = self.solver_bodies.len();
         let moving = |i: u32, bodies: &[SolverBody]| bodies[i as usize].inv_mass > 0.0;
         let bodies = &self.solver_bodies;
-        unite_islands(&mut self.island_parent, n, &self.contacts, |i| {
+        unite_islands(&mut self.island_parent, n, &self.contact_bodies, |i| {
             moving(i, bodies)
         });
         self.body_tier.clear();
         self.body_tier.resize(n, 0);
-        for (k, c) in self.contacts.iter().enumerate() {
-            let t = self.contact_tier[k];
-            for i in [c.a, c.b] {
+        for (&t, pair) in self.contact_tier.iter().zip(&self.contact_bodies) {
+            for &i in pair {
                 if moving(i, &self.solver_bodies) {
                     let root = find(&mut self.island_parent, i) as usize;
                     self.body_tier[root] = self.body_tier[root].max(t);
@@ -87,13 +88,9 @@ impl World {
             let root = find(&mut self.island_parent, i) as usize;
             self.body_tier[i as usize] = self.body_tier[root];
         }
-        for (k, c) in self.contacts.iter().enumerate() {
-            let i = if moving(c.a, &self.solver_bodies) {
-                c.a
-            } else {
-                c.b
-            };
-            self.contact_tier[k] = self.body_tier[i as usize];
+        for (tier, &[a, b]) in self.contact_tier.iter_mut().zip(&self.contact_bodies) {
+            let i = if moving(a, &self.solver_bodies) { a } else { b };
+            *tier = self.body_tier[i as usize];
         }
         top
     }
@@ -118,7 +115,10 @@ impl World {
         let active =
             |slots: &[Slot], i: u32| slots[i as usize].body.as_ref().is_some_and(Body::is_active);
         let slots = &self.slots;
-        unite_islands(&mut self.island_parent, n, &self.contacts, |i| {
+        self.contact_bodies.clear();
+        self.contact_bodies
+            .extend(self.contacts.iter().map(|c| [c.a, c.b]));
+        unite_islands(&mut self.island_parent, n, &self.contact_bodies, |i| {
             active(slots, i)
         });
         // The island rests as long as its most restless body.
@@ -270,19 +270,14 @@ pub(super) const LOADED_RANGE: Real = 2.25;
 const NEW_CONTACT_STEPS: u8 = 8;
 
 /// Islands by union-find: `parent` becomes `n` singletons, then the two bodies of every
-/// contact for which `joins` holds on both sides are united. The lower root wins, so the
+/// contact (`pairs`) for which `joins` holds on both sides are united. The lower root wins, so the
 /// islands (and everything solved per island) are the same on every run.
-fn unite_islands(
-    parent: &mut Vec<u32>,
-    n: usize,
-    contacts: &[Contact],
-    joins: impl Fn(u32) -> bool,
-) {
+fn unite_islands(parent: &mut Vec<u32>, n: usize, pairs: &[[u32; 2]], joins: impl Fn(u32) -> bool) {
     parent.clear();
     parent.extend(0..n as u32);
-    for c in contacts {
-        if joins(c.a) && joins(c.b) {
-            let (ra, rb) = (find(parent, c.a), find(parent, c.b));
+    for &[a, b] in pairs {
+        if joins(a) && joins(b) {
+            let (ra, rb) = (find(parent, a), find(parent, b));
             if ra != rb {
                 let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
                 parent[hi as usize] = lo;

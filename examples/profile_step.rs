@@ -1,11 +1,13 @@
 //! Steps one benchmark scene and prints ms/step: a target for `perf record` while optimising.
-//! Usage: cargo run --release --no-default-features --features measure --example profile_step [SCENE] [STEPS]
+//! Usage: cargo run --release --no-default-features --features measure --example profile_step [SCENE] [STEPS] [WARM_UP]
+//! (WARM_UP: untimed steps first; the scene's own warm-up when left out).
 use std::time::Instant;
 
 fn main() {
     let mut args = std::env::args().skip(1);
     let name = args.next().unwrap_or_else(|| "large_pyramid".to_string());
     let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(500);
+    let warm_up: Option<usize> = args.next().and_then(|s| s.parse().ok());
     let Some(setup) = tiltbox::measure::cases::benchmark_setups()
         .into_iter()
         .find(|s| s.name == name)
@@ -20,7 +22,7 @@ fn main() {
             std::process::exit(1);
         }
     };
-    for _ in 0..setup.warm_up {
+    for _ in 0..warm_up.unwrap_or(setup.warm_up) {
         let _ = world.step(1.0 / 60.0);
     }
     let mut times = Vec::with_capacity(steps);

@@ -86,6 +86,47 @@ impl Moving<'_> {
     }
 }
 
+/// Which contacts a solve works on: all of them, or only those listed, ascending (the
+/// contacts of one stiffness tier). Listing them leaves the contacts where they are: grouping
+/// 350-byte contacts by tier and merging them back cost 5 % of mixed_shapes' step.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Selected<'a> {
+    /// Every contact of the slice.
+    All,
+    /// Only these indices, ascending.
+    Only(&'a [u32]),
+}
+
+impl Selected<'_> {
+    /// How many contacts, of a slice of `all`.
+    #[inline]
+    pub fn count(self, all: usize) -> usize {
+        match self {
+            Selected::All => all,
+            Selected::Only(list) => list.len(),
+        }
+    }
+
+    /// Run `f` on every selected contact's index, in order. (One loop, so `f` has one call
+    /// site and is inlined: with a loop per case it was not, and single-tier scenes paid 2 %.)
+    #[inline]
+    pub fn for_each_index(self, all: usize, mut f: impl FnMut(usize)) {
+        let (n, list) = match self {
+            Selected::All => (all, None),
+            Selected::Only(list) => (list.len(), Some(list)),
+        };
+        for k in 0..n {
+            f(list.map_or(k, |list| list[k] as usize));
+        }
+    }
+
+    /// Run `f` on every selected contact, in order.
+    #[inline]
+    pub fn for_each(self, contacts: &mut [Contact], mut f: impl FnMut(&mut Contact)) {
+        self.for_each_index(contacts.len(), |i| f(&mut contacts[i]));
+    }
+}
+
 /// Semi-implicit Euler, velocity half: v += h a, w += h alpha (appendix eqs. 1-2).
 pub(crate) fn integrate_velocities(
     bodies: &mut [SolverBody],

@@ -12,7 +12,7 @@ use super::sequential::point_masses;
 use super::wide::WideSolver;
 use super::{
     apply_along, integrate_positions, integrate_velocities, pair_mut, relative_velocity, BlockMass,
-    Limits, Moving, SolverBody,
+    Limits, Moving, Selected, SolverBody,
 };
 use crate::physics::contact::{Arms, Contact, ContactPoint};
 use crate::physics::math::{Real, Vec2, PI};
@@ -81,12 +81,14 @@ pub(crate) struct Work<'a> {
     pub creep: Real,
 }
 
-/// Run one full step of `dt` seconds on `contacts` and the `moving` bodies (the bodies the
-/// contacts join must be among them).
+/// Run one full step of `dt` seconds on the `selected` contacts and the `moving` bodies (the
+/// bodies those contacts join must be among them).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     bodies: &mut [SolverBody],
     moving: Moving,
     contacts: &mut [Contact],
+    selected: Selected,
     wide: &mut WideSolver,
     work: Work,
     dt: Real,
@@ -119,13 +121,14 @@ pub(crate) fn solve(
     prepare(
         bodies,
         contacts,
+        selected,
         settings.warm_starting,
         per_substep,
         &stiffness,
     );
     // Most contacts are solved four at a time (see `wide`); the few the colouring could not
     // place are solved here one by one, after the bundles.
-    wide.build(bodies, contacts);
+    wide.build(bodies, contacts, selected);
 
     for _ in 0..substeps {
         integrate_velocities(bodies, moving, h, limits);
@@ -156,18 +159,24 @@ pub(crate) fn solve(
         }
     }
     wide.store(contacts);
-    restitution(bodies, contacts, settings.restitution_threshold);
-    finish(bodies, contacts, substeps as Real, dt);
+    restitution(bodies, contacts, selected, settings.restitution_threshold);
+    finish(bodies, contacts, selected, substeps as Real, dt);
 }
 
 /// The end of a step, in one pass over the contacts: each point's friction anchor, its
 /// impulses back from per substep to per step, and the contact's load.
-fn finish(bodies: &[SolverBody], contacts: &mut [Contact], substeps: Real, dt: Real) {
+fn finish(
+    bodies: &[SolverBody],
+    contacts: &mut [Contact],
+    selected: Selected,
+    substeps: Real,
+    dt: Real,
+) {
     // A moving kinematic body is fixed in the solver (its motion is not in `dp`), so slip
     // against it cannot be measured: such contacts are never anchored.
     let moving_fixed = |s: &SolverBody| s.inv_mass == 0.0 && (s.v != Vec2::ZERO || s.w != 0.0);
     let inv_dt = 1.0 / dt;
-    for c in contacts.iter_mut() {
+    selected.for_each(contacts, |c| {
         let t = c.tangent();
         let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
         let dp_t = (b.dp - a.dp).dot(t);
@@ -198,7 +207,7 @@ fn finish(bodies: &[SolverBody], contacts: &mut [Contact], substeps: Real, dt: R
         let force = force * inv_dt;
         c.load = force.min(c.force).max(HERTZ_DECAY * c.load);
         c.force = force;
-    }
+    });
 }
 
 /// How stiff contacts are made this step.
@@ -271,11 +280,12 @@ const STICK: Real = 0.99;
 fn prepare(
     bodies: &mut [SolverBody],
     contacts: &mut [Contact],
+    selected: Selected,
     warm_starting: bool,
     per_substep: Real,
     stiffness: &Stiffness,
 ) {
-    for c in contacts.iter_mut() {
+    selected.for_each(contacts, |c| {
         let n = c.normal;
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
@@ -301,7 +311,7 @@ fn prepare(
             0.0
         };
         c.block = BlockMass::of_contact(a, b, c);
-    }
+    });
 }
 
 /// Creep: the compression (m) at which the contact's spring would carry, in translation, the
@@ -504,10 +514,15 @@ fn block_normal(
 
 /// Reverse e times the pre-solve approach speed where it exceeded the threshold and the
 /// contact pushed.
-fn restitution(bodies: &mut [SolverBody], contacts: &mut [Contact], threshold: Real) {
-    for c in contacts.iter_mut() {
+fn restitution(
+    bodies: &mut [SolverBody],
+    contacts: &mut [Contact],
+    selected: Selected,
+    threshold: Real,
+) {
+    selected.for_each(contacts, |c| {
         if c.restitution == 0.0 {
-            continue;
+            return;
         }
         let n = c.normal;
         let e = c.restitution;
@@ -524,7 +539,7 @@ fn restitution(bodies: &mut [SolverBody], contacts: &mut [Contact], threshold: R
             if c.block
                 .is_some_and(|block| block_normal(a, b, &mut c.points, n, &block, &coeffs))
             {
-                continue;
+                return;
             }
         }
         for p in &mut c.points[..c.count] {
@@ -535,7 +550,7 @@ fn restitution(bodies: &mut [SolverBody], contacts: &mut [Contact], threshold: R
             let impulse = -p.normal_mass * (vn + e * p.relative_velocity);
             accumulate_normal(a, b, n, p, impulse);
         }
-    }
+    });
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@
 //! last colour are solved by the scalar code after the bundles.
 
 use super::lanes::{eight_lanes_available, Lanes8, Wide};
-use super::SolverBody;
+use super::{Selected, SolverBody};
 use crate::physics::contact::Contact;
 use crate::physics::math::{Lanes, Real};
 
@@ -244,9 +244,9 @@ impl<L: Wide> BodyLanes<L> {
 }
 
 impl WideSolver {
-    /// Colour the contacts and pack them into bundles. `bodies` must have one extra fixed
-    /// body at the end (index `bodies.len() - 1`) for empty lanes.
-    pub fn build(&mut self, bodies: &[SolverBody], contacts: &[Contact]) {
+    /// Colour the `selected` contacts and pack them into bundles. `bodies` must have one extra
+    /// fixed body at the end (index `bodies.len() - 1`) for empty lanes.
+    pub fn build(&mut self, bodies: &[SolverBody], contacts: &[Contact], selected: Selected) {
         let dummy = (bodies.len() - 1) as u32;
         debug_assert!(
             bodies.last().is_some_and(|d| d.inv_mass == 0.0),
@@ -259,7 +259,8 @@ impl WideSolver {
             list.clear();
         }
         self.overflow.clear();
-        for (i, c) in contacts.iter().enumerate() {
+        selected.for_each_index(contacts.len(), |i| {
+            let c = &contacts[i];
             let dynamic_a = bodies[c.a as usize].inv_mass > 0.0;
             let dynamic_b = bodies[c.b as usize].inv_mass > 0.0;
             let used = (if dynamic_a {
@@ -274,7 +275,7 @@ impl WideSolver {
             let colour = (!used).trailing_zeros() as usize;
             if colour >= self.colours.unwrap_or(COLOURS) {
                 self.overflow.push(i as u32);
-                continue;
+                return;
             }
             let bit = 1u32 << colour;
             if dynamic_a {
@@ -289,14 +290,14 @@ impl WideSolver {
                 1
             };
             self.by_colour[colour * 2 + kind].push(i as u32);
-        }
+        });
 
         // Eight lanes only where the processor runs them (a test may ask for them anywhere),
         // and by default only for enough contacts to fill them.
         let width = match self.width {
             Some(Width::Eight) if !eight_lanes_available() => Width::Four,
             Some(width) => width,
-            None if contacts.len() < EIGHT_LANES_FROM => Width::Four,
+            None if selected.count(contacts.len()) < EIGHT_LANES_FROM => Width::Four,
             None => Width::detect(),
         };
         self.built = Some(width);

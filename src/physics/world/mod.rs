@@ -15,7 +15,7 @@ use super::math::{cross, Real, Rot, Vec2};
 use super::settings::{Settings, SolverKind};
 use super::solver::soft_step::Softness;
 use super::solver::wide::WideSolver;
-use super::solver::{self, clamp_speed, Limits, Moving, SolverBody};
+use super::solver::{self, clamp_speed, Limits, Moving, Selected, SolverBody};
 
 /// Export and import of the full state (checkpoints); a child module so it reads private fields.
 pub mod snapshot;
@@ -59,14 +59,14 @@ pub struct World {
     wide: WideSolver,
     split_impulse: solver::sequential::SplitImpulse,
     // Adaptive stiffness, reused every step: each contact's and each slot's tier, the
-    // contacts grouped by tier (or, after the solve, merged back into key order) while tiers
-    // are solved apart, and the bodies of the tier being solved.
+    // contacts' indices grouped by tier while tiers are solved apart, and the bodies of the
+    // tier being solved.
     contact_tier: Vec<u8>,
     /// Adaptive stiffness scratch: each contact's two bodies, in contact order, so the
     /// island passes read 8 bytes a contact instead of the whole contact.
     contact_bodies: Vec<[u32; 2]>,
     body_tier: Vec<u8>,
-    tier_scratch: Vec<Contact>,
+    tier_contacts: Vec<u32>,
     tier_bodies: Vec<u32>,
     // Sleep bookkeeping, reused every step.
     wake_queue: Vec<u32>,
@@ -114,7 +114,7 @@ impl World {
             contact_tier: Vec::new(),
             contact_bodies: Vec::new(),
             body_tier: Vec::new(),
-            tier_scratch: Vec::new(),
+            tier_contacts: Vec::new(),
             tier_bodies: Vec::new(),
             wake_queue: Vec::new(),
             island_parent: Vec::new(),

@@ -70,6 +70,7 @@ impl World {
                 &mut self.solver_bodies,
                 Moving::All,
                 &mut self.contacts,
+                Selected::All,
                 &mut self.wide,
                 Work {
                     settings: &self.settings,
@@ -84,25 +85,21 @@ impl World {
         for &t in &self.contact_tier {
             has_contacts[t as usize] = true;
         }
-        // Usually every contact is in one tier (a stack, a pyramid, a pile): solve them where
-        // they are. Otherwise the contacts are grouped by tier, each group still in key order,
-        // and each tier solves its own slice.
+        // Usually every contact is in one tier (a stack, a pyramid, a pile): solve them all.
+        // Otherwise each tier solves the list of its contacts' indices, in key order, and the
+        // contacts stay where they are.
         let split = has_contacts.iter().filter(|&&h| h).count() > 1;
         let mut ranges: [std::ops::Range<usize>; TIERS] = Default::default();
         if split {
-            self.tier_scratch.clear();
+            self.tier_contacts.clear();
             for (tier, range) in ranges.iter_mut().enumerate() {
-                let start = self.tier_scratch.len();
-                self.tier_scratch.extend(
-                    self.contacts
-                        .iter()
-                        .zip(&self.contact_tier)
-                        .filter(|&(_, &t)| t as usize == tier)
-                        .map(|(c, _)| *c),
+                let start = self.tier_contacts.len();
+                self.tier_contacts.extend(
+                    (0..self.contacts.len() as u32)
+                        .filter(|&k| self.contact_tier[k as usize] as usize == tier),
                 );
-                *range = start..self.tier_scratch.len();
+                *range = start..self.tier_contacts.len();
             }
-            std::mem::swap(&mut self.contacts, &mut self.tier_scratch);
         }
         let dynamic = self
             .solver_bodies
@@ -131,13 +128,13 @@ impl World {
                     ..self.settings.clone()
                 }
             };
-            let contacts: &mut [Contact] = if split {
-                &mut self.contacts[ranges[tier as usize].clone()]
+            let selected = if split {
+                Selected::Only(&self.tier_contacts[ranges[tier as usize].clone()])
             } else if has_contacts[tier as usize] {
-                &mut self.contacts
+                Selected::All
             } else {
                 // Bodies touching nothing: only integrated.
-                &mut []
+                Selected::Only(&[])
             };
             solver::soft_step::solve(
                 &mut self.solver_bodies,
@@ -147,7 +144,8 @@ impl World {
                 } else {
                     Moving::Only(&self.tier_bodies)
                 },
-                contacts,
+                &mut self.contacts,
+                selected,
                 &mut self.wide,
                 Work {
                     settings: &settings,
@@ -156,23 +154,6 @@ impl World {
                 dt,
                 limits,
             );
-        }
-        if split {
-            // Back into one list in key order, as the next step's matching expects: a merge of
-            // the tiers' groups, each already in key order (no sort of 350-byte contacts).
-            self.tier_scratch.clear();
-            let mut heads = ranges.clone();
-            loop {
-                let next = heads
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, r)| !r.is_empty())
-                    .min_by_key(|(_, r)| self.contacts[r.start].key);
-                let Some((t, _)) = next else { break };
-                self.tier_scratch.push(self.contacts[heads[t].start]);
-                heads[t].start += 1;
-            }
-            std::mem::swap(&mut self.contacts, &mut self.tier_scratch);
         }
     }
 

@@ -3,7 +3,7 @@
 
 use super::body::BodyId;
 use super::collide::FeatureId;
-use super::math::{Real, Vec2};
+use super::math::{Real, Rot, Vec2};
 use super::solver::soft_step::Softness;
 use super::solver::BlockMass;
 
@@ -58,6 +58,13 @@ pub(crate) struct ContactPoint {
     pub approach_velocity: Real,
     /// Sequential solver: target normal velocity (m/s) from position bias or restitution.
     pub bias: Real,
+    /// Contact recycling: the point in body A's frame when the manifold was last computed (m).
+    pub local_a: Vec2,
+    /// Contact recycling: the same point in body B's frame (m); `local_a` and `local_b` were
+    /// one world point then.
+    pub local_b: Vec2,
+    /// Contact recycling: the separation when the manifold was last computed (m).
+    pub base_separation: Real,
 }
 
 /// A point's lever arms along the normal n and tangent t (see `ContactPoint::arms`).
@@ -152,6 +159,10 @@ pub(crate) struct Contact {
     /// Two-point contacts: the normal block and its inverse for this step (None: solve the
     /// points one at a time).
     pub block: Option<BlockMass>,
+    /// Contact recycling: the normal in body A's frame when the manifold was last computed.
+    pub local_normal: Vec2,
+    /// Contact recycling: B's rotation relative to A's when the manifold was last computed.
+    pub base_rotation: Rot,
 }
 
 impl Contact {

@@ -25,7 +25,9 @@ use std::thread::JoinHandle;
 /// Bumped whenever [`SimState`] (or anything in it, e.g. the engine's `Settings`) changes shape.
 /// 4: bodies record whether they are kinematic, shapes may be segments (issue 17).
 /// 5: contact points carry their friction anchor (slip, and the tangent arms).
-pub const FORMAT_VERSION: u32 = 5;
+/// 6: contacts carry what contact recycling reuses (points in both bodies' frames, the normal
+/// in A's, the pair's rotation), and `Settings` has `contact_recycling`.
+pub const FORMAT_VERSION: u32 = 6;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

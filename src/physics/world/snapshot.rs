@@ -88,6 +88,9 @@ pub struct PointState {
     pub solver: [Real; 7],
     /// Static friction held the point at the end of the last step (its slip counts).
     pub stuck: bool,
+    /// Contact recycling: local_a.x, local_a.y, local_b.x, local_b.y, base separation.
+    /// Checkpoint format version 6 on.
+    pub recycle: [Real; 5],
 }
 
 /// A persistent contact.
@@ -121,6 +124,9 @@ pub struct ContactState {
     pub age: u8,
     /// Block solver matrices k and inv, row major.
     pub block: Option<[Real; 8]>,
+    /// Contact recycling: the normal in A's frame and B's rotation relative to A's (cos,
+    /// sin) when the manifold was computed. Checkpoint format version 6 on.
+    pub recycle: [Real; 4],
 }
 
 /// Everything a World carries from one step to the next.
@@ -183,6 +189,13 @@ fn contact_state(c: &Contact) -> ContactState {
                 p.adjusted_slip,
             ],
             stuck: p.stuck,
+            recycle: [
+                p.local_a.x,
+                p.local_a.y,
+                p.local_b.x,
+                p.local_b.y,
+                p.base_separation,
+            ],
         })
         .collect();
     ContactState {
@@ -199,6 +212,12 @@ fn contact_state(c: &Contact) -> ContactState {
         load: c.load,
         force: c.force,
         age: c.age,
+        recycle: [
+            c.local_normal.x,
+            c.local_normal.y,
+            c.base_rotation.c,
+            c.base_rotation.s,
+        ],
         block: c.block.map(|b| {
             [
                 b.k[0][0],
@@ -259,12 +278,14 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
         ],
     )?;
     finite_all("contact softness", &s.softness)?;
+    finite_all("contact recycling", &s.recycle)?;
     let mut points = [ContactPoint::default(); 2];
     for (out, p) in points.iter_mut().zip(&s.points) {
         finite_all("contact point", &p.geometry)?;
         finite_all("contact point", &p.impulses)?;
         finite_all("contact point", &p.arms)?;
         finite_all("contact point", &p.solver)?;
+        finite_all("contact point", &p.recycle)?;
         let g = &p.geometry;
         *out = ContactPoint {
             id: p.id,
@@ -286,6 +307,9 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             bias: p.solver[5],
             adjusted_slip: p.solver[6],
             stuck: p.stuck,
+            local_a: Vec2::new(p.recycle[0], p.recycle[1]),
+            local_b: Vec2::new(p.recycle[2], p.recycle[3]),
+            base_separation: p.recycle[4],
             ..ContactPoint::default()
         };
     }
@@ -317,6 +341,11 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
         force: s.force,
         age: s.age,
         block,
+        local_normal: Vec2::new(s.recycle[0], s.recycle[1]),
+        base_rotation: Rot {
+            c: s.recycle[2],
+            s: s.recycle[3],
+        },
     })
 }
 

@@ -41,8 +41,6 @@ pub(crate) trait Wide:
     fn from_fn(f: impl FnMut(usize) -> Real) -> Self;
     /// Every index lane `i`.
     fn index_splat(i: u32) -> Self::Index;
-    /// Lane `i`.
-    fn lane(self, i: usize) -> Real;
     /// Set lane `i` to `x`, in place (packing writes each lane once, where it lives).
     fn set_lane(&mut self, i: usize, x: Real);
     /// All lanes as plain numbers.
@@ -102,10 +100,6 @@ impl Wide for Lanes {
     #[inline(always)]
     fn index_splat(i: u32) -> [u32; 4] {
         [i; 4]
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> Real {
-        self[i]
     }
     #[inline(always)]
     fn set_lane(&mut self, i: usize, x: Real) {
@@ -224,10 +218,6 @@ mod avx {
         #[inline(always)]
         fn index_splat(i: u32) -> [u32; 8] {
             [i; 8]
-        }
-        #[inline(always)]
-        fn lane(self, i: usize) -> Real {
-            self.to_array()[i]
         }
         #[inline(always)]
         fn set_lane(&mut self, i: usize, x: Real) {
@@ -363,9 +353,6 @@ mod portable {
         }
         fn index_splat(i: u32) -> [u32; 8] {
             [i; 8]
-        }
-        fn lane(self, i: usize) -> Real {
-            self.0[i]
         }
         fn set_lane(&mut self, i: usize, x: Real) {
             self.0[i] = x;

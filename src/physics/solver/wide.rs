@@ -161,13 +161,6 @@ struct BodyLanes<L> {
     inv_inertia: L,
 }
 
-/// One field of the lanes' bodies. A closure, not a function pointer, so that it is inlined
-/// into the kernels (a pointer was called once per lane in a whole-program build).
-#[inline(always)]
-fn lanes<L: Wide>(bodies: &[SolverBody], idx: &[u32], field: impl Fn(&SolverBody) -> Real) -> L {
-    L::from_fn(|i| field(&bodies[idx[i] as usize]))
-}
-
 impl<L: Wide> BodyLanes<L> {
     /// Load the lanes' bodies' velocities (and, with `motion`, how far they moved this step).
     /// The inverse masses do not change within a step: they come packed in the bundle.
@@ -179,21 +172,30 @@ impl<L: Wide> BodyLanes<L> {
         inv_inertia: L,
         motion: bool,
     ) -> BodyLanes<L> {
-        let idx = idx.as_ref();
+        // Each lane's body is looked up once and its fields spread into per-field rows.
+        let mut rows = [[0.0 as Real; 8]; 7];
+        for (lane, &i) in idx.as_ref().iter().enumerate() {
+            let s = &bodies[i as usize];
+            rows[0][lane] = s.v.x;
+            rows[1][lane] = s.v.y;
+            rows[2][lane] = s.w;
+            if motion {
+                rows[3][lane] = s.dp.x;
+                rows[4][lane] = s.dp.y;
+                rows[5][lane] = s.dq.c;
+                rows[6][lane] = s.dq.s;
+            }
+        }
+        let row = |k: usize| L::from_fn(|lane| rows[k][lane]);
         let (dpx, dpy, qc, qs) = if motion {
-            (
-                lanes(bodies, idx, |s| s.dp.x),
-                lanes(bodies, idx, |s| s.dp.y),
-                lanes(bodies, idx, |s| s.dq.c),
-                lanes(bodies, idx, |s| s.dq.s),
-            )
+            (row(3), row(4), row(5), row(6))
         } else {
             (L::ZERO, L::ZERO, L::ONE, L::ZERO)
         };
         BodyLanes {
-            vx: lanes(bodies, idx, |s| s.v.x),
-            vy: lanes(bodies, idx, |s| s.v.y),
-            w: lanes(bodies, idx, |s| s.w),
+            vx: row(0),
+            vy: row(1),
+            w: row(2),
             dpx,
             dpy,
             qc,
@@ -203,17 +205,19 @@ impl<L: Wide> BodyLanes<L> {
         }
     }
 
-    /// Write velocities back, for dynamic bodies only (static ones were not changed and may
-    /// appear in several lanes).
+    /// Write velocities back. A fixed body's lanes (static, kinematic, or the dummy of an
+    /// empty lane; one may fill several lanes) come back as they were read, since its zero
+    /// inverse mass and inertia take nothing from an impulse, so every lane is written
+    /// without asking which kind of body it holds (asking was a mispredicted branch per lane
+    /// wherever bundles mix contacts with the ground and between boxes).
     #[inline(always)]
     fn scatter(&self, bodies: &mut [SolverBody], idx: &L::Index) {
+        let (vx, vy, w) = (self.vx.to_lanes(), self.vy.to_lanes(), self.w.to_lanes());
         for (lane, &i) in idx.as_ref().iter().enumerate() {
             let body = &mut bodies[i as usize];
-            if body.inv_mass > 0.0 {
-                body.v.x = self.vx.lane(lane);
-                body.v.y = self.vy.lane(lane);
-                body.w = self.w.lane(lane);
-            }
+            body.v.x = vx.as_ref()[lane];
+            body.v.y = vy.as_ref()[lane];
+            body.w = w.as_ref()[lane];
         }
     }
 

@@ -1,6 +1,7 @@
 //! Finding contacts: the broad phase's candidate pairs, the narrow phase's manifolds, and
 //! last step's impulses carried over to the points that persist.
 
+use super::islands::TierInput;
 use super::*;
 use crate::physics::collide::{Manifold, ManifoldPoint};
 use crate::physics::math::Transform;
@@ -43,6 +44,7 @@ impl World {
 
         std::mem::swap(&mut self.contacts, &mut self.previous);
         self.contacts.clear();
+        self.tier_inputs.clear();
         let mut old = 0usize;
         let fm = self.settings.friction_mixing;
         let rm = self.settings.restitution_mixing;
@@ -113,6 +115,25 @@ impl World {
                     manifold
                 }
             };
+            if let (Some(manifold), Some(base)) = (recycled, previous) {
+                // The same points as last step: the contact carries over whole (impulses,
+                // friction anchors, load, the recycling frame) and only its geometry moves.
+                // Everything else in it is recomputed by the solver's prepare.
+                self.contacts.push(*base);
+                let contact = self.contacts.last_mut().expect("just pushed");
+                contact.normal = manifold.normal;
+                contact.friction = fm.mix(a.friction, b.friction);
+                contact.restitution = rm.mix(a.restitution, b.restitution);
+                contact.age = base.age.saturating_add(1);
+                for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {
+                    cp.point = mp.point;
+                    cp.separation = mp.separation;
+                    cp.anchor_a = mp.point - a.position;
+                    cp.anchor_b = mp.point - b.position;
+                }
+                self.tier_inputs.push(TierInput::of(contact, slop));
+                continue;
+            }
             let mut contact = Contact {
                 key,
                 a: ia,
@@ -133,29 +154,15 @@ impl World {
                 local_normal: xf_a.q.inv_rotate(manifold.normal),
                 base_rotation: relative_rotation(xf_a.q, xf_b.q),
             };
-            if recycled.is_some() {
-                let base = previous.expect("recycled from a previous contact");
-                contact.local_normal = base.local_normal;
-                contact.base_rotation = base.base_rotation;
-            }
-            for (k, (cp, mp)) in contact.points.iter_mut().zip(manifold.points()).enumerate() {
+            for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {
                 cp.id = mp.id;
                 cp.point = mp.point;
                 cp.separation = mp.separation;
                 cp.anchor_a = mp.point - a.position;
                 cp.anchor_b = mp.point - b.position;
-                match (recycled, previous) {
-                    (Some(_), Some(base)) => {
-                        let bp = &base.points[k];
-                        (cp.local_a, cp.local_b) = (bp.local_a, bp.local_b);
-                        cp.base_separation = bp.base_separation;
-                    }
-                    _ => {
-                        cp.local_a = xf_a.apply_inv(mp.point);
-                        cp.local_b = xf_b.apply_inv(mp.point);
-                        cp.base_separation = mp.separation;
-                    }
-                }
+                cp.local_a = xf_a.apply_inv(mp.point);
+                cp.local_b = xf_b.apply_inv(mp.point);
+                cp.base_separation = mp.separation;
                 if let Some(prev) =
                     previous.and_then(|c| c.points[..c.count].iter().find(|p| p.id == mp.id))
                 {
@@ -166,6 +173,7 @@ impl World {
                     cp.stuck = prev.stuck;
                 }
             }
+            self.tier_inputs.push(TierInput::of(&contact, slop));
             self.contacts.push(contact);
         }
         self.wake_queued();

@@ -65,6 +65,9 @@ pub struct World {
     /// Adaptive stiffness scratch: each contact's two bodies, in contact order, so the
     /// island passes read 8 bytes a contact instead of the whole contact.
     contact_bodies: Vec<[u32; 2]>,
+    /// Adaptive stiffness: each contact's inputs, in contact order, filled as the contacts
+    /// are found (rebuilt by `assign_tiers` when the counts differ).
+    tier_inputs: Vec<islands::TierInput>,
     body_tier: Vec<u8>,
     tier_contacts: Vec<u32>,
     tier_bodies: Vec<u32>,
@@ -113,6 +116,7 @@ impl World {
             split_impulse: Default::default(),
             contact_tier: Vec::new(),
             contact_bodies: Vec::new(),
+            tier_inputs: Vec::new(),
             body_tier: Vec::new(),
             tier_contacts: Vec::new(),
             tier_bodies: Vec::new(),

@@ -121,8 +121,8 @@ pub struct Settings {
     /// Reuse a contact's manifold while its two bodies have hardly moved against each other
     /// since it was computed: each point stays fixed in both bodies and its separation follows
     /// their motion along the normal, which is exact for a vertex on a face until the clipping
-    /// changes. A pair is collided afresh once a point drifts 0.2 linear slop (1 mm by
-    /// default; at most 0.5 % of the smaller body's size) or the pair turns 2 mrad. Default
+    /// changes. A pair is collided afresh once a point drifts 1 mm (at most 0.5 % of the
+    /// smaller body's size) or the pair turns 2 mrad. Default
     /// on: a pyramid at rest then skips most of its narrow phase.
     pub contact_recycling: bool,
     /// Let bodies that rest with their island sleep, costing nothing until something touches

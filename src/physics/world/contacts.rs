@@ -74,7 +74,7 @@ impl World {
                 .filter(|_| recycling && steady(a) && steady(b))
                 .and_then(|c| {
                     let size = a.shape.bounding_radius().min(b.shape.bounding_radius());
-                    let max_drift = (RECYCLE_SLOPS * slop).min(RECYCLE_SIZE * size);
+                    let max_drift = RECYCLE_DRIFT.min(RECYCLE_SIZE * size);
                     recycle(c, xf_a, xf_b, max_drift)
                 });
             let manifold = match recycled {
@@ -180,9 +180,9 @@ impl World {
     }
 }
 
-/// Contact recycling: a point may drift this many linear slops from where it was computed
-/// before the pair is collided afresh (`Settings::contact_recycling`)...
-const RECYCLE_SLOPS: Real = 0.2;
+/// Contact recycling: how far (m) a point may drift from where it was computed before the
+/// pair is collided afresh (`Settings::contact_recycling`)...
+const RECYCLE_DRIFT: Real = 1.0e-3;
 /// ...and at most this fraction of the smaller body's bounding radius (small bodies).
 const RECYCLE_SIZE: Real = 0.005;
 /// Contact recycling: the largest relative turn of the pair (sine of the angle) before the

@@ -118,7 +118,7 @@ pub(crate) fn solve(
     // whose substep count changes (adaptive stiffness) warm starts with the same force.
     // Substep counts are powers of two in practice, which makes the scaling exact.
     let per_substep = 1.0 / substeps as Real;
-    prepare(
+    let bouncy = prepare(
         bodies,
         contacts,
         selected,
@@ -158,56 +158,60 @@ pub(crate) fn solve(
             }
         }
     }
-    wide.store(contacts);
-    restitution(bodies, contacts, selected, settings.restitution_threshold);
-    finish(bodies, contacts, selected, substeps as Real, dt);
+    let (substeps, inv_dt) = (substeps as Real, 1.0 / dt);
+    if bouncy {
+        // Restitution reads every contact's impulses and changes velocities: store them all,
+        // bounce, then finish.
+        wide.store(contacts, |_| {});
+        restitution(bodies, contacts, selected, settings.restitution_threshold);
+        selected.for_each(contacts, |c| finish(bodies, c, substeps, inv_dt));
+    } else {
+        // Each contact is finished as its impulses are stored (finishing one reads nothing of
+        // the others): one pass over the contacts instead of two.
+        wide.store(contacts, |c| finish(bodies, c, substeps, inv_dt));
+        for &i in &wide.overflow {
+            finish(bodies, &mut contacts[i as usize], substeps, inv_dt);
+        }
+    }
 }
 
-/// The end of a step, in one pass over the contacts: each point's friction anchor, its
-/// impulses back from per substep to per step, and the contact's load.
-fn finish(
-    bodies: &[SolverBody],
-    contacts: &mut [Contact],
-    selected: Selected,
-    substeps: Real,
-    dt: Real,
-) {
+/// The end of a step for contact `c`: each point's friction anchor, its impulses back from
+/// per substep to per step, and the contact's load (`substeps` as a number, `inv_dt` in 1/s).
+#[inline]
+fn finish(bodies: &[SolverBody], c: &mut Contact, substeps: Real, inv_dt: Real) {
     // A moving kinematic body is fixed in the solver (its motion is not in `dp`), so slip
     // against it cannot be measured: such contacts are never anchored.
     let moving_fixed = |s: &SolverBody| s.inv_mass == 0.0 && (s.v != Vec2::ZERO || s.w != 0.0);
-    let inv_dt = 1.0 / dt;
-    selected.for_each(contacts, |c| {
-        let t = c.tangent();
-        let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
-        let dp_t = (b.dp - a.dp).dot(t);
-        let friction = c.friction;
-        let measurable = !moving_fixed(a) && !moving_fixed(b);
-        let mut force = 0.0;
-        for p in &mut c.points[..c.count] {
-            // Carry the slip to the next step while static friction holds the point: one that
-            // ends the step inside the friction cone (and pushing) sticks. Only a step that
-            // also began stuck adds to the slip, so the anchor undoes creep, never the end of
-            // a slide; a point that slides starts over from where it stops.
-            let max_f = friction * p.normal_impulse;
-            let stuck = measurable && max_f > 0.0 && p.tangent_impulse.abs() < STICK * max_f;
-            p.slip = if stuck && p.stuck {
-                current_slip(a, b, p, dp_t)
-            } else {
-                0.0
-            };
-            p.stuck = stuck;
-            p.normal_impulse *= substeps;
-            p.tangent_impulse *= substeps;
-            force += p.total_normal_impulse;
-        }
-        // The force the contact carried, held so that a load that comes and goes does not
-        // switch an island's work on and off every step (`Settings::adaptive_stiffness`), and
-        // counted only when it lasted two steps running: the impact of a falling body is a
-        // one-step spike, not a load to stiffen for.
-        let force = force * inv_dt;
-        c.load = force.min(c.force).max(HERTZ_DECAY * c.load);
-        c.force = force;
-    });
+    let t = c.tangent();
+    let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
+    let dp_t = (b.dp - a.dp).dot(t);
+    let friction = c.friction;
+    let measurable = !moving_fixed(a) && !moving_fixed(b);
+    let mut force = 0.0;
+    for p in &mut c.points[..c.count] {
+        // Carry the slip to the next step while static friction holds the point: one that
+        // ends the step inside the friction cone (and pushing) sticks. Only a step that
+        // also began stuck adds to the slip, so the anchor undoes creep, never the end of
+        // a slide; a point that slides starts over from where it stops.
+        let max_f = friction * p.normal_impulse;
+        let stuck = measurable && max_f > 0.0 && p.tangent_impulse.abs() < STICK * max_f;
+        p.slip = if stuck && p.stuck {
+            current_slip(a, b, p, dp_t)
+        } else {
+            0.0
+        };
+        p.stuck = stuck;
+        p.normal_impulse *= substeps;
+        p.tangent_impulse *= substeps;
+        force += p.total_normal_impulse;
+    }
+    // The force the contact carried, held so that a load that comes and goes does not
+    // switch an island's work on and off every step (`Settings::adaptive_stiffness`), and
+    // counted only when it lasted two steps running: the impact of a falling body is a
+    // one-step spike, not a load to stiffen for.
+    let force = force * inv_dt;
+    c.load = force.min(c.force).max(HERTZ_DECAY * c.load);
+    c.force = force;
 }
 
 /// How stiff contacts are made this step.
@@ -277,6 +281,8 @@ const STICK: Real = 0.99;
 
 /// Effective masses, adjusted separations, approach speeds and springs, once per step; the
 /// impulses carried from the last step become per substep (`per_substep` = 1 / substeps).
+/// Returns whether any contact has restitution (if none, the restitution pass, a walk over
+/// every contact, is left out).
 fn prepare(
     bodies: &mut [SolverBody],
     contacts: &mut [Contact],
@@ -284,8 +290,10 @@ fn prepare(
     warm_starting: bool,
     per_substep: Real,
     stiffness: &Stiffness,
-) {
+) -> bool {
+    let mut bouncy = false;
     selected.for_each(contacts, |c| {
+        bouncy |= c.restitution != 0.0;
         let n = c.normal;
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
@@ -312,6 +320,7 @@ fn prepare(
         };
         c.block = BlockMass::of_contact(a, b, c);
     });
+    bouncy
 }
 
 /// Creep: the compression (m) at which the contact's spring would carry, in translation, the

@@ -350,11 +350,12 @@ impl WideSolver {
     }
 
     /// Copy the lanes' impulses back to the contacts (for restitution, warm starting next
-    /// step, and what `World::contacts` reports).
-    pub fn store(&self, contacts: &mut [Contact]) {
+    /// step, and what `World::contacts` reports), and run `then` on each contact as soon as
+    /// its impulses are in (the end-of-step work, while the contact is in cache).
+    pub fn store(&self, contacts: &mut [Contact], then: impl FnMut(&mut Contact)) {
         match self.built {
-            Some(Width::Eight) => store_bundles(&self.bundles8, contacts),
-            _ => store_bundles(&self.bundles4, contacts),
+            Some(Width::Eight) => store_bundles(&self.bundles8, contacts, then),
+            _ => store_bundles(&self.bundles4, contacts, then),
         }
     }
 }
@@ -578,7 +579,11 @@ fn coefficients<L: Wide>(
 
 /// Copy the lanes' impulses back to the contacts. Each field's lanes are read out once per
 /// bundle, not once per lane.
-fn store_bundles<L: Wide>(bundles: &[Bundle<L>], contacts: &mut [Contact]) {
+fn store_bundles<L: Wide>(
+    bundles: &[Bundle<L>],
+    contacts: &mut [Contact],
+    mut then: impl FnMut(&mut Contact),
+) {
     for bundle in bundles {
         let fields = bundle.p.each_ref().map(|p| {
             [
@@ -599,6 +604,7 @@ fn store_bundles<L: Wide>(bundles: &[Bundle<L>], contacts: &mut [Contact]) {
                 p.total_normal_impulse = total.as_ref()[lane];
                 p.max_normal_impulse = max.as_ref()[lane];
             }
+            then(c);
         }
     }
 }

@@ -78,6 +78,8 @@ pub struct Settings {
     /// Soft step: contact stiffness (Hz), capped at a quarter of the substep rate. Default 60
     /// (the cap at 4 substeps of 1/60 s). Box2D v3 uses 30; at 30 Hz we measured a 20-box
     /// stack with 1 cm jitter toppling within 30 s, at 60 Hz it stands (docs/accuracy.md).
+    /// Contacts with static bodies get twice this, within the same cap (so at the defaults
+    /// the same 60 Hz).
     pub contact_hertz: Real,
     /// Soft step: stiffen a contact beyond `contact_hertz` when the load it carried last step
     /// would sink it deeper than `linear_slop` (k >= F / slop), up to `max_contact_hertz_ratio`
@@ -180,8 +182,8 @@ impl Settings {
     }
 
     /// The soft step with every island on heavy fixed settings: 8 substeps, 4 relax passes,
-    /// 120 Hz contacts (a quarter of the 480 Hz substep rate; twice that against static
-    /// bodies) and load-aware stiffening, adaptive stiffness off. Before adaptive stiffness
+    /// 120 Hz contacts (a quarter of the 480 Hz substep rate, the cap, so static contacts
+    /// get no more) and load-aware stiffening, adaptive stiffness off. Before adaptive stiffness
     /// this was the only configuration that passed the stiff suite; the defaults now pass it
     /// too (`Settings::adaptive_stiffness`), paying only where an island needs it, so this is
     /// kept for comparison: it costs 2.2-2.5 times the base step everywhere.

@@ -119,25 +119,21 @@ impl Polygon {
     pub(crate) fn rect(h: Vec2) -> Polygon {
         // Built directly: the normals are the axes exactly (normalising the edges would
         // round them), and the narrow phase builds two of these per box pair every step.
-        let mut p = Polygon {
-            vertices: [Vec2::ZERO; MAX_VERTICES],
-            normals: [Vec2::ZERO; MAX_VERTICES],
-            count: 4,
-            radius: h.length(),
-        };
-        p.vertices[..4].copy_from_slice(&[
-            Vec2::new(-h.x, -h.y),
-            Vec2::new(h.x, -h.y),
-            Vec2::new(h.x, h.y),
-            Vec2::new(-h.x, h.y),
-        ]);
-        p.normals[..4].copy_from_slice(&[
-            Vec2::new(0.0, -1.0),
-            Vec2::new(1.0, 0.0),
-            Vec2::new(0.0, 1.0),
-            Vec2::new(-1.0, 0.0),
-        ]);
-        p
+        Polygon::quad(
+            [
+                Vec2::new(-h.x, -h.y),
+                Vec2::new(h.x, -h.y),
+                Vec2::new(h.x, h.y),
+                Vec2::new(-h.x, h.y),
+            ],
+            [
+                Vec2::new(0.0, -1.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(0.0, 1.0),
+                Vec2::new(-1.0, 0.0),
+            ],
+            h.length(),
+        )
     }
 
     /// [`Polygon::rect`] moved by `xf`, built in place: the edge half-vectors rotated once
@@ -145,24 +141,34 @@ impl Polygon {
     pub(crate) fn rect_at(h: Vec2, xf: Transform) -> Polygon {
         let (c, s) = (xf.q.c, xf.q.s);
         let (ex, ey) = (Vec2::new(c * h.x, s * h.x), Vec2::new(-s * h.y, c * h.y));
+        Polygon::quad(
+            [
+                xf.p - ex - ey,
+                xf.p + ex - ey,
+                xf.p + ex + ey,
+                xf.p - ex + ey,
+            ],
+            [
+                Vec2::new(s, -c),
+                Vec2::new(c, s),
+                Vec2::new(-s, c),
+                Vec2::new(-c, -s),
+            ],
+            h.length(),
+        )
+    }
+
+    /// A four-sided polygon from its vertices (counter-clockwise), their edges' unit normals
+    /// and its bounding radius (m), taken as given.
+    fn quad(vertices: [Vec2; 4], normals: [Vec2; 4], radius: Real) -> Polygon {
         let mut p = Polygon {
             vertices: [Vec2::ZERO; MAX_VERTICES],
             normals: [Vec2::ZERO; MAX_VERTICES],
             count: 4,
-            radius: h.length(),
+            radius,
         };
-        p.vertices[..4].copy_from_slice(&[
-            xf.p - ex - ey,
-            xf.p + ex - ey,
-            xf.p + ex + ey,
-            xf.p - ex + ey,
-        ]);
-        p.normals[..4].copy_from_slice(&[
-            Vec2::new(s, -c),
-            Vec2::new(c, s),
-            Vec2::new(-s, c),
-            Vec2::new(-c, -s),
-        ]);
+        p.vertices[..4].copy_from_slice(&vertices);
+        p.normals[..4].copy_from_slice(&normals);
         p
     }
 

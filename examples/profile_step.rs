@@ -36,8 +36,13 @@ fn main() {
         .bodies()
         .map(|b| b.position().y)
         .fold(f32::MIN as f64, |a, y| a.max(y as f64));
+    // FNV-1a over the state's words: equal hashes before and after a change that should not
+    // change results say it did not (to the bit).
+    let hash = world.state_bits().fold(0xcbf2_9ce4_8422_2325u64, |h, w| {
+        (h ^ w).wrapping_mul(0x0000_0100_0000_01b3)
+    });
     println!(
-        "{name}: {} bodies, median {:.4} ms/step, min {:.4}, contacts {}, awake {}, top y {top:.2}",
+        "{name}: {} bodies, median {:.4} ms/step, min {:.4}, contacts {}, awake {}, top y {top:.2}, state {hash:016x}",
         world.body_count(),
         times[times.len() / 2],
         times[0],

@@ -27,7 +27,7 @@ use std::thread::JoinHandle;
 /// 5: contact points carry their friction anchor (slip, and the tangent arms).
 /// 6: contacts carry what contact recycling reuses (points in both bodies' frames, the normal
 /// in A's, the pair's rotation), and `Settings` has `contact_recycling`.
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

@@ -3,6 +3,7 @@
 //! Both solvers work on [`SolverBody`]: a compact copy of what the inner loops touch
 //! (velocities, inverse masses, and how far each body has moved during the step).
 
+pub(crate) mod constraint;
 pub(crate) mod lanes;
 pub(crate) mod sequential;
 pub(crate) mod soft_step;
@@ -118,12 +119,6 @@ impl Selected<'_> {
         for k in 0..n {
             f(list.map_or(k, |list| list[k] as usize));
         }
-    }
-
-    /// Run `f` on every selected contact, in order.
-    #[inline]
-    pub fn for_each(self, contacts: &mut [Contact], mut f: impl FnMut(&mut Contact)) {
-        self.for_each_index(contacts.len(), |i| f(&mut contacts[i]));
     }
 }
 

@@ -5,6 +5,7 @@
 //! points `iterations` times, each time solving the normal impulse (clamped so bodies only
 //! push) and the friction impulse (clamped to the Coulomb cone).
 
+use super::constraint::{ContactConstraint, PointConstraint};
 use super::{apply_impulse, pair_mut, BlockMass, SolverBody};
 use crate::physics::contact::{Contact, ContactPoint};
 use crate::physics::math::{cross, cross_sv, Real, Vec2};
@@ -27,21 +28,30 @@ pub(crate) fn effective_mass(a: &SolverBody, b: &SolverBody, ra: Vec2, rb: Vec2,
 /// A point's normal and tangent effective masses (eqs. 56-57) from its anchors, for normal
 /// `n` and tangent `t`.
 #[inline]
-pub(crate) fn point_masses(a: &SolverBody, b: &SolverBody, p: &mut ContactPoint, n: Vec2, t: Vec2) {
-    p.normal_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, n);
-    p.tangent_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, t);
+pub(crate) fn point_masses(
+    a: &SolverBody,
+    b: &SolverBody,
+    p: &ContactPoint,
+    k: &mut PointConstraint,
+    n: Vec2,
+    t: Vec2,
+) {
+    k.normal_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, n);
+    k.tangent_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, t);
 }
 
-/// Prepare, warm start and iterate. Velocities in `bodies` are updated in place.
+/// Prepare, warm start and iterate. Velocities in `bodies` are updated in place;
+/// `constraints` (one per contact) receive this step's constraints.
 pub(crate) fn solve(
     bodies: &mut [SolverBody],
     contacts: &mut [Contact],
+    constraints: &mut [ContactConstraint],
     settings: &Settings,
     dt: Real,
 ) {
-    prepare(bodies, contacts, settings, dt);
+    prepare(bodies, contacts, constraints, settings, dt);
     for _ in 0..settings.iterations {
-        iterate(bodies, contacts, settings);
+        iterate(bodies, contacts, constraints, settings);
     }
     for c in contacts.iter_mut() {
         for p in &mut c.points[..c.count] {
@@ -73,6 +83,7 @@ impl SplitImpulse {
         &mut self,
         bodies: &mut [SolverBody],
         contacts: &[Contact],
+        constraints: &[ContactConstraint],
         settings: &Settings,
         dt: Real,
     ) {
@@ -83,10 +94,18 @@ impl SplitImpulse {
         self.impulse.resize(contacts.len(), [0.0; 2]);
         let mut any = false;
         for _ in 0..settings.iterations {
-            for (c, acc) in contacts.iter().zip(self.impulse.iter_mut()) {
+            for ((c, k), acc) in contacts
+                .iter()
+                .zip(constraints)
+                .zip(self.impulse.iter_mut())
+            {
                 let n = c.normal;
                 let (ia, ib) = (c.a as usize, c.b as usize);
-                for (p, acc) in c.points[..c.count].iter().zip(acc.iter_mut()) {
+                for ((p, k), acc) in c.points[..c.count]
+                    .iter()
+                    .zip(&k.points)
+                    .zip(acc.iter_mut())
+                {
                     // Position bias (appendix eq. 70), on the overlap beyond the slop only.
                     let target = -settings.bias_factor
                         * inv_dt
@@ -100,7 +119,7 @@ impl SplitImpulse {
                     let (vb, wb) = self.velocity[ib];
                     let vn = (vb + cross_sv(wb, rb) - va - cross_sv(wa, ra)).dot(n);
                     let old = *acc;
-                    *acc = (old + p.normal_mass * (target - vn)).max(0.0);
+                    *acc = (old + k.normal_mass * (target - vn)).max(0.0);
                     let pn = (*acc - old) * n;
                     let (a, b) = (&bodies[ia], &bodies[ib]);
                     self.velocity[ia].0 -= a.inv_mass * pn;
@@ -129,18 +148,24 @@ impl SplitImpulse {
 }
 
 /// Effective masses and target velocities (bias), then the warm start.
-fn prepare(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Settings, dt: Real) {
+fn prepare(
+    bodies: &mut [SolverBody],
+    contacts: &mut [Contact],
+    constraints: &mut [ContactConstraint],
+    settings: &Settings,
+    dt: Real,
+) {
     let inv_dt = 1.0 / dt;
-    for c in contacts.iter_mut() {
+    for (c, k) in contacts.iter_mut().zip(constraints.iter_mut()) {
         let n = c.normal;
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
-        for p in &mut c.points[..c.count] {
-            point_masses(a, b, p, n, t);
+        for (p, k) in c.points[..c.count].iter_mut().zip(&mut k.points) {
+            point_masses(a, b, p, k, n, t);
             let (ra, rb) = (p.anchor_a, p.anchor_b);
             let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
             let vn = dv.dot(n);
-            p.relative_velocity = vn;
+            k.relative_velocity = vn;
             // Speculative point: the bodies may close the gap this step, no more. Overlaps are
             // pushed apart by the split impulse (`SplitImpulse`), not through the velocities.
             let mut bias = if p.separation > 0.0 {
@@ -163,7 +188,7 @@ fn prepare(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
                     bias = bias.max(-c.restitution * approach);
                 }
             }
-            p.bias = bias;
+            k.bias = bias;
             if settings.warm_starting {
                 apply_impulse(a, b, ra, rb, p.normal_impulse * n + p.tangent_impulse * t);
             } else {
@@ -171,24 +196,29 @@ fn prepare(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
                 p.tangent_impulse = 0.0;
             }
         }
-        c.block = BlockMass::of_contact(a, b, c);
+        k.block = BlockMass::of_contact(a, b, c);
     }
 }
 
 /// One sweep over every contact point: normal impulse, then friction.
-fn iterate(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Settings) {
-    for c in contacts.iter_mut() {
+fn iterate(
+    bodies: &mut [SolverBody],
+    contacts: &mut [Contact],
+    constraints: &[ContactConstraint],
+    settings: &Settings,
+) {
+    for (c, k) in contacts.iter_mut().zip(constraints) {
         let n = c.normal;
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
-        let solved = settings.accumulate_impulses && c.count == 2 && block_normal(a, b, c);
+        let solved = settings.accumulate_impulses && c.count == 2 && block_normal(a, b, c, k);
         if !solved {
-            for p in &mut c.points[..c.count] {
+            for (p, k) in c.points[..c.count].iter_mut().zip(&k.points) {
                 let (ra, rb) = (p.anchor_a, p.anchor_b);
                 // Normal impulse: drive the normal velocity to the bias, only ever pushing.
                 let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
                 let vn = dv.dot(n);
-                let mut dpn = p.normal_mass * (-vn + p.bias);
+                let mut dpn = k.normal_mass * (-vn + k.bias);
                 if settings.accumulate_impulses {
                     let old = p.normal_impulse;
                     p.normal_impulse = (old + dpn).max(0.0);
@@ -200,13 +230,13 @@ fn iterate(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
                 apply_impulse(a, b, ra, rb, dpn * n);
             }
         }
-        for p in &mut c.points[..c.count] {
+        for (p, k) in c.points[..c.count].iter_mut().zip(&k.points) {
             let (ra, rb) = (p.anchor_a, p.anchor_b);
 
             // Friction impulse: stop sliding, within |Pt| <= mu Pn (appendix eq. 60).
             let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
             let vt = dv.dot(t);
-            let mut dpt = -p.tangent_mass * vt;
+            let mut dpt = -k.tangent_mass * vt;
             let max_pt = c.friction * p.normal_impulse;
             if settings.accumulate_impulses {
                 let old = p.tangent_impulse;
@@ -224,8 +254,13 @@ fn iterate(bodies: &mut [SolverBody], contacts: &mut [Contact], settings: &Setti
 /// Both normal impulses of a two-point contact at once, each aiming at its bias velocity
 /// (see `solve_block_lcp`). Returns false, having applied nothing, when the contact has no
 /// well-conditioned block or no LCP case fits.
-fn block_normal(a: &mut SolverBody, b: &mut SolverBody, c: &mut Contact) -> bool {
-    let (Some(block), n) = (c.block, c.normal) else {
+fn block_normal(
+    a: &mut SolverBody,
+    b: &mut SolverBody,
+    c: &mut Contact,
+    k: &ContactConstraint,
+) -> bool {
+    let (Some(block), n) = (k.block, c.normal) else {
         return false;
     };
     let points = &mut c.points;
@@ -233,7 +268,7 @@ fn block_normal(a: &mut SolverBody, b: &mut SolverBody, c: &mut Contact) -> bool
     let rb = [points[0].anchor_b, points[1].anchor_b];
     let lambda = [points[0].normal_impulse, points[1].normal_impulse];
     let vn = [0, 1].map(|i| (b.v + cross_sv(b.w, rb[i]) - a.v - cross_sv(a.w, ra[i])).dot(n));
-    let Some(x) = block.solve(lambda, vn, |i, _| points[i].bias) else {
+    let Some(x) = block.solve(lambda, vn, |i, _| k.points[i].bias) else {
         return false;
     };
     for i in 0..2 {

@@ -8,13 +8,14 @@
 //! push-out speed is capped; and speculative points (separation > 0) only let the bodies
 //! close the gap in one substep, which stops fast bodies at the surface.
 
+use super::constraint::{Arms, ContactConstraint, PointConstraint, PointEnd, Slip};
 use super::sequential::point_masses;
 use super::wide::WideSolver;
 use super::{
     apply_along, integrate_positions, integrate_velocities, pair_mut, relative_velocity, BlockMass,
     Limits, Moving, Selected, SolverBody,
 };
-use crate::physics::contact::{Arms, Contact, ContactPoint};
+use crate::physics::contact::{Contact, ContactPoint};
 use crate::physics::math::{Real, Vec2, PI};
 use crate::physics::settings::Settings;
 
@@ -32,20 +33,6 @@ pub(crate) struct Softness {
 }
 
 impl Softness {
-    /// The three coefficients as words, in field order (for saved states).
-    pub fn to_words(self) -> [Real; 3] {
-        [self.bias_rate, self.mass_scale, self.impulse_scale]
-    }
-
-    /// The inverse of [`Softness::to_words`].
-    pub fn from_words([bias_rate, mass_scale, impulse_scale]: [Real; 3]) -> Softness {
-        Softness {
-            bias_rate,
-            mass_scale,
-            impulse_scale,
-        }
-    }
-
     /// A rigid constraint: full correction, no compliance.
     pub const RIGID: Softness = Softness {
         bias_rate: 0.0,
@@ -82,12 +69,14 @@ pub(crate) struct Work<'a> {
 }
 
 /// Run one full step of `dt` seconds on the `selected` contacts and the `moving` bodies (the
-/// bodies those contacts join must be among them).
+/// bodies those contacts join must be among them). `constraints` has one slot per contact:
+/// the contacts solved by the scalar code keep their constraint there.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     bodies: &mut [SolverBody],
     moving: Moving,
     contacts: &mut [Contact],
+    constraints: &mut [ContactConstraint],
     selected: Selected,
     wide: &mut WideSolver,
     work: Work,
@@ -121,24 +110,23 @@ pub(crate) fn solve(
     // whose substep count changes (adaptive stiffness) warm starts with the same force.
     // Substep counts are powers of two in practice, which makes the scaling exact.
     let per_substep = 1.0 / substeps as Real;
-    let bouncy = prepare(
-        bodies,
-        contacts,
-        selected,
-        settings.warm_starting,
-        per_substep,
-        &stiffness,
-    );
-    // Most contacts are solved four at a time (see `wide`); the few the colouring could not
-    // place are solved here one by one, after the bundles.
-    wide.build(bodies, contacts, selected);
+    let warm_starting = settings.warm_starting;
+    // Each contact is prepared as it is coloured and its constraint written straight into
+    // its bundle's lanes (see `wide`): one pass over the contacts. The few the colouring could
+    // not place are solved here one by one, after the bundles.
+    let mut bouncy = false;
+    wide.build(bodies, contacts, constraints, selected, |c, a, b| {
+        bouncy |= c.restitution != 0.0;
+        prepare(a, b, c, warm_starting, per_substep, &stiffness)
+    });
 
     for _ in 0..substeps {
         integrate_velocities(bodies, moving, h, limits);
         if settings.warm_starting {
             wide.warm_start(bodies);
             for &i in &wide.overflow {
-                warm_start(bodies, &mut contacts[i as usize]);
+                let i = i as usize;
+                warm_start(bodies, &mut contacts[i], &constraints[i]);
             }
         } else {
             wide.clear_impulses();
@@ -149,39 +137,93 @@ pub(crate) fn solve(
                 }
             }
         }
-        wide.solve(bodies, inv_h, true, push_out);
-        for &i in &wide.overflow {
-            solve_contact(bodies, &mut contacts[i as usize], inv_h, true, push_out);
-        }
-        integrate_positions(bodies, moving, h, limits);
-        for _ in 0..settings.relax_iterations {
-            wide.solve(bodies, inv_h, false, push_out);
+        for pass in 0..=settings.relax_iterations {
+            // The biased pass, then (after the positions move) the relax passes.
+            let use_bias = pass == 0;
+            wide.solve(bodies, inv_h, use_bias, push_out);
             for &i in &wide.overflow {
-                solve_contact(bodies, &mut contacts[i as usize], inv_h, false, push_out);
+                let i = i as usize;
+                solve_contact(
+                    bodies,
+                    &mut contacts[i],
+                    &mut constraints[i],
+                    inv_h,
+                    use_bias,
+                    push_out,
+                );
+            }
+            if use_bias {
+                integrate_positions(bodies, moving, h, limits);
             }
         }
     }
     let (substeps, inv_dt) = (substeps as Real, 1.0 / dt);
+    // Each contact is finished as its impulses are stored (finishing one reads nothing of the
+    // others and no velocity): one pass over the contacts. Those that bounce wait for the
+    // restitution pass, which changes their impulses; they and the scalar code's contacts
+    // finish from their kept constraints.
+    wide.store(contacts, |c, i, ends| {
+        if c.restitution == 0.0 {
+            finish(bodies, c, ends, substeps, inv_dt);
+        } else {
+            let points = c.points[..c.count].iter_mut();
+            for ((p, k), end) in points.zip(&mut constraints[i].points).zip(ends) {
+                p.normal_impulse = end.normal_impulse;
+                p.tangent_impulse = end.tangent_impulse;
+                p.total_normal_impulse = end.total_normal_impulse;
+                k.max_normal_impulse = end.max_normal_impulse;
+            }
+        }
+    });
+    // The point ends of a contact the scalar code solved, or that bounced.
+    let kept = |c: &Contact, k: &ContactConstraint| {
+        [0, 1].map(|j| {
+            let (p, k) = (&c.points[j], &k.points[j]);
+            PointEnd {
+                normal_impulse: p.normal_impulse,
+                tangent_impulse: p.tangent_impulse,
+                total_normal_impulse: p.total_normal_impulse,
+                max_normal_impulse: k.max_normal_impulse,
+                slip: k.slip(),
+            }
+        })
+    };
     if bouncy {
-        // Restitution reads every contact's impulses and changes velocities: store them all,
-        // bounce, then finish.
-        wide.store(contacts, |_| {});
-        restitution(bodies, contacts, selected, settings.restitution_threshold);
-        selected.for_each(contacts, |c| finish(bodies, c, substeps, inv_dt));
-    } else {
-        // Each contact is finished as its impulses are stored (finishing one reads nothing of
-        // the others): one pass over the contacts instead of two.
-        wide.store(contacts, |c| finish(bodies, c, substeps, inv_dt));
-        for &i in &wide.overflow {
-            finish(bodies, &mut contacts[i as usize], substeps, inv_dt);
+        restitution(
+            bodies,
+            contacts,
+            constraints,
+            selected,
+            settings.restitution_threshold,
+        );
+        selected.for_each_index(contacts.len(), |i| {
+            let c = &mut contacts[i];
+            if c.restitution != 0.0 {
+                let ends = kept(c, &constraints[i]);
+                finish(bodies, c, &ends, substeps, inv_dt);
+            }
+        });
+    }
+    for &i in &wide.overflow {
+        let c = &mut contacts[i as usize];
+        if c.restitution == 0.0 {
+            let ends = kept(c, &constraints[i as usize]);
+            finish(bodies, c, &ends, substeps, inv_dt);
         }
     }
 }
 
-/// The end of a step for contact `c`: each point's friction anchor, its impulses back from
-/// per substep to per step, and the contact's load (`substeps` as a number, `inv_dt` in 1/s).
+/// The end of a step for contact `c`, from its points' `ends`: each point's friction anchor,
+/// its impulses back from per substep to per step, and the contact's load (`substeps` as a
+/// number, `inv_dt` in 1/s).
 #[inline]
-fn finish(bodies: &[SolverBody], c: &mut Contact, substeps: Real, inv_dt: Real) {
+fn finish(
+    bodies: &[SolverBody],
+    c: &mut Contact,
+    ends: &[PointEnd; 2],
+    substeps: Real,
+    inv_dt: Real,
+) {
     // A moving kinematic body is fixed in the solver (its motion is not in `dp`), so slip
     // against it cannot be measured: such contacts are never anchored.
     let moving_fixed = |s: &SolverBody| s.inv_mass == 0.0 && (s.v != Vec2::ZERO || s.w != 0.0);
@@ -191,22 +233,23 @@ fn finish(bodies: &[SolverBody], c: &mut Contact, substeps: Real, inv_dt: Real) 
     let friction = c.friction;
     let measurable = !moving_fixed(a) && !moving_fixed(b);
     let mut force = 0.0;
-    for p in &mut c.points[..c.count] {
+    for (p, end) in c.points[..c.count].iter_mut().zip(ends) {
         // Carry the slip to the next step while static friction holds the point: one that
         // ends the step inside the friction cone (and pushing) sticks. Only a step that
         // also began stuck adds to the slip, so the anchor undoes creep, never the end of
         // a slide; a point that slides starts over from where it stops.
-        let max_f = friction * p.normal_impulse;
-        let stuck = measurable && max_f > 0.0 && p.tangent_impulse.abs() < STICK * max_f;
+        let max_f = friction * end.normal_impulse;
+        let stuck = measurable && max_f > 0.0 && end.tangent_impulse.abs() < STICK * max_f;
         p.slip = if stuck && p.stuck {
-            current_slip(a, b, p, dp_t)
+            current_slip(a, b, &end.slip, dp_t)
         } else {
             0.0
         };
         p.stuck = stuck;
-        p.normal_impulse *= substeps;
-        p.tangent_impulse *= substeps;
-        force += p.total_normal_impulse;
+        p.normal_impulse = end.normal_impulse * substeps;
+        p.tangent_impulse = end.tangent_impulse * substeps;
+        p.total_normal_impulse = end.total_normal_impulse;
+        force += end.total_normal_impulse;
     }
     // The force the contact carried, held so that a load that comes and goes does not
     // switch an island's work on and off every step (`Settings::adaptive_stiffness`), and
@@ -251,8 +294,8 @@ impl Stiffness {
     /// falls by at most [`HERTZ_DECAY`] per step: under a steady or bouncing load the spring
     /// stays put. That hold is not enough for a big pile (1,668 of 2,000 piled boxes still
     /// moving after 10 s, against 1,861 without it), which is why stiffening is off by default
-    /// (`Settings::load_aware_stiffness`).
-    fn softness(&self, c: &mut Contact) -> Softness {
+    /// (`Settings::load_aware_stiffness`). `points` are the contact's constraints this step.
+    fn softness(&self, c: &mut Contact, points: &[PointConstraint; 2]) -> Softness {
         let base = if c.touches_static {
             self.static_hertz
         } else {
@@ -262,9 +305,9 @@ impl Stiffness {
         if self.max_hertz > base {
             let mut force: Real = 0.0;
             let mut mass = Real::INFINITY;
-            for p in &c.points[..c.count] {
+            for (p, k) in c.points[..c.count].iter().zip(points) {
                 force = force.max(p.normal_impulse / self.h);
-                mass = mass.min(p.normal_mass);
+                mass = mass.min(k.normal_mass);
             }
             let mut wanted = base;
             if force > 0.0 && mass > 0.0 && mass.is_finite() {
@@ -288,48 +331,44 @@ const HERTZ_DECAY: Real = 0.98;
 /// slip is kept for the next step's friction anchor.
 const STICK: Real = 0.99;
 
-/// Effective masses, adjusted separations, approach speeds and springs, once per step; the
-/// impulses carried from the last step become per substep (`per_substep` = 1 / substeps).
-/// Returns whether any contact has restitution (if none, the restitution pass, a walk over
-/// every contact, is left out).
+/// Contact `c`'s constraint for this step (effective masses, adjusted separations, approach
+/// speeds, spring, block) between bodies `a` and `b`; the impulses it carries from the last
+/// step become per substep (`per_substep` = 1 / substeps).
+#[inline(always)]
 fn prepare(
-    bodies: &mut [SolverBody],
-    contacts: &mut [Contact],
-    selected: Selected,
+    a: &SolverBody,
+    b: &SolverBody,
+    c: &mut Contact,
     warm_starting: bool,
     per_substep: Real,
     stiffness: &Stiffness,
-) -> bool {
-    let mut bouncy = false;
-    selected.for_each(contacts, |c| {
-        bouncy |= c.restitution != 0.0;
-        let n = c.normal;
-        let t = c.tangent();
-        let (a, b) = pair_mut(bodies, c.a, c.b);
-        for p in &mut c.points[..c.count] {
-            p.normal_impulse *= per_substep;
-            p.tangent_impulse *= per_substep;
-            p.arms = Arms::new(p.anchor_a, p.anchor_b, n, t);
-            point_masses(a, b, p, n, t);
-            p.adjusted_separation = p.separation - (p.arms.rb_n - p.arms.ra_n);
-            p.adjusted_slip = p.slip - (p.arms.rb_t - p.arms.ra_t);
-            p.relative_velocity = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
-            p.max_normal_impulse = 0.0;
-            p.total_normal_impulse = 0.0;
-            if !warm_starting {
-                p.normal_impulse = 0.0;
-                p.tangent_impulse = 0.0;
-            }
+) -> ContactConstraint {
+    let n = c.normal;
+    let t = c.tangent();
+    let mut k = ContactConstraint::default();
+    for (p, kp) in c.points[..c.count].iter_mut().zip(&mut k.points) {
+        p.normal_impulse *= per_substep;
+        p.tangent_impulse *= per_substep;
+        let arms = Arms::new(p.anchor_a, p.anchor_b, n, t);
+        kp.arms = arms;
+        point_masses(a, b, p, kp, n, t);
+        kp.adjusted_separation = p.separation - (arms.rb_n - arms.ra_n);
+        kp.adjusted_slip = p.slip - (arms.rb_t - arms.ra_t);
+        kp.relative_velocity = relative_velocity(a, b, n, arms.rn_a, arms.rn_b);
+        p.total_normal_impulse = 0.0;
+        if !warm_starting {
+            p.normal_impulse = 0.0;
+            p.tangent_impulse = 0.0;
         }
-        c.softness = stiffness.softness(c);
-        c.creep = if stiffness.creep > 0.0 {
-            stiffness.creep * creep(c, a.inv_mass + b.inv_mass)
-        } else {
-            0.0
-        };
-        c.block = BlockMass::of_contact(a, b, c);
-    });
-    bouncy
+    }
+    k.softness = stiffness.softness(c, &k.points);
+    k.creep = if stiffness.creep > 0.0 {
+        stiffness.creep * creep(c, k.softness, a.inv_mass + b.inv_mass)
+    } else {
+        0.0
+    };
+    k.block = BlockMass::of_contact(a, b, c);
+    k
 }
 
 /// Creep: the compression (m) at which the contact's spring would carry, in translation, the
@@ -349,14 +388,13 @@ fn prepare(
 /// a two-point contact, and a jittered 20-box stack on the base settings was thrown over.
 /// The load is the contact's held load (`Contact::load`), so the one-step spike of an impact
 /// makes nothing creep, and a contact younger than [`CREEP_FROM_AGE`] steps does not creep.
-/// `inv_mass` is 1/mA + 1/mB (1/kg).
-fn creep(c: &Contact, inv_mass: Real) -> Real {
+/// `sf` is the contact's spring this step; `inv_mass` is 1/mA + 1/mB (1/kg).
+fn creep(c: &Contact, sf: Softness, inv_mass: Real) -> Real {
     if c.force <= 0.0 || inv_mass <= 0.0 || c.age < CREEP_FROM_AGE {
         return 0.0;
     }
     let steady = (c.load / c.force).min(1.0);
     let impulse: Real = c.points[..c.count].iter().map(|p| p.normal_impulse).sum();
-    let sf = c.softness;
     let stiffness = sf.mass_scale * sf.bias_rate;
     if stiffness > 0.0 {
         steady * sf.impulse_scale * impulse * inv_mass / stiffness
@@ -374,21 +412,23 @@ fn creep(c: &Contact, inv_mass: Real) -> Real {
 /// base-134 pyramid.
 const CREEP_FROM_AGE: u8 = 4;
 
-/// Apply one contact's accumulated impulses at the start of a substep.
-fn warm_start(bodies: &mut [SolverBody], c: &mut Contact) {
+/// Apply one contact's accumulated impulses at the start of a substep (`k`: its constraint).
+fn warm_start(bodies: &mut [SolverBody], c: &mut Contact, k: &ContactConstraint) {
     let (n, t) = (c.normal, c.tangent());
     let (a, b) = pair_mut(bodies, c.a, c.b);
-    for p in &mut c.points[..c.count] {
+    for (p, k) in c.points[..c.count].iter_mut().zip(&k.points) {
         p.total_normal_impulse += p.normal_impulse;
-        apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, p.normal_impulse);
-        apply_along(a, b, t, p.arms.rt_a, p.arms.rt_b, p.tangent_impulse);
+        apply_along(a, b, n, k.arms.rn_a, k.arms.rn_b, p.normal_impulse);
+        apply_along(a, b, t, k.arms.rt_a, k.arms.rt_b, p.tangent_impulse);
     }
 }
 
-/// Solve one contact: with the soft bias (`use_bias`), or the relax pass without.
+/// Solve one contact (`k`: its constraint): with the soft bias (`use_bias`), or the relax
+/// pass without.
 fn solve_contact(
     bodies: &mut [SolverBody],
     c: &mut Contact,
+    k: &mut ContactConstraint,
     inv_h: Real,
     use_bias: bool,
     max_push_out: Real,
@@ -396,7 +436,7 @@ fn solve_contact(
     {
         let n = c.normal;
         let t = c.tangent();
-        let (sf, creep) = (c.softness, c.creep);
+        let (sf, creep) = (k.softness, k.creep);
         let (a, b) = pair_mut(bodies, c.a, c.b);
         let dp_n = (b.dp - a.dp).dot(n);
 
@@ -404,7 +444,7 @@ fn solve_contact(
         // impulse = -m_eff (mass_scale vn + bias) - impulse_scale P, with
         // bias = mass_scale bias_rate s capped at the push-out speed.
         let mut coeffs = [(0.0, 1.0, 0.0); 2];
-        for (p, coeff) in c.points[..c.count].iter().zip(coeffs.iter_mut()) {
+        for (p, coeff) in k.points[..c.count].iter().zip(coeffs.iter_mut()) {
             // Current separation from how far the bodies moved this step:
             // s = s0 + (dpB - dpA) . n + (qB rB - rB) . n - (qA rA - rA) . n, where for a
             // rotation q = (c, s): (q r) . n = c (r . n) + s (r x n).
@@ -426,18 +466,22 @@ fn solve_contact(
             };
         }
 
-        let solved = match &c.block {
-            Some(block) if c.count == 2 => block_normal(a, b, &mut c.points, n, block, &coeffs),
+        let solved = match &k.block {
+            Some(block) if c.count == 2 => {
+                block_normal(a, b, &mut c.points, &mut k.points, n, block, &coeffs)
+            }
             _ => false,
         };
         if !solved {
-            for (p, &(bias, mass_scale, impulse_scale)) in
-                c.points[..c.count].iter_mut().zip(coeffs.iter())
+            for ((p, kp), &(bias, mass_scale, impulse_scale)) in c.points[..c.count]
+                .iter_mut()
+                .zip(&mut k.points)
+                .zip(coeffs.iter())
             {
-                let vn = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
+                let vn = relative_velocity(a, b, n, kp.arms.rn_a, kp.arms.rn_b);
                 let impulse =
-                    -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
-                accumulate_normal(a, b, n, p, impulse);
+                    -kp.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
+                accumulate_normal(a, b, n, p, kp, impulse);
             }
         }
 
@@ -445,23 +489,23 @@ fn solve_contact(
             return;
         }
         let dp_t = (b.dp - a.dp).dot(t);
-        for p in &mut c.points[..c.count] {
-            let vt = relative_velocity(a, b, t, p.arms.rt_a, p.arms.rt_b);
+        for (p, kp) in c.points[..c.count].iter_mut().zip(&k.points) {
+            let vt = relative_velocity(a, b, t, kp.arms.rt_a, kp.arms.rt_b);
             let max_f = c.friction * p.normal_impulse;
             // The friction anchor: with the bias, static friction also undoes the slip of a
             // point that began the step stuck, at the normal spring's rate (the relax passes then take the
             // velocity this adds back out, as they do the normal's).
             let bias = if use_bias && p.stuck {
-                (sf.mass_scale * sf.bias_rate * current_slip(a, b, p, dp_t))
+                (sf.mass_scale * sf.bias_rate * current_slip(a, b, &kp.slip(), dp_t))
                     .clamp(-max_push_out, max_push_out)
             } else {
                 0.0
             };
-            let impulse = -p.tangent_mass * (vt + bias);
+            let impulse = -kp.tangent_mass * (vt + bias);
             let total = (p.tangent_impulse + impulse).clamp(-max_f, max_f);
             let applied = total - p.tangent_impulse;
             p.tangent_impulse = total;
-            apply_along(a, b, t, p.arms.rt_a, p.arms.rt_b, applied);
+            apply_along(a, b, t, kp.arms.rt_a, kp.arms.rt_b, applied);
         }
     }
 }
@@ -469,29 +513,30 @@ fn solve_contact(
 /// A point's slip along the tangent now: the slip at the start of the step plus how far the
 /// bodies moved this step, as the separation is found (`(q r) . t = c (r . t) + s (r x t)`).
 #[inline]
-fn current_slip(a: &SolverBody, b: &SolverBody, p: &ContactPoint, dp_t: Real) -> Real {
-    let arms = &p.arms;
-    let rot_b = b.dq.c * arms.rb_t + b.dq.s * arms.rt_b;
-    let rot_a = a.dq.c * arms.ra_t + a.dq.s * arms.rt_a;
-    dp_t + rot_b - rot_a + p.adjusted_slip
+fn current_slip(a: &SolverBody, b: &SolverBody, slip: &Slip, dp_t: Real) -> Real {
+    let rot_b = b.dq.c * slip.rb_t + b.dq.s * slip.rt_b;
+    let rot_a = a.dq.c * slip.ra_t + a.dq.s * slip.rt_a;
+    dp_t + rot_b - rot_a + slip.adjusted
 }
 
 /// Add `impulse` (N s) to a point's accumulated normal impulse, clamped so that the total
-/// stays >= 0 (a contact pushes, never pulls), and apply to A and B only what was added.
+/// stays >= 0 (a contact pushes, never pulls), and apply to A and B only what was added
+/// (`k`: the point's constraint).
 #[inline]
 fn accumulate_normal(
     a: &mut SolverBody,
     b: &mut SolverBody,
     n: Vec2,
     p: &mut ContactPoint,
+    k: &mut PointConstraint,
     impulse: Real,
 ) {
     let total = (p.normal_impulse + impulse).max(0.0);
     let applied = total - p.normal_impulse;
     p.normal_impulse = total;
-    p.max_normal_impulse = p.max_normal_impulse.max(applied);
+    k.max_normal_impulse = k.max_normal_impulse.max(applied);
     p.total_normal_impulse += applied;
-    apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, applied);
+    apply_along(a, b, n, k.arms.rn_a, k.arms.rn_b, applied);
 }
 
 /// Both normal impulses of a two-point contact at once (see `solve_block_lcp`).
@@ -506,12 +551,13 @@ fn block_normal(
     a: &mut SolverBody,
     b: &mut SolverBody,
     points: &mut [ContactPoint; 2],
+    k: &mut [PointConstraint; 2],
     n: Vec2,
     block: &BlockMass,
     coeffs: &[(Real, Real, Real); 2],
 ) -> bool {
     let lambda = [points[0].normal_impulse, points[1].normal_impulse];
-    let vn = [0, 1].map(|i| relative_velocity(a, b, n, points[i].arms.rn_a, points[i].arms.rn_b));
+    let vn = [0, 1].map(|i| relative_velocity(a, b, n, k[i].arms.rn_a, k[i].arms.rn_b));
     let aim = |i: usize, free: Real| {
         let (bias, _, impulse_scale) = coeffs[i];
         impulse_scale * free - bias
@@ -519,26 +565,27 @@ fn block_normal(
     let Some(x) = block.solve(lambda, vn, aim) else {
         return false;
     };
-    for i in 0..2 {
-        let p = &mut points[i];
+    for (i, (p, k)) in points.iter_mut().zip(k.iter_mut()).enumerate() {
         let applied = x[i] - lambda[i];
         p.normal_impulse = x[i];
-        p.max_normal_impulse = p.max_normal_impulse.max(applied);
+        k.max_normal_impulse = k.max_normal_impulse.max(applied);
         p.total_normal_impulse += applied;
-        apply_along(a, b, n, p.arms.rn_a, p.arms.rn_b, applied);
+        apply_along(a, b, n, k.arms.rn_a, k.arms.rn_b, applied);
     }
     true
 }
 
 /// Reverse e times the pre-solve approach speed where it exceeded the threshold and the
-/// contact pushed.
+/// contact pushed (a contact with restitution keeps its constraint in `constraints`).
 fn restitution(
     bodies: &mut [SolverBody],
     contacts: &mut [Contact],
+    constraints: &mut [ContactConstraint],
     selected: Selected,
     threshold: Real,
 ) {
-    selected.for_each(contacts, |c| {
+    selected.for_each_index(contacts.len(), |i| {
+        let (c, k) = (&mut contacts[i], &mut constraints[i]);
         if c.restitution == 0.0 {
             return;
         }
@@ -546,27 +593,27 @@ fn restitution(
         let e = c.restitution;
         let (a, b) = pair_mut(bodies, c.a, c.b);
         let bounces =
-            |p: &ContactPoint| p.relative_velocity < -threshold && p.max_normal_impulse > 0.0;
-        if c.count == 2 && bounces(&c.points[0]) && bounces(&c.points[1]) {
+            |k: &PointConstraint| k.relative_velocity < -threshold && k.max_normal_impulse > 0.0;
+        if c.count == 2 && bounces(&k.points[0]) && bounces(&k.points[1]) {
             // Both points bounce: aim each at vn' = -e vn0 together, so a flat face hitting a
             // flat face rebounds by exactly e instead of whatever order the points were solved in.
             let coeffs = [
-                (e * c.points[0].relative_velocity, 1.0, 0.0),
-                (e * c.points[1].relative_velocity, 1.0, 0.0),
+                (e * k.points[0].relative_velocity, 1.0, 0.0),
+                (e * k.points[1].relative_velocity, 1.0, 0.0),
             ];
-            if c.block
-                .is_some_and(|block| block_normal(a, b, &mut c.points, n, &block, &coeffs))
-            {
-                return;
+            if let Some(block) = k.block {
+                if block_normal(a, b, &mut c.points, &mut k.points, n, &block, &coeffs) {
+                    return;
+                }
             }
         }
-        for p in &mut c.points[..c.count] {
-            if !bounces(p) {
+        for (p, kp) in c.points[..c.count].iter_mut().zip(&mut k.points) {
+            if !bounces(kp) {
                 continue;
             }
-            let vn = relative_velocity(a, b, n, p.arms.rn_a, p.arms.rn_b);
-            let impulse = -p.normal_mass * (vn + e * p.relative_velocity);
-            accumulate_normal(a, b, n, p, impulse);
+            let vn = relative_velocity(a, b, n, kp.arms.rn_a, kp.arms.rn_b);
+            let impulse = -kp.normal_mass * (vn + e * kp.relative_velocity);
+            accumulate_normal(a, b, n, p, kp, impulse);
         }
     });
 }

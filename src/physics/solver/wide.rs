@@ -11,7 +11,8 @@
 //! coincident points) one point after the other, in bundles of their own. Contacts beyond the
 //! last colour are solved by the scalar code after the bundles.
 
-use super::lanes::{eight_lanes_available, Lanes8, Wide};
+use super::constraint::{ContactConstraint, PointEnd, Slip};
+use super::lanes::{eight_lanes_available, prefetch, Lanes8, Wide};
 use super::{Selected, SolverBody};
 use crate::physics::contact::Contact;
 use crate::physics::math::{Lanes, Real};
@@ -135,14 +136,13 @@ impl Width {
 /// Buffers for the wide solve, kept by the World so a steady step does not allocate.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct WideSolver {
-    /// Four-lane bundles (used at [`Width::Four`]).
-    bundles4: Vec<Bundle<Lanes>>,
-    /// Eight-lane bundles (used at [`Width::Eight`]).
-    bundles8: Vec<Bundle<Lanes8>>,
+    /// Four-lane bundles (used at [`Width::Four`]) per (colour, kind), flattened as
+    /// colour * 2 + kind: solved in that order.
+    bundles4: Vec<Vec<Bundle<Lanes>>>,
+    /// Eight-lane bundles (used at [`Width::Eight`]), likewise.
+    bundles8: Vec<Vec<Bundle<Lanes8>>>,
     /// Colour mask per solver body: bit c set when a contact of colour c uses the body.
     colour_masks: Vec<u32>,
-    /// Contact indices per (colour, kind), flattened as colour * 2 + kind.
-    by_colour: Vec<Vec<u32>>,
     /// Contacts that found no colour: solved by the scalar code.
     pub overflow: Vec<u32>,
     /// Colours to try before a contact overflows ([`COLOURS`]; tests lower it to force the
@@ -255,54 +255,28 @@ impl<L: Wide> BodyLanes<L> {
 }
 
 impl WideSolver {
-    /// Colour the `selected` contacts and pack them into bundles. `bodies` must have one extra
-    /// fixed body at the end (index `bodies.len() - 1`) for empty lanes.
-    pub fn build(&mut self, bodies: &[SolverBody], contacts: &[Contact], selected: Selected) {
-        let dummy = (bodies.len() - 1) as u32;
+    /// Prepare, colour and pack the `selected` contacts, in one pass over them: `prepare`
+    /// gives a contact's constraint for this step (from the contact and its bodies A and B),
+    /// which goes straight into the lanes of its bundle. Contacts the colouring cannot place
+    /// ([`WideSolver::overflow`]) and contacts that bounce (the restitution pass reads them
+    /// after the solve) also keep their constraint in `constraints`, indexed like `contacts`.
+    /// `bodies` must have one extra fixed body at the end (index `bodies.len() - 1`) for empty
+    /// lanes.
+    pub fn build(
+        &mut self,
+        bodies: &[SolverBody],
+        contacts: &mut [Contact],
+        constraints: &mut [ContactConstraint],
+        selected: Selected,
+        prepare: impl FnMut(&mut Contact, &SolverBody, &SolverBody) -> ContactConstraint,
+    ) {
         debug_assert!(
             bodies.last().is_some_and(|d| d.inv_mass == 0.0),
             "the last solver body is the fixed dummy"
         );
         self.colour_masks.clear();
         self.colour_masks.resize(bodies.len(), 0);
-        self.by_colour.resize_with(COLOURS * 2, Vec::new);
-        for list in &mut self.by_colour {
-            list.clear();
-        }
         self.overflow.clear();
-        selected.for_each_index(contacts.len(), |i| {
-            let c = &contacts[i];
-            let dynamic_a = bodies[c.a as usize].inv_mass > 0.0;
-            let dynamic_b = bodies[c.b as usize].inv_mass > 0.0;
-            let used = (if dynamic_a {
-                self.colour_masks[c.a as usize]
-            } else {
-                0
-            }) | (if dynamic_b {
-                self.colour_masks[c.b as usize]
-            } else {
-                0
-            });
-            let colour = (!used).trailing_zeros() as usize;
-            if colour >= self.colours.unwrap_or(COLOURS) {
-                self.overflow.push(i as u32);
-                return;
-            }
-            let bit = 1u32 << colour;
-            if dynamic_a {
-                self.colour_masks[c.a as usize] |= bit;
-            }
-            if dynamic_b {
-                self.colour_masks[c.b as usize] |= bit;
-            }
-            let kind = if c.count == 2 && c.block.is_some() {
-                0
-            } else {
-                1
-            };
-            self.by_colour[colour * 2 + kind].push(i as u32);
-        });
-
         // Eight lanes only where the processor runs them (a test may ask for them anywhere),
         // and by default only for enough contacts to fill them.
         let width = match self.width {
@@ -312,9 +286,20 @@ impl WideSolver {
             None => Width::detect(),
         };
         self.built = Some(width);
+        let mut colouring = Colouring {
+            masks: &mut self.colour_masks,
+            overflow: &mut self.overflow,
+            colours: self.colours.unwrap_or(COLOURS).min(COLOURS),
+        };
+        let input = PackInput {
+            bodies,
+            contacts,
+            constraints,
+            selected,
+        };
         match width {
-            Width::Four => pack_all(&mut self.bundles4, &self.by_colour, contacts, bodies, dummy),
-            Width::Eight => pack_all(&mut self.bundles8, &self.by_colour, contacts, bodies, dummy),
+            Width::Four => pack_all(&mut self.bundles4, &mut colouring, input, prepare),
+            Width::Eight => pack_all(&mut self.bundles8, &mut colouring, input, prepare),
         }
     }
 
@@ -328,8 +313,8 @@ impl WideSolver {
 
     /// Zero the accumulated impulses (warm starting off).
     pub fn clear_impulses(&mut self) {
-        fn clear<L: Wide>(bundles: &mut [Bundle<L>]) {
-            for bundle in bundles {
+        fn clear<L: Wide>(bundles: &mut [Vec<Bundle<L>>]) {
+            for bundle in bundles.iter_mut().flatten() {
                 for p in &mut bundle.p {
                     p.normal_impulse = L::ZERO;
                     p.tangent_impulse = L::ZERO;
@@ -356,10 +341,14 @@ impl WideSolver {
         }
     }
 
-    /// Copy the lanes' impulses back to the contacts (for restitution, warm starting next
-    /// step, and what `World::contacts` reports), and run `then` on each contact as soon as
-    /// its impulses are in (the end-of-step work, while the contact is in cache).
-    pub fn store(&self, contacts: &mut [Contact], then: impl FnMut(&mut Contact)) {
+    /// Hand each contact, with its index, the ends of its points read out of the lanes
+    /// (impulses and what measures their slip), for the end-of-step work to write back (for
+    /// warm starting next step, what `World::contacts` reports, and restitution).
+    pub fn store(
+        &self,
+        contacts: &mut [Contact],
+        then: impl FnMut(&mut Contact, usize, &[PointEnd; 2]),
+    ) {
         match self.built {
             Some(Width::Eight) => store_bundles(&self.bundles8, contacts, then),
             _ => store_bundles(&self.bundles4, contacts, then),
@@ -374,7 +363,7 @@ mod eight {
     use super::{solve_bundles, warm_start_bundles, Bundle, Lanes8, Real, SolverBody};
 
     /// [`warm_start_bundles`] on eight lanes.
-    pub(super) fn warm_start(bundles: &mut [Bundle<Lanes8>], bodies: &mut [SolverBody]) {
+    pub(super) fn warm_start(bundles: &mut [Vec<Bundle<Lanes8>>], bodies: &mut [SolverBody]) {
         #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
         // SAFETY: eight-lane bundles exist only where the processor has AVX2.
         unsafe {
@@ -386,7 +375,7 @@ mod eight {
 
     /// [`solve_bundles`] on eight lanes.
     pub(super) fn solve(
-        bundles: &mut [Bundle<Lanes8>],
+        bundles: &mut [Vec<Bundle<Lanes8>>],
         bodies: &mut [SolverBody],
         inv_h: Real,
         use_bias: bool,
@@ -405,7 +394,7 @@ mod eight {
     /// The processor must have AVX2.
     #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
     #[target_feature(enable = "avx2")]
-    unsafe fn warm_start_avx2(bundles: &mut [Bundle<Lanes8>], bodies: &mut [SolverBody]) {
+    unsafe fn warm_start_avx2(bundles: &mut [Vec<Bundle<Lanes8>>], bodies: &mut [SolverBody]) {
         warm_start_bundles(bundles, bodies);
     }
 
@@ -414,7 +403,7 @@ mod eight {
     #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
     #[target_feature(enable = "avx2")]
     unsafe fn solve_avx2(
-        bundles: &mut [Bundle<Lanes8>],
+        bundles: &mut [Vec<Bundle<Lanes8>>],
         bodies: &mut [SolverBody],
         inv_h: Real,
         use_bias: bool,
@@ -426,8 +415,8 @@ mod eight {
 
 /// Apply each contact's accumulated impulses (the warm start of a substep).
 #[inline(always)]
-fn warm_start_bundles<L: Wide>(bundles: &mut [Bundle<L>], bodies: &mut [SolverBody]) {
-    for bundle in bundles {
+fn warm_start_bundles<L: Wide>(bundles: &mut [Vec<Bundle<L>>], bodies: &mut [SolverBody]) {
+    for bundle in bundles.iter_mut().flatten() {
         let (mut a, mut b) = bundle.gather(bodies, false);
         let (nx, ny) = (bundle.nx, bundle.ny);
         let (tx, ty) = (ny, -nx);
@@ -444,7 +433,7 @@ fn warm_start_bundles<L: Wide>(bundles: &mut [Bundle<L>], bodies: &mut [SolverBo
 /// One pass over every bundle, with the soft bias (`use_bias`) or the relax pass without.
 #[inline(always)]
 fn solve_bundles<L: Wide>(
-    bundles: &mut [Bundle<L>],
+    bundles: &mut [Vec<Bundle<L>>],
     bodies: &mut [SolverBody],
     inv_h: Real,
     use_bias: bool,
@@ -452,7 +441,7 @@ fn solve_bundles<L: Wide>(
 ) {
     let inv_h = L::splat(inv_h);
     let push_out = L::splat(-max_push_out);
-    for bundle in bundles {
+    for bundle in bundles.iter_mut().flatten() {
         let (mut a, mut b) = bundle.gather(bodies, true);
         let (nx, ny) = (bundle.nx, bundle.ny);
         let dp_n = (b.dpx - a.dpx) * nx + (b.dpy - a.dpy) * ny;
@@ -586,20 +575,37 @@ fn coefficients<L: Wide>(
     )
 }
 
-/// Copy the lanes' impulses back to the contacts. Each field's lanes are read out once per
-/// bundle, not once per lane.
+/// Hand each contact its points' ends (see [`WideSolver::store`]). Each field's lanes are
+/// read out once per bundle, not once per lane.
 fn store_bundles<L: Wide>(
-    bundles: &[Bundle<L>],
+    bundles: &[Vec<Bundle<L>>],
     contacts: &mut [Contact],
-    mut then: impl FnMut(&mut Contact),
+    mut then: impl FnMut(&mut Contact, usize, &[PointEnd; 2]),
 ) {
-    for bundle in bundles {
+    // Bundles hold contacts from all over the array: while one bundle's are stored, the next
+    // bundle's are fetched (storing waited on those loads for three quarters of its time).
+    let mut bundles = bundles.iter().flatten().peekable();
+    while let Some(bundle) = bundles.next() {
+        if let Some(next) = bundles.peek() {
+            for &ci in next.contact.as_ref() {
+                if let Some(c) = contacts.get(ci as usize) {
+                    prefetch(c);
+                }
+            }
+        }
+        // r . t is r x n and r x t is -(r . n) (`PointLanes::tangent_arms`).
         let fields = bundle.p.each_ref().map(|p| {
+            let (rt_a, rt_b) = p.tangent_arms();
             [
                 p.normal_impulse,
                 p.tangent_impulse,
                 p.total_normal_impulse,
                 p.max_normal_impulse,
+                p.rn_a,
+                p.rn_b,
+                rt_a,
+                rt_b,
+                p.adjusted_slip,
             ]
             .map(L::to_lanes)
         });
@@ -607,13 +613,24 @@ fn store_bundles<L: Wide>(
             let Some(c) = contacts.get_mut(ci as usize) else {
                 continue;
             };
-            for (p, [normal, tangent, total, max]) in c.points[..c.count].iter_mut().zip(&fields) {
-                p.normal_impulse = normal.as_ref()[lane];
-                p.tangent_impulse = tangent.as_ref()[lane];
-                p.total_normal_impulse = total.as_ref()[lane];
-                p.max_normal_impulse = max.as_ref()[lane];
-            }
-            then(c);
+            let ends = fields.each_ref().map(|f| {
+                let [normal, tangent, total, max, ra_t, rb_t, rt_a, rt_b, adjusted] =
+                    f.each_ref().map(|x| x.as_ref()[lane]);
+                PointEnd {
+                    normal_impulse: normal,
+                    tangent_impulse: tangent,
+                    total_normal_impulse: total,
+                    max_normal_impulse: max,
+                    slip: Slip {
+                        ra_t,
+                        rb_t,
+                        rt_a,
+                        rt_b,
+                        adjusted,
+                    },
+                }
+            });
+            then(c, ci as usize, &ends);
         }
     }
 }
@@ -644,36 +661,100 @@ fn block_lcp<L: Wide>(bundle: &Bundle<L>, r0: L, r1: L, l0: L, l1: L) -> (L, L) 
     (x0, x1)
 }
 
-/// Pack every (colour, kind) list into bundles of `L::WIDTH`, in colour order.
+/// The greedy colouring's state: a colour mask per solver body, the contacts that found no
+/// colour, and how many colours to try.
+struct Colouring<'a> {
+    masks: &'a mut [u32],
+    overflow: &'a mut Vec<u32>,
+    colours: usize,
+}
+
+impl Colouring<'_> {
+    /// The first colour no dynamic body of the pair (`dynamic_a`, `dynamic_b`: whether each
+    /// is) has used yet, now marked used by both; None when all are taken.
+    #[inline(always)]
+    fn colour(&mut self, a: u32, b: u32, dynamic_a: bool, dynamic_b: bool) -> Option<usize> {
+        let mask = |dynamic: bool, i: u32| if dynamic { self.masks[i as usize] } else { 0 };
+        let used = mask(dynamic_a, a) | mask(dynamic_b, b);
+        let colour = (!used).trailing_zeros() as usize;
+        if colour >= self.colours {
+            return None;
+        }
+        let bit = 1u32 << colour;
+        if dynamic_a {
+            self.masks[a as usize] |= bit;
+        }
+        if dynamic_b {
+            self.masks[b as usize] |= bit;
+        }
+        Some(colour)
+    }
+}
+
+/// What a build reads: the bodies, the contacts (and the slots for kept constraints), and
+/// which contacts to solve.
+struct PackInput<'a, 'b> {
+    bodies: &'a [SolverBody],
+    contacts: &'a mut [Contact],
+    constraints: &'a mut [ContactConstraint],
+    selected: Selected<'b>,
+}
+
+/// Prepare and colour each selected contact in key order and write it into the open bundle
+/// of its (colour, kind), `L::WIDTH` contacts to a bundle (so each colour's bundles hold the
+/// same contacts, in the same order, as if the contacts had been grouped first).
 ///
-/// Each bundle starts as a copy of one inert bundle and each contact's fields are written
-/// into their lanes where the bundle lives: one pass over the bundle's 1.7 kB instead of
-/// filling lane-major scratch, transposing it and moving the result (that was 13 % of
-/// large_pyramid's step).
+/// Each bundle starts as a copy of one inert bundle and each contact's constraint is written
+/// into its lanes where the bundle lives: the constraint never passes through memory, and the
+/// open bundles (one per colour and kind) stay in cache while they fill. Preparing the
+/// contacts into themselves and packing them in a second pass read and wrote each 400-byte
+/// contact twice.
 fn pack_all<L: Wide>(
-    bundles: &mut Vec<Bundle<L>>,
-    by_colour: &[Vec<u32>],
-    contacts: &[Contact],
-    bodies: &[SolverBody],
-    dummy: u32,
+    bundles: &mut Vec<Vec<Bundle<L>>>,
+    colouring: &mut Colouring,
+    input: PackInput,
+    mut prepare: impl FnMut(&mut Contact, &SolverBody, &SolverBody) -> ContactConstraint,
 ) {
-    bundles.clear();
+    let PackInput {
+        bodies,
+        contacts,
+        constraints,
+        selected,
+    } = input;
+    let dummy = (bodies.len() - 1) as u32;
+    bundles.resize_with(COLOURS * 2, Vec::new);
+    for list in bundles.iter_mut() {
+        list.clear();
+    }
     let inert = Bundle::<L>::inert(dummy);
-    for (slot, list) in by_colour.iter().enumerate() {
-        let kind = if slot % 2 == 0 {
+    let mut filled = [0usize; COLOURS * 2];
+    selected.for_each_index(contacts.len(), |i| {
+        let c = &mut contacts[i];
+        let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
+        let k = prepare(c, a, b);
+        let Some(colour) = colouring.colour(c.a, c.b, a.inv_mass > 0.0, b.inv_mass > 0.0) else {
+            constraints[i] = k;
+            colouring.overflow.push(i as u32);
+            return;
+        };
+        if c.restitution != 0.0 {
+            constraints[i] = k;
+        }
+        let kind = if c.count == 2 && k.block.is_some() {
             Kind::Block
         } else {
             Kind::Points
         };
-        for chunk in list.chunks(L::WIDTH) {
-            bundles.push(inert);
-            let bundle = bundles.last_mut().expect("just pushed");
-            bundle.kind = kind;
-            for (lane, &ci) in chunk.iter().enumerate() {
-                bundle.set_contact(lane, ci, &contacts[ci as usize], bodies);
-            }
+        let slot = colour * 2 + kind as usize;
+        let lane = filled[slot] % L::WIDTH;
+        filled[slot] += 1;
+        let list = &mut bundles[slot];
+        if lane == 0 {
+            list.push(Bundle { kind, ..inert });
         }
-    }
+        let bundle = list.last_mut().expect("a bundle is open");
+        bundle.set_contact(lane, i as u32, c, &k, bodies);
+    });
 }
 
 impl<L: Wide> Bundle<L> {
@@ -722,14 +803,22 @@ impl<L: Wide> Bundle<L> {
         }
     }
 
-    /// Write contact `c` (index `ci`) into lane `lane`. A contact without a usable block
-    /// keeps the inert identity; a one-point contact leaves its second point's lanes zero.
+    /// Write contact `c` (index `ci`) with its constraint `k` into lane `lane`. A contact
+    /// without a usable block keeps the inert identity; a one-point contact leaves its second
+    /// point's lanes zero.
     #[inline(always)]
-    fn set_contact(&mut self, lane: usize, ci: u32, c: &Contact, bodies: &[SolverBody]) {
+    fn set_contact(
+        &mut self,
+        lane: usize,
+        ci: u32,
+        c: &Contact,
+        k: &ContactConstraint,
+        bodies: &[SolverBody],
+    ) {
         self.contact.as_mut()[lane] = ci;
         self.a.as_mut()[lane] = c.a;
         self.b.as_mut()[lane] = c.b;
-        let sf = c.softness;
+        let sf = k.softness;
         let (body_a, body_b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
         for (field, x) in [
             (&mut self.nx, c.normal.x),
@@ -738,7 +827,7 @@ impl<L: Wide> Bundle<L> {
             (&mut self.bias_rate, sf.bias_rate),
             (&mut self.mass_scale, sf.mass_scale),
             (&mut self.impulse_scale, sf.impulse_scale),
-            (&mut self.creep, c.creep),
+            (&mut self.creep, k.creep),
             (&mut self.inv_mass_a, body_a.inv_mass),
             (&mut self.inv_i_a, body_a.inv_inertia),
             (&mut self.inv_mass_b, body_b.inv_mass),
@@ -746,7 +835,7 @@ impl<L: Wide> Bundle<L> {
         ] {
             field.set_lane(lane, x);
         }
-        if let Some(m) = &c.block {
+        if let Some(m) = &k.block {
             for (field, x) in [
                 (&mut self.k00, m.k[0][0]),
                 (&mut self.k01, m.k[0][1]),
@@ -758,22 +847,22 @@ impl<L: Wide> Bundle<L> {
                 field.set_lane(lane, x);
             }
         }
-        for (v, p) in self.p.iter_mut().zip(&c.points[..c.count]) {
-            let arms = p.arms;
+        for ((v, p), kp) in self.p.iter_mut().zip(&c.points[..c.count]).zip(&k.points) {
+            let arms = kp.arms;
             for (field, x) in [
                 (&mut v.rn_a, arms.rn_a),
                 (&mut v.rn_b, arms.rn_b),
                 (&mut v.ra_n, arms.ra_n),
                 (&mut v.rb_n, arms.rb_n),
-                (&mut v.adjusted_separation, p.adjusted_separation),
-                (&mut v.adjusted_slip, p.adjusted_slip),
+                (&mut v.adjusted_separation, kp.adjusted_separation),
+                (&mut v.adjusted_slip, kp.adjusted_slip),
                 (&mut v.anchor, if p.stuck { 1.0 } else { 0.0 }),
-                (&mut v.normal_mass, p.normal_mass),
-                (&mut v.tangent_mass, p.tangent_mass),
+                (&mut v.normal_mass, kp.normal_mass),
+                (&mut v.tangent_mass, kp.tangent_mass),
                 (&mut v.normal_impulse, p.normal_impulse),
                 (&mut v.tangent_impulse, p.tangent_impulse),
                 (&mut v.total_normal_impulse, p.total_normal_impulse),
-                (&mut v.max_normal_impulse, p.max_normal_impulse),
+                (&mut v.max_normal_impulse, kp.max_normal_impulse),
             ] {
                 field.set_lane(lane, x);
             }

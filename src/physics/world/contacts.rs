@@ -144,13 +144,10 @@ impl World {
                 touches_static: a.inv_mass == 0.0 || b.inv_mass == 0.0,
                 points: [ContactPoint::default(); 2],
                 count: manifold.count,
-                softness: Softness::RIGID,
-                creep: 0.0,
                 hertz: previous.map_or(0.0, |c| c.hertz),
                 load: previous.map_or(0.0, |c| c.load),
                 force: previous.map_or(0.0, |c| c.force),
                 age: previous.map_or(0, |c| c.age.saturating_add(1)),
-                block: None,
                 local_normal: xf_a.q.inv_rotate(manifold.normal),
                 base_rotation: relative_rotation(xf_a.q, xf_b.q),
             };

@@ -13,7 +13,7 @@ use super::contact::{Contact, ContactInfo, ContactPoint, ContactPointInfo};
 use super::error::{finite, finite_vec, positive, PhysicsError};
 use super::math::{cross, Real, Rot, Vec2};
 use super::settings::{Settings, SolverKind};
-use super::solver::soft_step::Softness;
+use super::solver::constraint::ContactConstraint;
 use super::solver::wide::WideSolver;
 use super::solver::{self, clamp_speed, Limits, Moving, Selected, SolverBody};
 
@@ -55,6 +55,9 @@ pub struct World {
     /// Contacts between bodies that sleep (or sleep and static): kept for warm starting and to
     /// wake islands, never solved.
     sleeping_contacts: Vec<Contact>,
+    /// This step's constraint per contact, where the scalar code solves it (see
+    /// `solver::constraint`); indexed like `contacts`.
+    constraints: Vec<ContactConstraint>,
     solver_bodies: Vec<SolverBody>,
     wide: WideSolver,
     split_impulse: solver::sequential::SplitImpulse,
@@ -111,6 +114,7 @@ impl World {
             contacts: Vec::new(),
             previous: Vec::new(),
             sleeping_contacts: Vec::new(),
+            constraints: Vec::new(),
             solver_bodies: Vec::new(),
             wide: WideSolver::default(),
             split_impulse: Default::default(),

@@ -6,20 +6,20 @@
 //! body, forces and sleep state included), the free list, time and step count, settings,
 //! gravity, and the persistent contacts (awake and sleeping) with their warm-start impulses.
 //! The broad phase is rebuilt from the bodies: its output is sorted, so its internal order
-//! does not change what a step computes. Per-step scratch buffers are not stored.
+//! does not change what a step computes. Per-step scratch buffers, and the contacts' per-step
+//! constraints (arms, effective masses, springs: worked out afresh by every step before
+//! anything reads them), are not stored.
 //!
 //! A child module of `world`, so it reads the World's private fields without widening their
 //! visibility. One concept over 600 lines: the state's shape, its export, and its checked
 //! import (every field validated before anything is replaced).
 
 use super::super::body::{Body, BodyId};
-use super::super::contact::{Arms, Contact, ContactPoint};
+use super::super::contact::{Contact, ContactPoint};
 use super::super::hash::Fnv1a;
 use super::super::math::{Real, Rot, Vec2};
 use super::super::settings::Settings;
 use super::super::shape::Shape;
-use super::super::solver::soft_step::Softness;
-use super::super::solver::BlockMass;
 use super::{Slot, World};
 use serde::{Deserialize, Serialize};
 
@@ -79,13 +79,11 @@ pub struct PointState {
     pub id: u16,
     /// point.x, point.y, separation, anchor_a.x, anchor_a.y, anchor_b.x, anchor_b.y, slip.
     pub geometry: [Real; 8],
-    /// normal, tangent, total normal and max normal impulse.
-    pub impulses: [Real; 4],
-    /// Lever arms: rn_a, rn_b, rt_a, rt_b, ra_n, rb_n, ra_t, rb_t.
-    pub arms: [Real; 8],
-    /// normal_mass, tangent_mass, adjusted_separation, relative_velocity, approach_velocity,
-    /// bias, adjusted_slip.
-    pub solver: [Real; 7],
+    /// normal, tangent and total normal impulse (N s).
+    pub impulses: [Real; 3],
+    /// Sequential solver: the approach velocity of a speculative point that closed its gap
+    /// (m/s).
+    pub approach_velocity: Real,
     /// Static friction held the point at the end of the last step (its slip counts).
     pub stuck: bool,
     /// Contact recycling: local_a.x, local_a.y, local_b.x, local_b.y, base separation.
@@ -112,8 +110,6 @@ pub struct ContactState {
     pub touches_static: bool,
     /// The live points (1 or 2).
     pub points: Vec<PointState>,
-    /// Soft step spring: bias_rate, mass_scale, impulse_scale.
-    pub softness: [Real; 3],
     /// Soft step spring frequency last step (Hz).
     pub hertz: Real,
     /// Normal force carried, held from step to step (N): adaptive stiffness reads it.
@@ -122,8 +118,6 @@ pub struct ContactState {
     pub force: Real,
     /// Steps in contact (saturating at 255).
     pub age: u8,
-    /// Block solver matrices k and inv, row major.
-    pub block: Option<[Real; 8]>,
     /// Contact recycling: the normal in A's frame and B's rotation relative to A's (cos,
     /// sin) when the manifold was computed. Checkpoint format version 6 on.
     pub recycle: [Real; 4],
@@ -172,22 +166,8 @@ fn contact_state(c: &Contact) -> ContactState {
                 p.anchor_b.y,
                 p.slip,
             ],
-            impulses: [
-                p.normal_impulse,
-                p.tangent_impulse,
-                p.total_normal_impulse,
-                p.max_normal_impulse,
-            ],
-            arms: p.arms.to_words(),
-            solver: [
-                p.normal_mass,
-                p.tangent_mass,
-                p.adjusted_separation,
-                p.relative_velocity,
-                p.approach_velocity,
-                p.bias,
-                p.adjusted_slip,
-            ],
+            impulses: [p.normal_impulse, p.tangent_impulse, p.total_normal_impulse],
+            approach_velocity: p.approach_velocity,
             stuck: p.stuck,
             recycle: [
                 p.local_a.x,
@@ -207,7 +187,6 @@ fn contact_state(c: &Contact) -> ContactState {
         restitution: c.restitution,
         touches_static: c.touches_static,
         points,
-        softness: c.softness.to_words(),
         hertz: c.hertz,
         load: c.load,
         force: c.force,
@@ -218,18 +197,6 @@ fn contact_state(c: &Contact) -> ContactState {
             c.base_rotation.c,
             c.base_rotation.s,
         ],
-        block: c.block.map(|b| {
-            [
-                b.k[0][0],
-                b.k[0][1],
-                b.k[1][0],
-                b.k[1][1],
-                b.inv[0][0],
-                b.inv[0][1],
-                b.inv[1][0],
-                b.inv[1][1],
-            ]
-        }),
     }
 }
 
@@ -277,14 +244,12 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             s.force,
         ],
     )?;
-    finite_all("contact softness", &s.softness)?;
     finite_all("contact recycling", &s.recycle)?;
     let mut points = [ContactPoint::default(); 2];
     for (out, p) in points.iter_mut().zip(&s.points) {
         finite_all("contact point", &p.geometry)?;
         finite_all("contact point", &p.impulses)?;
-        finite_all("contact point", &p.arms)?;
-        finite_all("contact point", &p.solver)?;
+        finite_all("contact point", &[p.approach_velocity])?;
         finite_all("contact point", &p.recycle)?;
         let g = &p.geometry;
         *out = ContactPoint {
@@ -297,15 +262,7 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             normal_impulse: p.impulses[0],
             tangent_impulse: p.impulses[1],
             total_normal_impulse: p.impulses[2],
-            max_normal_impulse: p.impulses[3],
-            arms: Arms::from_words(p.arms),
-            normal_mass: p.solver[0],
-            tangent_mass: p.solver[1],
-            adjusted_separation: p.solver[2],
-            relative_velocity: p.solver[3],
-            approach_velocity: p.solver[4],
-            bias: p.solver[5],
-            adjusted_slip: p.solver[6],
+            approach_velocity: p.approach_velocity,
             stuck: p.stuck,
             local_a: Vec2::new(p.recycle[0], p.recycle[1]),
             local_b: Vec2::new(p.recycle[2], p.recycle[3]),
@@ -313,16 +270,6 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             ..ContactPoint::default()
         };
     }
-    let block = match s.block {
-        Some(b) => {
-            finite_all("contact block", &b)?;
-            Some(BlockMass {
-                k: [[b[0], b[1]], [b[2], b[3]]],
-                inv: [[b[4], b[5]], [b[6], b[7]]],
-            })
-        }
-        None => None,
-    };
     Ok(Contact {
         key: s.key,
         a: s.a,
@@ -333,14 +280,10 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
         touches_static: s.touches_static,
         points,
         count: s.points.len(),
-        softness: Softness::from_words(s.softness),
-        // Found again by the next step's `prepare` before anything reads it.
-        creep: 0.0,
         hertz: s.hertz,
         load: s.load,
         force: s.force,
         age: s.age,
-        block,
         local_normal: Vec2::new(s.recycle[0], s.recycle[1]),
         base_rotation: Rot {
             c: s.recycle[2],

@@ -2,6 +2,7 @@
 
 use super::islands::{CREEP, RELAX_SCALE, SUBSTEP_QUARTERS, TIERS};
 use super::*;
+use crate::physics::solver::constraint::ContactConstraint;
 use crate::physics::solver::soft_step::Work;
 
 impl World {
@@ -26,6 +27,10 @@ impl World {
             max_rotation: self.settings.max_rotation,
         };
         self.find_contacts(dt, self.settings.speculative_distance);
+        // One constraint slot per contact. Only the scalar code's contacts use theirs, and
+        // each writes its own before reading it, so the slots are not cleared.
+        self.constraints
+            .resize(self.contacts.len(), ContactConstraint::default());
         self.load_solver_bodies();
         match self.settings.solver {
             SolverKind::Sequential => {
@@ -33,6 +38,7 @@ impl World {
                 solver::sequential::solve(
                     &mut self.solver_bodies,
                     &mut self.contacts,
+                    &mut self.constraints,
                     &self.settings,
                     dt,
                 );
@@ -40,6 +46,7 @@ impl World {
                 self.split_impulse.correct(
                     &mut self.solver_bodies,
                     &self.contacts,
+                    &self.constraints,
                     &self.settings,
                     dt,
                 );
@@ -70,6 +77,7 @@ impl World {
                 &mut self.solver_bodies,
                 Moving::All,
                 &mut self.contacts,
+                &mut self.constraints,
                 Selected::All,
                 &mut self.wide,
                 Work {
@@ -145,6 +153,7 @@ impl World {
                     Moving::Only(&self.tier_bodies)
                 },
                 &mut self.contacts,
+                &mut self.constraints,
                 selected,
                 &mut self.wide,
                 Work {

@@ -115,9 +115,9 @@ pub(crate) fn solve(
     // its bundle's lanes (see `wide`): one pass over the contacts. The few the colouring could
     // not place are solved here one by one, after the bundles.
     let mut bouncy = false;
-    wide.build(bodies, contacts, constraints, selected, |c, a, b| {
+    wide.build(bodies, contacts, constraints, selected, |c, a, b, k| {
         bouncy |= c.restitution != 0.0;
-        prepare(a, b, c, warm_starting, per_substep, &stiffness)
+        prepare(a, b, c, k, warm_starting, per_substep, &stiffness);
     });
 
     for _ in 0..substeps {
@@ -331,21 +331,22 @@ const HERTZ_DECAY: Real = 0.98;
 /// slip is kept for the next step's friction anchor.
 const STICK: Real = 0.99;
 
-/// Contact `c`'s constraint for this step (effective masses, adjusted separations, approach
-/// speeds, spring, block) between bodies `a` and `b`; the impulses it carries from the last
-/// step become per substep (`per_substep` = 1 / substeps).
+/// Work out contact `c`'s constraint `k` for this step (effective masses, adjusted
+/// separations, approach speeds, spring, block) between bodies `a` and `b`; the impulses it
+/// carries from the last step become per substep (`per_substep` = 1 / substeps).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn prepare(
     a: &SolverBody,
     b: &SolverBody,
     c: &mut Contact,
+    k: &mut ContactConstraint,
     warm_starting: bool,
     per_substep: Real,
     stiffness: &Stiffness,
-) -> ContactConstraint {
+) {
     let n = c.normal;
     let t = c.tangent();
-    let mut k = ContactConstraint::default();
     for (p, kp) in c.points[..c.count].iter_mut().zip(&mut k.points) {
         p.normal_impulse *= per_substep;
         p.tangent_impulse *= per_substep;
@@ -355,6 +356,7 @@ fn prepare(
         kp.adjusted_separation = p.separation - (arms.rb_n - arms.ra_n);
         kp.adjusted_slip = p.slip - (arms.rb_t - arms.ra_t);
         kp.relative_velocity = relative_velocity(a, b, n, arms.rn_a, arms.rn_b);
+        kp.max_normal_impulse = 0.0;
         p.total_normal_impulse = 0.0;
         if !warm_starting {
             p.normal_impulse = 0.0;
@@ -368,7 +370,6 @@ fn prepare(
         0.0
     };
     k.block = BlockMass::of_contact(a, b, c);
-    k
 }
 
 /// Creep: the compression (m) at which the contact's spring would carry, in translation, the

@@ -11,7 +11,7 @@
 //! coincident points) one point after the other, in bundles of their own. Contacts beyond the
 //! last colour are solved by the scalar code after the bundles.
 
-use super::constraint::{ContactConstraint, PointEnd, Slip};
+use super::constraint::{ContactConstraint, PointEnd};
 use super::lanes::{eight_lanes_available, prefetch, Lanes8, Wide};
 use super::{Selected, SolverBody};
 use crate::physics::contact::Contact;
@@ -256,8 +256,8 @@ impl<L: Wide> BodyLanes<L> {
 
 impl WideSolver {
     /// Prepare, colour and pack the `selected` contacts, in one pass over them: `prepare`
-    /// gives a contact's constraint for this step (from the contact and its bodies A and B),
-    /// which goes straight into the lanes of its bundle. Contacts the colouring cannot place
+    /// works out a contact's constraint for this step (from the contact and its bodies A and
+    /// B, into the last argument), which goes straight into the lanes of its bundle. Contacts the colouring cannot place
     /// ([`WideSolver::overflow`]) and contacts that bounce (the restitution pass reads them
     /// after the solve) also keep their constraint in `constraints`, indexed like `contacts`.
     /// `bodies` must have one extra fixed body at the end (index `bodies.len() - 1`) for empty
@@ -268,7 +268,7 @@ impl WideSolver {
         contacts: &mut [Contact],
         constraints: &mut [ContactConstraint],
         selected: Selected,
-        prepare: impl FnMut(&mut Contact, &SolverBody, &SolverBody) -> ContactConstraint,
+        prepare: impl FnMut(&mut Contact, &SolverBody, &SolverBody, &mut ContactConstraint),
     ) {
         debug_assert!(
             bodies.last().is_some_and(|d| d.inv_mass == 0.0),
@@ -593,44 +593,32 @@ fn store_bundles<L: Wide>(
                 }
             }
         }
-        // r . t is r x n and r x t is -(r . n) (`PointLanes::tangent_arms`).
-        let fields = bundle.p.each_ref().map(|p| {
+        // The lanes' point ends, field by field: each field's lanes are read out once.
+        let mut ends = [[PointEnd::default(); 2]; 8];
+        for (j, p) in bundle.p.iter().enumerate() {
+            // r . t is r x n and r x t is -(r . n) (`PointLanes::tangent_arms`).
             let (rt_a, rt_b) = p.tangent_arms();
-            [
-                p.normal_impulse,
-                p.tangent_impulse,
-                p.total_normal_impulse,
-                p.max_normal_impulse,
-                p.rn_a,
-                p.rn_b,
-                rt_a,
-                rt_b,
-                p.adjusted_slip,
-            ]
-            .map(L::to_lanes)
-        });
-        for (lane, &ci) in bundle.contact.as_ref().iter().enumerate() {
-            let Some(c) = contacts.get_mut(ci as usize) else {
-                continue;
-            };
-            let ends = fields.each_ref().map(|f| {
-                let [normal, tangent, total, max, ra_t, rb_t, rt_a, rt_b, adjusted] =
-                    f.each_ref().map(|x| x.as_ref()[lane]);
-                PointEnd {
-                    normal_impulse: normal,
-                    tangent_impulse: tangent,
-                    total_normal_impulse: total,
-                    max_normal_impulse: max,
-                    slip: Slip {
-                        ra_t,
-                        rb_t,
-                        rt_a,
-                        rt_b,
-                        adjusted,
-                    },
+            let fields: [(L, fn(&mut PointEnd) -> &mut Real); 9] = [
+                (p.normal_impulse, |e| &mut e.normal_impulse),
+                (p.tangent_impulse, |e| &mut e.tangent_impulse),
+                (p.total_normal_impulse, |e| &mut e.total_normal_impulse),
+                (p.max_normal_impulse, |e| &mut e.max_normal_impulse),
+                (p.rn_a, |e| &mut e.slip.ra_t),
+                (p.rn_b, |e| &mut e.slip.rb_t),
+                (rt_a, |e| &mut e.slip.rt_a),
+                (rt_b, |e| &mut e.slip.rt_b),
+                (p.adjusted_slip, |e| &mut e.slip.adjusted),
+            ];
+            for (lanes, field) in fields {
+                for (end, &x) in ends.iter_mut().zip(lanes.to_lanes().as_ref()) {
+                    *field(&mut end[j]) = x;
                 }
-            });
-            then(c, ci as usize, &ends);
+            }
+        }
+        for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
+            if let Some(c) = contacts.get_mut(ci as usize) {
+                then(c, ci as usize, end);
+            }
         }
     }
 }
@@ -713,7 +701,7 @@ fn pack_all<L: Wide>(
     bundles: &mut Vec<Vec<Bundle<L>>>,
     colouring: &mut Colouring,
     input: PackInput,
-    mut prepare: impl FnMut(&mut Contact, &SolverBody, &SolverBody) -> ContactConstraint,
+    mut prepare: impl FnMut(&mut Contact, &SolverBody, &SolverBody, &mut ContactConstraint),
 ) {
     let PackInput {
         bodies,
@@ -728,18 +716,23 @@ fn pack_all<L: Wide>(
     }
     let inert = Bundle::<L>::inert(dummy);
     let mut filled = [0usize; COLOURS * 2];
+    // Where a contact's constraint is worked out when nothing keeps it.
+    let mut scratch = ContactConstraint::default();
     selected.for_each_index(contacts.len(), |i| {
         let c = &mut contacts[i];
         let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
-        let k = prepare(c, a, b);
-        let Some(colour) = colouring.colour(c.a, c.b, a.inv_mass > 0.0, b.inv_mass > 0.0) else {
-            constraints[i] = k;
+        let colour = colouring.colour(c.a, c.b, a.inv_mass > 0.0, b.inv_mass > 0.0);
+        let Some(colour) = colour else {
+            prepare(c, a, b, &mut constraints[i]);
             colouring.overflow.push(i as u32);
             return;
         };
-        if c.restitution != 0.0 {
-            constraints[i] = k;
-        }
+        let k = if c.restitution != 0.0 {
+            &mut constraints[i]
+        } else {
+            &mut scratch
+        };
+        prepare(c, a, b, k);
         let kind = if c.count == 2 && k.block.is_some() {
             Kind::Block
         } else {
@@ -753,7 +746,7 @@ fn pack_all<L: Wide>(
             list.push(Bundle { kind, ..inert });
         }
         let bundle = list.last_mut().expect("a bundle is open");
-        bundle.set_contact(lane, i as u32, c, &k, bodies);
+        bundle.set_contact(lane, i as u32, c, k, bodies);
     });
 }
 

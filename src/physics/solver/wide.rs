@@ -575,6 +575,9 @@ fn coefficients<L: Wide>(
     )
 }
 
+/// One field of a point's lanes and where it goes in a [`PointEnd`].
+type EndField<L> = (L, fn(&mut PointEnd) -> &mut Real);
+
 /// Hand each contact its points' ends (see [`WideSolver::store`]). Each field's lanes are
 /// read out once per bundle, not once per lane.
 fn store_bundles<L: Wide>(
@@ -598,7 +601,7 @@ fn store_bundles<L: Wide>(
         for (j, p) in bundle.p.iter().enumerate() {
             // r . t is r x n and r x t is -(r . n) (`PointLanes::tangent_arms`).
             let (rt_a, rt_b) = p.tangent_arms();
-            let fields: [(L, fn(&mut PointEnd) -> &mut Real); 9] = [
+            let fields: [EndField<L>; 9] = [
                 (p.normal_impulse, |e| &mut e.normal_impulse),
                 (p.tangent_impulse, |e| &mut e.tangent_impulse),
                 (p.total_normal_impulse, |e| &mut e.total_normal_impulse),

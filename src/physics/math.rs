@@ -50,7 +50,9 @@ pub fn cross_sv(w: Real, r: Vec2) -> Vec2 {
 }
 
 /// A rotation stored as its cosine and sine: the columns of R(theta) = [[c, -s], [s, c]].
+/// Laid out as written (`c`, then `s`): the solver loads it with its neighbours.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Rot {
     /// cos(theta)
     pub c: Real,

@@ -37,8 +37,6 @@ pub(crate) trait Wide:
     type Array: Copy + AsRef<[Real]>;
     /// Every lane `x`.
     fn splat(x: Real) -> Self;
-    /// Lane i is `f(i)`.
-    fn from_fn(f: impl FnMut(usize) -> Real) -> Self;
     /// Every index lane `i`.
     fn index_splat(i: u32) -> Self::Index;
     /// Set lane `i` to `x`, in place (packing writes each lane once, where it lives).
@@ -57,6 +55,12 @@ pub(crate) trait Wide:
     fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
     /// Whether any lane of `mask` is true.
     fn any(mask: Self::Mask) -> bool;
+    /// The eight columns of `WIDTH` rows of eight numbers, lane i of column k being `row(i)[k]`:
+    /// a transpose, so that what is laid out per body (row) comes out per field (column).
+    fn columns<'a>(row: impl Fn(usize) -> &'a [Real; 8]) -> [Self; 8];
+    /// The inverse for four columns: lane i of column k becomes word k of `rows[idx[i]]`
+    /// (words 4-7 untouched). Where lanes name the same row, the last lane's words stay.
+    fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &Self::Index);
 
     /// `self.max(lo).min(hi)`, as glam's `clamp`.
     #[inline(always)]
@@ -94,10 +98,6 @@ impl Wide for Lanes {
         Lanes::splat(x)
     }
     #[inline(always)]
-    fn from_fn(mut f: impl FnMut(usize) -> Real) -> Self {
-        Lanes::new(f(0), f(1), f(2), f(3))
-    }
-    #[inline(always)]
     fn index_splat(i: u32) -> [u32; 4] {
         [i; 4]
     }
@@ -117,6 +117,97 @@ impl Wide for Lanes {
     #[inline(always)]
     fn any(mask: LanesMask) -> bool {
         mask.any()
+    }
+    #[inline(always)]
+    fn columns<'a>(row: impl Fn(usize) -> &'a [Real; 8]) -> [Self; 8] {
+        #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+        {
+            use std::arch::x86_64::{
+                __m128, _mm_loadu_ps, _mm_movehl_ps, _mm_movelh_ps, _mm_unpackhi_ps,
+                _mm_unpacklo_ps,
+            };
+            // SAFETY: SSE is part of x86-64, and each load reads four of a row's eight f32s.
+            unsafe {
+                let (r0, r1, r2, r3) = (
+                    row(0).as_ptr(),
+                    row(1).as_ptr(),
+                    row(2).as_ptr(),
+                    row(3).as_ptr(),
+                );
+                // Fields 0-3 and 4-7 apart, each a 4x4 transpose: pairs of rows interleaved,
+                // then their halves joined. (Spelled out: no closure may stand between the
+                // kernels and these instructions.)
+                let (a0, a1) = (_mm_loadu_ps(r0), _mm_loadu_ps(r1));
+                let (a2, a3) = (_mm_loadu_ps(r2), _mm_loadu_ps(r3));
+                let (b0, b1) = (_mm_loadu_ps(r0.add(4)), _mm_loadu_ps(r1.add(4)));
+                let (b2, b3) = (_mm_loadu_ps(r2.add(4)), _mm_loadu_ps(r3.add(4)));
+                let (t0, t1) = (_mm_unpacklo_ps(a0, a1), _mm_unpacklo_ps(a2, a3));
+                let (t2, t3) = (_mm_unpackhi_ps(a0, a1), _mm_unpackhi_ps(a2, a3));
+                let (u0, u1) = (_mm_unpacklo_ps(b0, b1), _mm_unpacklo_ps(b2, b3));
+                let (u2, u3) = (_mm_unpackhi_ps(b0, b1), _mm_unpackhi_ps(b2, b3));
+                let columns: [__m128; 8] = [
+                    _mm_movelh_ps(t0, t1),
+                    _mm_movehl_ps(t1, t0),
+                    _mm_movelh_ps(t2, t3),
+                    _mm_movehl_ps(t3, t2),
+                    _mm_movelh_ps(u0, u1),
+                    _mm_movehl_ps(u1, u0),
+                    _mm_movelh_ps(u2, u3),
+                    _mm_movehl_ps(u3, u2),
+                ];
+                [
+                    Lanes::from(columns[0]),
+                    Lanes::from(columns[1]),
+                    Lanes::from(columns[2]),
+                    Lanes::from(columns[3]),
+                    Lanes::from(columns[4]),
+                    Lanes::from(columns[5]),
+                    Lanes::from(columns[6]),
+                    Lanes::from(columns[7]),
+                ]
+            }
+        }
+        #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
+        {
+            let rows = [row(0), row(1), row(2), row(3)];
+            [0, 1, 2, 3, 4, 5, 6, 7]
+                .map(|k| Lanes::new(rows[0][k], rows[1][k], rows[2][k], rows[3][k]))
+        }
+    }
+    #[inline(always)]
+    fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &[u32; 4]) {
+        // The 4x4 transpose again, then one store of four words per row.
+        let [c0, c1, c2, c3] = columns;
+        #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+        {
+            use std::arch::x86_64::{
+                __m128, _mm_movehl_ps, _mm_movelh_ps, _mm_storeu_ps, _mm_unpackhi_ps,
+                _mm_unpacklo_ps,
+            };
+            let [c0, c1, c2, c3] = [c0, c1, c2, c3].map(__m128::from);
+            // SAFETY: SSE is part of x86-64; each store writes the first four of a row's
+            // eight words, through an exclusive reference.
+            unsafe {
+                let (t0, t1) = (_mm_unpacklo_ps(c0, c1), _mm_unpacklo_ps(c2, c3));
+                let (t2, t3) = (_mm_unpackhi_ps(c0, c1), _mm_unpackhi_ps(c2, c3));
+                let out = [
+                    _mm_movelh_ps(t0, t1),
+                    _mm_movehl_ps(t1, t0),
+                    _mm_movelh_ps(t2, t3),
+                    _mm_movehl_ps(t3, t2),
+                ];
+                for (&i, row) in idx.iter().zip(out) {
+                    _mm_storeu_ps(rows[i as usize].as_mut().as_mut_ptr(), row);
+                }
+            }
+        }
+        #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
+        for (lane, &i) in idx.iter().enumerate() {
+            let words = rows[i as usize].as_mut();
+            for (word, column) in words.iter_mut().zip([c0, c1, c2, c3]) {
+                *word = column[lane];
+            }
+        }
     }
 }
 
@@ -210,12 +301,6 @@ mod avx {
             Self::from_array([x; 8])
         }
         #[inline(always)]
-        fn from_fn(mut f: impl FnMut(usize) -> Real) -> Self {
-            // Spelled out rather than `array::from_fn`, which a whole-program (LTO) build
-            // left as a call inside the AVX2 kernels: 4x slower steps.
-            Self::from_array([f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)])
-        }
-        #[inline(always)]
         fn index_splat(i: u32) -> [u32; 8] {
             [i; 8]
         }
@@ -259,6 +344,74 @@ mod avx {
         fn any(mask: Mask8) -> bool {
             // SAFETY: as above.
             unsafe { _mm256_movemask_ps(mask.0) != 0 }
+        }
+        #[inline(always)]
+        fn columns<'a>(row: impl Fn(usize) -> &'a [Real; 8]) -> [Self; 8] {
+            // SAFETY: as above; each load reads one row's eight f32s.
+            unsafe {
+                let r0 = _mm256_loadu_ps(row(0).as_ptr());
+                let r1 = _mm256_loadu_ps(row(1).as_ptr());
+                let r2 = _mm256_loadu_ps(row(2).as_ptr());
+                let r3 = _mm256_loadu_ps(row(3).as_ptr());
+                let r4 = _mm256_loadu_ps(row(4).as_ptr());
+                let r5 = _mm256_loadu_ps(row(5).as_ptr());
+                let r6 = _mm256_loadu_ps(row(6).as_ptr());
+                let r7 = _mm256_loadu_ps(row(7).as_ptr());
+                // The 8x8 transpose. Rows interleaved in pairs (within each 128-bit half)...
+                let (t0, t1) = (_mm256_unpacklo_ps(r0, r1), _mm256_unpackhi_ps(r0, r1));
+                let (t2, t3) = (_mm256_unpacklo_ps(r2, r3), _mm256_unpackhi_ps(r2, r3));
+                let (t4, t5) = (_mm256_unpacklo_ps(r4, r5), _mm256_unpackhi_ps(r4, r5));
+                let (t6, t7) = (_mm256_unpacklo_ps(r6, r7), _mm256_unpackhi_ps(r6, r7));
+                // ... then in fours: s_k holds field k of rows 0-3 (or 4-7 for s_(k+4)) in
+                // its low half and field k + 4 in its high half ...
+                let s0 = _mm256_shuffle_ps::<0x44>(t0, t2);
+                let s1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
+                let s2 = _mm256_shuffle_ps::<0x44>(t1, t3);
+                let s3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
+                let s4 = _mm256_shuffle_ps::<0x44>(t4, t6);
+                let s5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
+                let s6 = _mm256_shuffle_ps::<0x44>(t5, t7);
+                let s7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
+                // ... and the halves joined. (Spelled out: no closure may stand between the
+                // AVX2 kernels and these instructions.)
+                [
+                    Lanes8(_mm256_permute2f128_ps::<0x20>(s0, s4)),
+                    Lanes8(_mm256_permute2f128_ps::<0x20>(s1, s5)),
+                    Lanes8(_mm256_permute2f128_ps::<0x20>(s2, s6)),
+                    Lanes8(_mm256_permute2f128_ps::<0x20>(s3, s7)),
+                    Lanes8(_mm256_permute2f128_ps::<0x31>(s0, s4)),
+                    Lanes8(_mm256_permute2f128_ps::<0x31>(s1, s5)),
+                    Lanes8(_mm256_permute2f128_ps::<0x31>(s2, s6)),
+                    Lanes8(_mm256_permute2f128_ps::<0x31>(s3, s7)),
+                ]
+            }
+        }
+        #[inline(always)]
+        fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &[u32; 8]) {
+            let [c0, c1, c2, c3] = columns.map(|c| c.0);
+            // SAFETY: as above; each store writes the first four of a row's eight f32s,
+            // through an exclusive reference.
+            unsafe {
+                // The 8x4 transpose: lanes interleaved in pairs, then in fours; the low half
+                // of v_k is lane k's four words and the high half lane k + 4's.
+                let (u0, u1) = (_mm256_unpacklo_ps(c0, c1), _mm256_unpackhi_ps(c0, c1));
+                let (u2, u3) = (_mm256_unpacklo_ps(c2, c3), _mm256_unpackhi_ps(c2, c3));
+                let v0 = _mm256_shuffle_ps::<0x44>(u0, u2);
+                let v1 = _mm256_shuffle_ps::<0xEE>(u0, u2);
+                let v2 = _mm256_shuffle_ps::<0x44>(u1, u3);
+                let v3 = _mm256_shuffle_ps::<0xEE>(u1, u3);
+                let mut store = |lane: usize, words: __m128| {
+                    _mm_storeu_ps(rows[idx[lane] as usize].as_mut().as_mut_ptr(), words)
+                };
+                store(0, _mm256_castps256_ps128(v0));
+                store(1, _mm256_castps256_ps128(v1));
+                store(2, _mm256_castps256_ps128(v2));
+                store(3, _mm256_castps256_ps128(v3));
+                store(4, _mm256_extractf128_ps::<1>(v0));
+                store(5, _mm256_extractf128_ps::<1>(v1));
+                store(6, _mm256_extractf128_ps::<1>(v2));
+                store(7, _mm256_extractf128_ps::<1>(v3));
+            }
         }
     }
 
@@ -348,9 +501,6 @@ mod portable {
         fn splat(x: Real) -> Self {
             Lanes8([x; 8])
         }
-        fn from_fn(f: impl FnMut(usize) -> Real) -> Self {
-            Lanes8(std::array::from_fn(f))
-        }
         fn index_splat(i: u32) -> [u32; 8] {
             [i; 8]
         }
@@ -395,6 +545,19 @@ mod portable {
         }
         fn any(mask: Mask8) -> bool {
             mask.0.iter().any(|&m| m)
+        }
+        #[inline(always)]
+        fn columns<'a>(row: impl Fn(usize) -> &'a [Real; 8]) -> [Self; 8] {
+            let rows = [0, 1, 2, 3, 4, 5, 6, 7].map(row);
+            [0, 1, 2, 3, 4, 5, 6, 7].map(|k| Lanes8(rows.map(|r| r[k])))
+        }
+        fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &[u32; 8]) {
+            for (lane, &i) in idx.iter().enumerate() {
+                let words = rows[i as usize].as_mut();
+                for (word, column) in words.iter_mut().zip(&columns) {
+                    *word = column.0[lane];
+                }
+            }
         }
     }
 }
@@ -486,5 +649,66 @@ mod tests {
         }
         assert!(Lanes8::any(a8.cmpgt(b8)));
         assert!(!Lanes8::any(a8.cmpgt(Lanes8::splat(10.0))));
+    }
+
+    /// `columns` is a transpose at both widths: lane i of column k is row i's word k (rows
+    /// numbered 10 i + k, so a swapped or misplaced word shows); `scatter_rows` puts the
+    /// first four columns back, in rows named by the lanes' indices, and nothing else.
+    #[test]
+    fn columns_and_scatter_rows_transpose_the_rows() {
+        let rows: [[Real; 8]; 8] =
+            std::array::from_fn(|i| std::array::from_fn(|k| (10 * i + k) as Real));
+        // Lane i writes row 7 - i, so a scatter that ignored the indices shows too.
+        struct Row([Real; 8]);
+        impl AsMut<[Real; 8]> for Row {
+            fn as_mut(&mut self) -> &mut [Real; 8] {
+                &mut self.0
+            }
+        }
+        let blank = || [0; 8].map(|_| Row([-1.0; 8]));
+        let expected = |written: &[Row; 8], width: usize| {
+            for (r, row) in written.iter().enumerate() {
+                let lane = 7 - r;
+                for (k, &word) in row.0.iter().enumerate() {
+                    let want = if lane < width && k < 4 {
+                        rows[lane][k]
+                    } else {
+                        -1.0
+                    };
+                    assert_eq!(word, want, "row {r} word {k} at width {width}");
+                }
+            }
+        };
+        let four = Lanes::columns(|i| &rows[i]);
+        for (k, column) in four.iter().enumerate() {
+            assert_eq!(
+                column.to_lanes(),
+                std::array::from_fn(|i| rows[i][k]),
+                "column {k}"
+            );
+        }
+        let mut written = blank();
+        Lanes::scatter_rows(
+            [four[0], four[1], four[2], four[3]],
+            &mut written,
+            &[7, 6, 5, 4],
+        );
+        expected(&written, 4);
+        if !eight_lanes_available() {
+            eprintln!("no AVX2 here: the eight-lane transpose never runs on this machine");
+            return;
+        }
+        let eight = Lanes8::columns(|i| &rows[i]);
+        for (k, column) in eight.iter().enumerate() {
+            assert_eq!(
+                column.to_lanes(),
+                std::array::from_fn(|i| rows[i][k]),
+                "column {k}"
+            );
+        }
+        let mut written = blank();
+        let idx = [7, 6, 5, 4, 3, 2, 1, 0];
+        Lanes8::scatter_rows([eight[0], eight[1], eight[2], eight[3]], &mut written, &idx);
+        expected(&written, 8);
     }
 }

@@ -13,12 +13,20 @@ use super::contact::Contact;
 use super::math::{Real, Rot, Vec2};
 
 /// The per-body data the solver's inner loop reads and writes.
+///
+/// Laid out as written: the first eight words (velocity, spin, motion this step, inverse
+/// mass) are what the wide solver's kernels load for a body, together ([`SolverBody::state`]).
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub(crate) struct SolverBody {
     /// Linear velocity (m/s).
     pub v: Vec2,
     /// Angular velocity (rad/s).
     pub w: Real,
+    /// Displacement since the start of the step (m).
+    pub dp: Vec2,
+    /// Rotation since the start of the step, as cos/sin.
+    pub dq: Rot,
     /// 1 / mass (1/kg); zero for static bodies and empty slots.
     pub inv_mass: Real,
     /// 1 / inertia (1/(kg m^2)).
@@ -27,15 +35,41 @@ pub(crate) struct SolverBody {
     pub accel: Vec2,
     /// Angular acceleration from applied torque (rad/s^2).
     pub alpha: Real,
-    /// Displacement since the start of the step (m).
-    pub dp: Vec2,
     /// Rotation since the start of the step (rad).
     pub dtheta: Real,
-    /// Rotation since the start of the step, as cos/sin.
-    pub dq: Rot,
+}
+
+// `SolverBody::state` reads the first eight words as one array: they must be where it says.
+const _: () = {
+    use std::mem::{offset_of, size_of};
+    let word = size_of::<Real>();
+    assert!(size_of::<Vec2>() == 2 * word && size_of::<Rot>() == 2 * word);
+    assert!(offset_of!(SolverBody, v) == 0);
+    assert!(offset_of!(SolverBody, w) == 2 * word);
+    assert!(offset_of!(SolverBody, dp) == 3 * word);
+    assert!(offset_of!(SolverBody, dq) == 5 * word);
+    assert!(offset_of!(SolverBody, inv_mass) == 7 * word);
+};
+
+impl AsMut<[Real; 8]> for SolverBody {
+    /// [`SolverBody::state`], to write (the wide solver stores velocities through it).
+    #[inline(always)]
+    fn as_mut(&mut self) -> &mut [Real; 8] {
+        // SAFETY: as in `state`, through an exclusive reference.
+        unsafe { &mut *(self as *mut SolverBody).cast::<[Real; 8]>() }
+    }
 }
 
 impl SolverBody {
+    /// v.x, v.y, w, dp.x, dp.y, dq.c, dq.s, inv_mass as one array (m/s, rad/s, m, -, 1/kg).
+    #[inline(always)]
+    pub fn state(&self) -> &[Real; 8] {
+        // SAFETY: `SolverBody` is `repr(C)` and its first eight words are `Real`s in this
+        // order with no padding (`Vec2` and `Rot` are two `Real`s each; asserted above), so
+        // they are an initialised `[Real; 8]` at the start of the struct, aligned for `Real`.
+        unsafe { &*(self as *const SolverBody).cast::<[Real; 8]>() }
+    }
+
     /// A body that nothing can move (static bodies and empty slots).
     pub const FIXED: SolverBody = SolverBody {
         v: Vec2::ZERO,
@@ -369,6 +403,22 @@ pub(crate) fn solve_block_lcp(m: &BlockMass, b: [Real; 2]) -> Option<[Real; 2]> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn state_is_the_first_eight_words_in_order() {
+        let body = SolverBody {
+            v: Vec2::new(1.0, 2.0),
+            w: 3.0,
+            dp: Vec2::new(4.0, 5.0),
+            dq: Rot { c: 6.0, s: 7.0 },
+            inv_mass: 8.0,
+            inv_inertia: 9.0,
+            accel: Vec2::new(10.0, 11.0),
+            alpha: 12.0,
+            dtheta: 13.0,
+        };
+        assert_eq!(body.state(), &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]);
+    }
 
     #[test]
     fn clamp_speed_caps_length_and_removes_infinities() {

@@ -96,12 +96,12 @@ struct Bundle<L: Wide> {
 }
 
 impl<L: Wide> Bundle<L> {
-    /// Both sides' body lanes (with this step's motion when `motion`).
+    /// Both sides' body lanes.
     #[inline(always)]
-    fn gather(&self, bodies: &[SolverBody], motion: bool) -> (BodyLanes<L>, BodyLanes<L>) {
+    fn gather(&self, bodies: &[SolverBody]) -> (BodyLanes<L>, BodyLanes<L>) {
         (
-            BodyLanes::gather(bodies, &self.a, self.inv_mass_a, self.inv_i_a, motion),
-            BodyLanes::gather(bodies, &self.b, self.inv_mass_b, self.inv_i_b, motion),
+            BodyLanes::gather(bodies, &self.a, self.inv_mass_a, self.inv_i_a),
+            BodyLanes::gather(bodies, &self.b, self.inv_mass_b, self.inv_i_b),
         )
     }
 
@@ -169,40 +169,19 @@ struct BodyLanes<L> {
 }
 
 impl<L: Wide> BodyLanes<L> {
-    /// Load the lanes' bodies' velocities (and, with `motion`, how far they moved this step).
-    /// The inverse masses do not change within a step: they come packed in the bundle.
+    /// Load the lanes' bodies' velocities and how far they moved this step. The inverse
+    /// masses do not change within a step: they come packed in the bundle.
     #[inline(always)]
-    fn gather(
-        bodies: &[SolverBody],
-        idx: &L::Index,
-        inv_mass: L,
-        inv_inertia: L,
-        motion: bool,
-    ) -> BodyLanes<L> {
-        // Each lane's body is looked up once and its fields spread into per-field rows.
-        let mut rows = [[0.0 as Real; 8]; 7];
-        for (lane, &i) in idx.as_ref().iter().enumerate() {
-            let s = &bodies[i as usize];
-            rows[0][lane] = s.v.x;
-            rows[1][lane] = s.v.y;
-            rows[2][lane] = s.w;
-            if motion {
-                rows[3][lane] = s.dp.x;
-                rows[4][lane] = s.dp.y;
-                rows[5][lane] = s.dq.c;
-                rows[6][lane] = s.dq.s;
-            }
-        }
-        let row = |k: usize| L::from_fn(|lane| rows[k][lane]);
-        let (dpx, dpy, qc, qs) = if motion {
-            (row(3), row(4), row(5), row(6))
-        } else {
-            (L::ZERO, L::ZERO, L::ONE, L::ZERO)
-        };
+    fn gather(bodies: &[SolverBody], idx: &L::Index, inv_mass: L, inv_inertia: L) -> BodyLanes<L> {
+        // Each lane's body's first eight words (`SolverBody::state`), transposed into one
+        // value per field: 8 loads and 24 shuffles on eight lanes, where reading each field
+        // of each body into per-field rows and loading those took 119 instructions.
+        let [vx, vy, w, dpx, dpy, qc, qs, _] =
+            L::columns(|lane| bodies[idx.as_ref()[lane] as usize].state());
         BodyLanes {
-            vx: row(0),
-            vy: row(1),
-            w: row(2),
+            vx,
+            vy,
+            w,
             dpx,
             dpy,
             qc,
@@ -212,20 +191,16 @@ impl<L: Wide> BodyLanes<L> {
         }
     }
 
-    /// Write velocities back. A fixed body's lanes (static, kinematic, or the dummy of an
-    /// empty lane; one may fill several lanes) come back as they were read, since its zero
-    /// inverse mass and inertia take nothing from an impulse, so every lane is written
-    /// without asking which kind of body it holds (asking was a mispredicted branch per lane
-    /// wherever bundles mix contacts with the ground and between boxes).
+    /// Write velocities back, with the motion as it was read (it does not change in a solve
+    /// pass): the first four words of each lane's body, transposed back, one store a body.
+    /// A fixed body's lanes (static, kinematic, or the dummy of an empty lane; one may fill
+    /// several lanes) come back as they were read, since its zero inverse mass and inertia
+    /// take nothing from an impulse, so every lane is written without asking which kind of
+    /// body it holds (asking was a mispredicted branch per lane wherever bundles mix
+    /// contacts with the ground and between boxes).
     #[inline(always)]
     fn scatter(&self, bodies: &mut [SolverBody], idx: &L::Index) {
-        let (vx, vy, w) = (self.vx.to_lanes(), self.vy.to_lanes(), self.w.to_lanes());
-        for (lane, &i) in idx.as_ref().iter().enumerate() {
-            let body = &mut bodies[i as usize];
-            body.v.x = vx.as_ref()[lane];
-            body.v.y = vy.as_ref()[lane];
-            body.w = w.as_ref()[lane];
-        }
+        L::scatter_rows([self.vx, self.vy, self.w, self.dpx], bodies, idx);
     }
 
     /// Apply impulse lambda along (dx, dy) with arms rd_a, rd_b: B gets +, A gets -.
@@ -417,7 +392,7 @@ mod eight {
 #[inline(always)]
 fn warm_start_bundles<L: Wide>(bundles: &mut [Vec<Bundle<L>>], bodies: &mut [SolverBody]) {
     for bundle in bundles.iter_mut().flatten() {
-        let (mut a, mut b) = bundle.gather(bodies, false);
+        let (mut a, mut b) = bundle.gather(bodies);
         let (nx, ny) = (bundle.nx, bundle.ny);
         let (tx, ty) = (ny, -nx);
         for p in &mut bundle.p {
@@ -442,7 +417,7 @@ fn solve_bundles<L: Wide>(
     let inv_h = L::splat(inv_h);
     let push_out = L::splat(-max_push_out);
     for bundle in bundles.iter_mut().flatten() {
-        let (mut a, mut b) = bundle.gather(bodies, true);
+        let (mut a, mut b) = bundle.gather(bodies);
         let (nx, ny) = (bundle.nx, bundle.ny);
         let dp_n = (b.dpx - a.dpx) * nx + (b.dpy - a.dpy) * ny;
 

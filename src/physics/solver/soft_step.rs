@@ -91,15 +91,21 @@ pub(crate) fn solve(
     // neither the base spring nor the doubled one against static bodies may pass it.
     let cap = 0.25 * inv_h;
     let hertz = settings.contact_hertz.min(cap);
+    let static_hertz = (2.0 * hertz).min(cap);
+    let zeta = settings.contact_damping_ratio;
     let stiffness = Stiffness {
         hertz,
-        static_hertz: (2.0 * hertz).min(cap),
+        static_hertz,
+        springs: [
+            Softness::new(hertz, zeta, h),
+            Softness::new(static_hertz, zeta, h),
+        ],
         max_hertz: if settings.load_aware_stiffness {
             settings.max_contact_hertz_ratio * inv_h
         } else {
             0.0
         },
-        zeta: settings.contact_damping_ratio,
+        zeta,
         slop: settings.linear_slop.max(Real::EPSILON),
         h,
         creep,
@@ -270,6 +276,9 @@ struct Stiffness {
     /// 4 Hz forever in 2 of 200 simulated tilt histories of the Falling Bricks box (0 of 200
     /// capped).
     static_hertz: Real,
+    /// The springs of `hertz` and `static_hertz`, worked out once per solve instead of once
+    /// per contact.
+    springs: [Softness; 2],
     /// Ceiling for load-aware stiffening (Hz); 0 disables it.
     max_hertz: Real,
     /// Damping ratio.
@@ -301,23 +310,25 @@ impl Stiffness {
         } else {
             self.hertz
         };
-        let mut hertz = base;
-        if self.max_hertz > base {
-            let mut force: Real = 0.0;
-            let mut mass = Real::INFINITY;
-            for (p, k) in c.points[..c.count].iter().zip(points) {
-                force = force.max(p.normal_impulse / self.h);
-                mass = mass.min(k.normal_mass);
-            }
-            let mut wanted = base;
-            if force > 0.0 && mass > 0.0 && mass.is_finite() {
-                let omega = (force / (mass * self.slop)).sqrt();
-                wanted = omega / (2.0 * PI);
-            }
-            hertz = wanted
-                .max(HERTZ_DECAY * c.hertz)
-                .clamp(base, self.max_hertz);
+        if self.max_hertz <= base {
+            // No load-aware stiffening: every contact has one of the two springs.
+            c.hertz = base;
+            return self.springs[usize::from(c.touches_static)];
         }
+        let mut force: Real = 0.0;
+        let mut mass = Real::INFINITY;
+        for (p, k) in c.points[..c.count].iter().zip(points) {
+            force = force.max(p.normal_impulse / self.h);
+            mass = mass.min(k.normal_mass);
+        }
+        let mut wanted = base;
+        if force > 0.0 && mass > 0.0 && mass.is_finite() {
+            let omega = (force / (mass * self.slop)).sqrt();
+            wanted = omega / (2.0 * PI);
+        }
+        let hertz = wanted
+            .max(HERTZ_DECAY * c.hertz)
+            .clamp(base, self.max_hertz);
         c.hertz = hertz;
         Softness::new(hertz, self.zeta, self.h)
     }

@@ -141,6 +141,9 @@ pub(crate) struct WideSolver {
     bundles4: Vec<Vec<Bundle<Lanes>>>,
     /// Eight-lane bundles (used at [`Width::Eight`]), likewise.
     bundles8: Vec<Vec<Bundle<Lanes8>>>,
+    /// How many of those (colour, kind) lists the last build filled, up to the last one with
+    /// a bundle: the passes visit no more (a small scene uses a few of the 64).
+    lists: usize,
     /// Colour mask per solver body: bit c set when a contact of colour c uses the body.
     colour_masks: Vec<u32>,
     /// Contacts that found no colour: solved by the scalar code.
@@ -275,14 +278,18 @@ impl WideSolver {
         match width {
             Width::Four => pack_all(&mut self.bundles4, &mut colouring, input, prepare),
             Width::Eight => pack_all(&mut self.bundles8, &mut colouring, input, prepare),
+        };
+        self.lists = match width {
+            Width::Four => used_lists(&self.bundles4),
+            Width::Eight => used_lists(&self.bundles8),
         }
     }
 
     /// Apply each contact's accumulated impulses (the warm start of a substep).
     pub fn warm_start(&mut self, bodies: &mut [SolverBody]) {
         match self.built {
-            Some(Width::Eight) => eight::warm_start(&mut self.bundles8, bodies),
-            _ => warm_start_bundles(&mut self.bundles4, bodies),
+            Some(Width::Eight) => eight::warm_start(&mut self.bundles8[..self.lists], bodies),
+            _ => warm_start_bundles(&mut self.bundles4[..self.lists], bodies),
         }
     }
 
@@ -310,9 +317,13 @@ impl WideSolver {
     ) {
         match self.built {
             Some(Width::Eight) => {
-                eight::solve(&mut self.bundles8, bodies, inv_h, use_bias, max_push_out)
+                let bundles = &mut self.bundles8[..self.lists];
+                eight::solve(bundles, bodies, inv_h, use_bias, max_push_out)
             }
-            _ => solve_bundles(&mut self.bundles4, bodies, inv_h, use_bias, max_push_out),
+            _ => {
+                let bundles = &mut self.bundles4[..self.lists];
+                solve_bundles(bundles, bodies, inv_h, use_bias, max_push_out)
+            }
         }
     }
 
@@ -325,8 +336,8 @@ impl WideSolver {
         then: impl FnMut(&mut Contact, usize, &[PointEnd; 2]),
     ) {
         match self.built {
-            Some(Width::Eight) => store_bundles(&self.bundles8, contacts, then),
-            _ => store_bundles(&self.bundles4, contacts, then),
+            Some(Width::Eight) => store_bundles(&self.bundles8[..self.lists], contacts, then),
+            _ => store_bundles(&self.bundles4[..self.lists], contacts, then),
         }
     }
 }
@@ -625,6 +636,14 @@ fn block_lcp<L: Wide>(bundle: &Bundle<L>, r0: L, r1: L, l0: L, l1: L) -> (L, L) 
         L::select(case2 | case4, zero, L::select(case3, x1_3, l1)),
     );
     (x0, x1)
+}
+
+/// How many of the (colour, kind) lists are in use: up to the last non-empty one.
+fn used_lists<L: Wide>(bundles: &[Vec<Bundle<L>>]) -> usize {
+    bundles
+        .iter()
+        .rposition(|list| !list.is_empty())
+        .map_or(0, |i| i + 1)
 }
 
 /// The greedy colouring's state: a colour mask per solver body, the contacts that found no

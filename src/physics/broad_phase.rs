@@ -74,7 +74,8 @@ pub(crate) struct SweepAndPrune {
     /// Scratch for `find_pairs`: the slots outside their fat boxes, and a flag per slot.
     outside: Vec<u32>,
     outside_flag: Vec<bool>,
-    /// Scratch for `update`: the moved bodies' new pairs.
+    /// Scratch for `update`: the moved bodies' boxes and their new pairs.
+    moved_boxes: Vec<SortedBox>,
     new_pairs: Vec<u64>,
     /// Slots freed since the lists were last compacted, flagged by slot in `dead` (removal
     /// marks them, the next query drops them in one pass: removing k bodies costs k, not k
@@ -255,18 +256,9 @@ impl SweepAndPrune {
         };
         self.fat_pairs.retain(|key| !moved(key));
 
-        // The sorted lists with the new boxes, sorted again (a few entries moved a little),
-        // and the widest active box: an active box overlapping [x0, x1] starts at or right
-        // of x0 minus that width.
+        // The sorted lists with the new boxes, sorted again (a few entries moved a little).
         let fat = &self.fat;
-        let mut widest: Real = 0.0;
-        for b in &mut self.active_boxes {
-            if flag[b.slot as usize] {
-                *b = SortedBox::new(b.slot, fat);
-            }
-            widest = widest.max(b.max_x - b.min_x);
-        }
-        for b in &mut self.passive_boxes {
+        for b in self.active_boxes.iter_mut().chain(&mut self.passive_boxes) {
             if flag[b.slot as usize] {
                 *b = SortedBox::new(b.slot, fat);
             }
@@ -279,38 +271,21 @@ impl SweepAndPrune {
         self.passive
             .extend(self.passive_boxes.iter().map(|b| b.slot));
 
-        // Each moved box against the active boxes (and an active one against the passive
-        // ones too): the same closed overlap test as the sweep's. A pair of two moved boxes
-        // is found from both sides, once each; duplicates go below.
+        // The moved boxes, active and passive apart (each in sorted order), against the
+        // lists they pair with: moved active boxes with the active and the passive ones,
+        // moved passive ones with the active ones. A pair of two moved boxes is found from
+        // both sides; duplicates go below.
         let (active, passive) = (&self.active_boxes, &self.passive_boxes);
+        let is_moved = |b: &&SortedBox| flag[b.slot as usize];
+        self.moved_boxes.clear();
+        self.moved_boxes.extend(active.iter().filter(is_moved));
+        let moved_active = self.moved_boxes.len();
+        self.moved_boxes.extend(passive.iter().filter(is_moved));
+        let (moved_active, moved_passive) = self.moved_boxes.split_at(moved_active);
         self.new_pairs.clear();
-        let mut search = |m: &SortedBox, with_passive: bool| {
-            let start = active.partition_point(|b| b.min_x < m.min_x - widest);
-            for b in &active[start..] {
-                if b.min_x > m.max_x {
-                    break;
-                }
-                if b.slot != m.slot && m.min_x <= b.max_x && m.overlaps_y(b) {
-                    self.new_pairs.push(pair_key(m.slot, b.slot));
-                }
-            }
-            if with_passive {
-                for p in passive {
-                    if p.min_x > m.max_x {
-                        break;
-                    }
-                    if m.min_x <= p.max_x && m.overlaps_y(p) {
-                        self.new_pairs.push(pair_key(m.slot, p.slot));
-                    }
-                }
-            }
-        };
-        for m in active.iter().filter(|b| flag[b.slot as usize]) {
-            search(m, true);
-        }
-        for m in passive.iter().filter(|b| flag[b.slot as usize]) {
-            search(m, false);
-        }
+        cross_pairs(moved_active, active, &mut self.new_pairs);
+        cross_pairs(moved_active, passive, &mut self.new_pairs);
+        cross_pairs(moved_passive, active, &mut self.new_pairs);
         self.new_pairs.sort_unstable();
         self.new_pairs.dedup();
         merge_sorted(&mut self.fat_pairs, &self.new_pairs);
@@ -383,6 +358,40 @@ impl SweepAndPrune {
 /// Fat-pair updates are for a few moved bodies: when more than one active body in this many
 /// left its fat box, the whole sweep runs instead (a falling pile: every body, every step).
 const UPDATE_FRACTION: usize = 8;
+
+/// Push every pair of a box of `moved` and a box of `list` (both sorted by left edge) that
+/// overlap, a box never with itself, with the sweep's closed overlap test. As in the sweep, a
+/// pair overlaps in x exactly when the list box's left edge lies within the moved box
+/// (strictly right of its left edge) or the moved box's left edge lies within the list box
+/// (at or right of its left edge): each side is a binary search and a short scan, so the cost
+/// is linear in the list whatever the boxes' widths (no search window as wide as the widest).
+fn cross_pairs(moved: &[SortedBox], list: &[SortedBox], out: &mut Vec<u64>) {
+    if moved.is_empty() {
+        return;
+    }
+    for m in moved {
+        let start = list.partition_point(|b| b.min_x <= m.min_x);
+        for b in &list[start..] {
+            if b.min_x > m.max_x {
+                break;
+            }
+            if b.slot != m.slot && m.overlaps_y(b) {
+                out.push(pair_key(m.slot, b.slot));
+            }
+        }
+    }
+    for b in list {
+        let start = moved.partition_point(|m| m.min_x < b.min_x);
+        for m in &moved[start..] {
+            if m.min_x > b.max_x {
+                break;
+            }
+            if b.slot != m.slot && m.overlaps_y(b) {
+                out.push(pair_key(m.slot, b.slot));
+            }
+        }
+    }
+}
 
 /// Insertion sort of sorted boxes by their left edges (nearly sorted input: close to O(n)).
 fn insertion_sort_boxes(boxes: &mut [SortedBox]) {

@@ -297,6 +297,7 @@ pub(crate) struct BlockMass {
 
 impl BlockMass {
     /// The block of a two-point contact `c` (None for one point, or when ill-conditioned).
+    #[inline]
     pub fn of_contact(a: &SolverBody, b: &SolverBody, c: &Contact) -> Option<BlockMass> {
         if c.count != 2 {
             return None;
@@ -308,6 +309,7 @@ impl BlockMass {
 
     /// The block for anchors `ra`, `rb` along `n`, or None when it is too ill-conditioned to
     /// invert safely (nearly coincident points): k11^2 < 1000 det, Box2D's bound.
+    #[inline]
     pub fn new(
         a: &SolverBody,
         b: &SolverBody,

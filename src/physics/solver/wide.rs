@@ -585,8 +585,9 @@ fn store_bundles<L: Wide>(
         // The lanes' point ends, field by field: each field's lanes are read out once.
         let mut ends = [[PointEnd::default(); 2]; 8];
         for (j, p) in bundle.p.iter().enumerate() {
-            // r . t is r x n and r x t is -(r . n) (`PointLanes::tangent_arms`).
-            let (rt_a, rt_b) = p.tangent_arms();
+            // r . t is r x n and r x t is -(r . n) (`PointLanes::tangent_arms`); the signs
+            // are turned on the numbers below, since this function is not compiled for AVX
+            // and a lane negation here was a call per bundle.
             let fields: [EndField<L>; 9] = [
                 (p.normal_impulse, |e| &mut e.normal_impulse),
                 (p.tangent_impulse, |e| &mut e.tangent_impulse),
@@ -594,14 +595,18 @@ fn store_bundles<L: Wide>(
                 (p.max_normal_impulse, |e| &mut e.max_normal_impulse),
                 (p.rn_a, |e| &mut e.slip.ra_t),
                 (p.rn_b, |e| &mut e.slip.rb_t),
-                (rt_a, |e| &mut e.slip.rt_a),
-                (rt_b, |e| &mut e.slip.rt_b),
+                (p.ra_n, |e| &mut e.slip.rt_a),
+                (p.rb_n, |e| &mut e.slip.rt_b),
                 (p.adjusted_slip, |e| &mut e.slip.adjusted),
             ];
             for (lanes, field) in fields {
                 for (end, &x) in ends.iter_mut().zip(lanes.to_lanes().as_ref()) {
                     *field(&mut end[j]) = x;
                 }
+            }
+            for end in &mut ends {
+                let slip = &mut end[j].slip;
+                (slip.rt_a, slip.rt_b) = (-slip.rt_a, -slip.rt_b);
             }
         }
         for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {

@@ -79,7 +79,7 @@ struct Bundle<L: Wide> {
     bias_rate: L,
     mass_scale: L,
     impulse_scale: L,
-    /// How far the spring has crept (m; `Contact::creep`).
+    /// How far the spring has crept (m; `ContactConstraint::creep`).
     creep: L,
     k00: L,
     k01: L,

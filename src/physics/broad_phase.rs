@@ -326,31 +326,8 @@ impl SweepAndPrune {
             }
         }
 
-        // Active with passive: a pair overlaps in x exactly when one box's left edge lies within
-        // the other's interval. (1) passive left edges within an active box (strictly right of
-        // its left edge); (2) active left edges within a passive box (at or right of its left edge).
-        for a in active {
-            let start = passive.partition_point(|p| p.min_x <= a.min_x);
-            for p in &passive[start..] {
-                if p.min_x > a.max_x {
-                    break;
-                }
-                if a.overlaps_y(p) {
-                    out.push(pair_key(a.slot, p.slot));
-                }
-            }
-        }
-        for p in passive {
-            let start = active.partition_point(|a| a.min_x < p.min_x);
-            for a in &active[start..] {
-                if a.min_x > p.max_x {
-                    break;
-                }
-                if a.overlaps_y(p) {
-                    out.push(pair_key(a.slot, p.slot));
-                }
-            }
-        }
+        // Active with passive: each active box against the passive list, from both sides.
+        cross_pairs(active, passive, out);
         out.sort_unstable();
     }
 }
@@ -360,11 +337,12 @@ impl SweepAndPrune {
 const UPDATE_FRACTION: usize = 8;
 
 /// Push every pair of a box of `moved` and a box of `list` (both sorted by left edge) that
-/// overlap, a box never with itself, with the sweep's closed overlap test. As in the sweep, a
-/// pair overlaps in x exactly when the list box's left edge lies within the moved box
-/// (strictly right of its left edge) or the moved box's left edge lies within the list box
-/// (at or right of its left edge): each side is a binary search and a short scan, so the cost
-/// is linear in the list whatever the boxes' widths (no search window as wide as the widest).
+/// overlap, a box never with itself, with the sweep's closed overlap test. A pair overlaps in
+/// x exactly when the list box's left edge lies within the moved box (strictly right of its
+/// left edge) or the moved box's left edge lies within the list box (at or right of its left
+/// edge): each side is a binary search and a short scan, so the cost is linear in the list
+/// whatever the boxes' widths (no search window as wide as the widest). The sweep pairs the
+/// active boxes with the passive ones this way too.
 fn cross_pairs(moved: &[SortedBox], list: &[SortedBox], out: &mut Vec<u64>) {
     if moved.is_empty() {
         return;

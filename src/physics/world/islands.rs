@@ -4,12 +4,15 @@
 use super::*;
 
 impl World {
-    /// Give every awake island a stiffness tier from its contacts: tier 1 (1.5 times the
-    /// substeps) where a contact's lasting force is `stiff_load_ratio` times the lighter
-    /// body's weight or more (a pyramid), or a touching contact is too new for its load to be
-    /// known; tier 2 (1.75 times) where the load is [`LOADED_RANGE`] times that (a tall stack) or
-    /// the two bodies' masses differ by `stiff_load_ratio`; tier 3 (four times) where the masses
-    /// differ by `extreme_mass_ratio` or more.
+    /// Give every awake island a stiffness tier from its contacts ([`SUBSTEP_QUARTERS`] says
+    /// what each tier does). An island is loaded where a contact's lasting force is
+    /// `stiff_load_ratio` times the lighter body's weight or more, or a touching contact is
+    /// too new for its load to be known. A loaded island that is braced sideways (a pyramid,
+    /// a pile: its most loaded contact carries less than [`SLENDER`] of its bodies' weight)
+    /// gets [`BRACED`]; a slender one (a stack) [`STACK`], or [`TALL_STACK`] where the load is
+    /// [`LOADED_RANGE`] times more. [`TALL_STACK`] also takes islands where two bodies' masses
+    /// differ by `stiff_load_ratio`, and [`EXTREME`] those where they differ by
+    /// `extreme_mass_ratio` or more.
     /// Fills `contact_tier` and `body_tier`; returns the highest tier (0: nothing needs more).
     pub(super) fn assign_tiers(&mut self) -> u8 {
         let g = self.gravity.length();
@@ -27,6 +30,7 @@ impl World {
         }
         self.contact_tier.clear();
         self.contact_bodies.clear();
+        self.contact_load.clear();
         let mut top = 0u8;
         for input in &self.tier_inputs {
             let [a, b] = input.bodies;
@@ -49,19 +53,23 @@ impl World {
             };
             // A soft contact's spring compresses by its load over m omega^2, and omega can rise
             // with the substep rate only: 1.5 times the substeps hold 1.5^2 = 2.25 times the
-            // load at the same compression.
-            let tier = if masses >= extreme {
-                3
-            } else if load >= LOADED_RANGE * stiff || masses >= stiff {
-                2
+            // load at the same compression. What the contact needs, before its island is
+            // known to be slender or braced:
+            let need = if masses >= extreme {
+                EXTREME
+            } else if masses >= stiff {
+                TALL_STACK
+            } else if load >= LOADED_RANGE * stiff {
+                HEAVILY_LOADED
             } else if load >= stiff || input.unmeasured {
-                1
+                LOADED
             } else {
                 0
             };
-            top = top.max(tier);
-            self.contact_tier.push(tier);
+            top = top.max(need);
+            self.contact_tier.push(need);
             self.contact_bodies.push(input.bodies);
+            self.contact_load.push(load);
         }
         if top == 0 {
             return 0;
@@ -74,14 +82,40 @@ impl World {
         unite_islands(&mut self.island_parent, n, &self.contact_bodies, |i| {
             moving(i, bodies)
         });
+        // Each island's need, most loaded contact and moving bodies, kept at its root; then
+        // its tier.
         self.body_tier.clear();
         self.body_tier.resize(n, 0);
-        for (&t, pair) in self.contact_tier.iter().zip(&self.contact_bodies) {
-            for &i in pair {
-                if moving(i, &self.solver_bodies) {
-                    let root = find(&mut self.island_parent, i) as usize;
-                    self.body_tier[root] = self.body_tier[root].max(t);
-                }
+        self.island_load.clear();
+        self.island_load.resize(n, 0.0);
+        self.island_bodies.clear();
+        self.island_bodies.resize(n, 0);
+        let contacts = self.contact_tier.iter().zip(&self.contact_load);
+        for ((&need, &load), pair) in contacts.zip(&self.contact_bodies) {
+            let i = if moving(pair[0], bodies) {
+                pair[0]
+            } else {
+                pair[1]
+            };
+            let root = find(&mut self.island_parent, i) as usize;
+            self.body_tier[root] = self.body_tier[root].max(need);
+            self.island_load[root] = self.island_load[root].max(load);
+        }
+        for i in 0..n as u32 {
+            if moving(i, bodies) {
+                self.island_bodies[find(&mut self.island_parent, i) as usize] += 1;
+            }
+        }
+        top = 0;
+        for i in 0..n {
+            if self.island_parent[i] as usize == i {
+                let tier = island_tier(
+                    self.body_tier[i],
+                    self.island_load[i],
+                    self.island_bodies[i],
+                );
+                self.body_tier[i] = tier;
+                top = top.max(tier);
             }
         }
         for i in 0..n as u32 {
@@ -89,7 +123,7 @@ impl World {
             self.body_tier[i as usize] = self.body_tier[root];
         }
         for (tier, &[a, b]) in self.contact_tier.iter_mut().zip(&self.contact_bodies) {
-            let i = if moving(a, &self.solver_bodies) { a } else { b };
+            let i = if moving(a, bodies) { a } else { b };
             *tier = self.body_tier[i as usize];
         }
         top
@@ -262,33 +296,78 @@ impl TierInput {
     }
 }
 
-/// Adaptive stiffness: the base tier and the three above it.
-pub(super) const TIERS: usize = 4;
+/// Adaptive stiffness: the base tier and the four above it.
+pub(super) const TIERS: usize = 5;
 
-/// Adaptive stiffness: substeps per tier in quarters of `Settings::substeps` (1, 1.5, 1.75
-/// and 4 times: 4, 6, 7 and 16 at the default 4); the contact hertz scales with them, since
-/// its ceiling is a quarter of the substep rate. Tier 2 was twice the base until creep
-/// (`soft_step::creep`): with it, 7 substeps hold a jittered 50-box stack to 0.66 cm of drift
-/// (bound 5) and pyramid_30's top to 0.85 cm (bound 2); 6 do not (13 cm and 2.15 cm).
-pub(super) const SUBSTEP_QUARTERS: [u32; TIERS] = [4, 6, 7, 16];
+/// Tier of a loaded island braced sideways (a pyramid, a pile): the base substeps with two
+/// relax passes and creep.
+pub(super) const BRACED: u8 = 1;
+/// Tier of a loaded slender island (a stack): 1.5 times the substeps and stiffness.
+pub(super) const STACK: u8 = 2;
+/// Tier of a slender island under [`LOADED_RANGE`] times the load (a tall stack), or with
+/// masses `stiff_load_ratio` apart: 1.75 times the substeps and stiffness.
+pub(super) const TALL_STACK: u8 = 3;
+/// Tier of an island with masses `extreme_mass_ratio` apart: four times the substeps and
+/// stiffness, eight times the relax passes.
+pub(super) const EXTREME: u8 = 4;
+
+/// What a contact asks of its island before the island's shape is known: a load from
+/// `stiff_load_ratio` ([`STACK`] if the island is slender, else [`BRACED`]), or
+/// [`LOADED_RANGE`] times that ([`TALL_STACK`] if slender, else [`BRACED`]).
+const LOADED: u8 = STACK;
+const HEAVILY_LOADED: u8 = TALL_STACK;
+
+/// Adaptive stiffness: an island is slender (a stack) when it has fewer moving bodies than
+/// this many times the load ratio of its most loaded contact. A stack's bottom contact
+/// carries the weight of every box in it (a 50-box stack: 50 bodies, load ratio 50); in a
+/// pyramid or a pile the weight spreads over many contacts (a base-100 pyramid: 5,050 bodies,
+/// at most 77; the 2,000-box pile of `many_boxes`: at most 389, during its landing).
+pub(super) const SLENDER: Real = 2.0;
+
+/// The tier of an island from its contacts' highest `need`, the load ratio of its most
+/// loaded contact, and its moving bodies. An island loaded only by contacts too new to be
+/// measured (load 0) counts as slender until they are: a 20-box stack solved as braced in
+/// its first steps sank 2.18 cm (bound 2) instead of 1.87.
+fn island_tier(need: u8, load: Real, bodies: u32) -> u8 {
+    let loaded = need == LOADED || need == HEAVILY_LOADED;
+    if loaded && load > 0.0 && (bodies as Real) >= SLENDER * load {
+        BRACED
+    } else {
+        need
+    }
+}
+
+/// Adaptive stiffness: substeps per tier in quarters of `Settings::substeps` (1, 1, 1.5,
+/// 1.75 and 4 times: 4, 4, 6, 7 and 16 at the default 4); the contact hertz scales with
+/// them, since its ceiling is a quarter of the substep rate.
+///
+/// Stacks need stiff springs, so more substeps: [`TALL_STACK`] was twice the base until
+/// creep (`soft_step::creep`); with it, 7 substeps hold a jittered 50-box stack to 1.2 cm of
+/// drift (bound 5), 6 do not (11.5 cm), nor do 4 with two relax passes (it falls).
+/// Braced islands need the slow bounce of their rows damped rather than stiffer springs: on
+/// the base substeps with two relax passes and creep, a base-134 pyramid ends with its
+/// fastest body at 0.01 m/s (0.28 on 7 substeps and one pass, 0.58 on 4 and one pass; bound
+/// 0.5) and pyramid_30's top moves 0.66 cm (bound 2), for 16 solver passes a step instead
+/// of 21.
+pub(super) const SUBSTEP_QUARTERS: [u32; TIERS] = [4, 4, 6, 7, 16];
 
 /// Adaptive stiffness: relax passes per tier, as multiples of `Settings::relax_iterations`.
-/// Tiers 1 and 2 need no more than the base: friction anchors hold stuck points, and in tier
-/// 2 the springs' creep damps the slow bounce of a pyramid ([`CREEP`]). Without creep, tier
-/// 2 needed two passes (with one, pyramid_30's top walked 7.8 cm, bound 2).
-/// Tier 3 gets 8 (not 4) times: with 4, the 4 m box of 1000 kg on two 1 kg boxes overlapped
-/// 9.8 mm (bound 10) and slid 2.3 cm; with 8, 2.5 mm and 0.04 mm. Its islands are small.
-pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 1, 1, 8];
+/// The stack tiers need no more than the base: friction anchors hold stuck points, and the
+/// springs' creep damps the slow bounce ([`CREEP`]). [`BRACED`] gets two (see
+/// [`SUBSTEP_QUARTERS`]). [`EXTREME`] gets 8 (not 4) times: with 4, the 4 m box of 1000 kg
+/// on two 1 kg boxes overlapped 9.8 mm (bound 10) and slid 2.3 cm; with 8, 2.5 mm and 0.04
+/// mm. Its islands are small.
+pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 2, 1, 1, 8];
 
 /// Adaptive stiffness: how much of last step's compression the springs creep by, per tier
-/// (`soft_step::creep`). With 0.5 in tiers 1 and 2, tier 2 holds on 7 substeps and one relax
-/// pass where it needed 8 and two (pyramid_30's top: 0.98 cm sideways, bound 2; 7.8 cm with
-/// one pass and no creep; 4.7 cm when only tier 2 creeps, as the pyramid passes through
-/// tier 1 while it settles). With 0.65 a 20-box stack's top sank 2.14 cm (bound 2); with
-/// 0.35 pyramid_30's top moved 1.32 cm. Creep leaves a spring at rest 1.5 times softer, which
-/// the other tiers do not need: on the base settings a 10-box stack sank 1.04 cm (bound 1),
-/// and in tier 3 a 1000 kg box on 1 kg overlapped 8.8 mm instead of 5.5 (bound 10).
-pub(super) const CREEP: [Real; TIERS] = [0.0, 0.5, 0.5, 0.0];
+/// (`soft_step::creep`). With 0.5 in the stack tiers, [`TALL_STACK`] holds on 7 substeps and
+/// one relax pass where it needed 8 and two (pyramid_30's top: 0.98 cm sideways, bound 2;
+/// 7.8 cm with one pass and no creep). With 0.65 a 20-box stack's top sank 2.14 cm (bound
+/// 2); with 0.35 pyramid_30's top moved 1.32 cm. Creep leaves a spring at rest 1.5 times
+/// softer, which the other tiers do not need: on the base settings a 10-box stack sank 1.04
+/// cm (bound 1), and in [`EXTREME`] a 1000 kg box on 1 kg overlapped 8.8 mm instead of 5.5
+/// (bound 10).
+pub(super) const CREEP: [Real; TIERS] = [0.0, 0.5, 0.5, 0.5, 0.0];
 
 /// Adaptive stiffness: the loads tier 1 holds, as a multiple of `stiff_load_ratio`: 1.5^2,
 /// the square of its substep factor (the spring's compression is load / (m omega^2)).

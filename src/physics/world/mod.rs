@@ -72,6 +72,13 @@ pub struct World {
     /// are found (rebuilt by `assign_tiers` when the counts differ).
     tier_inputs: Vec<islands::TierInput>,
     body_tier: Vec<u8>,
+    /// Adaptive stiffness scratch: each contact's load ratio (its load over the lighter
+    /// body's weight), in contact order.
+    contact_load: Vec<Real>,
+    /// Adaptive stiffness scratch, at each island's root: its most loaded contact's load
+    /// ratio, and its moving bodies.
+    island_load: Vec<Real>,
+    island_bodies: Vec<u32>,
     tier_contacts: Vec<u32>,
     tier_bodies: Vec<u32>,
     // Sleep bookkeeping, reused every step.
@@ -122,6 +129,9 @@ impl World {
             contact_bodies: Vec::new(),
             tier_inputs: Vec::new(),
             body_tier: Vec::new(),
+            contact_load: Vec::new(),
+            island_load: Vec::new(),
+            island_bodies: Vec::new(),
             tier_contacts: Vec::new(),
             tier_bodies: Vec::new(),
             wake_queue: Vec::new(),

@@ -174,8 +174,9 @@ fn rest_compression(settings: Settings) -> Real {
 /// points, solved as a block, push it up like one spring of stiffness m omega^2. A contact
 /// with the floor gets twice the contact hertz up to a quarter of the substep rate, which at
 /// these settings it already is. On the base settings (tier 0: 4 substeps, 60 Hz) the box
-/// sinks exactly that; with `stiff_load_ratio` below 1 its own weight puts it in tier 1
-/// (6 substeps, 90 Hz), where it sinks 1.5 times its spring's compression. The tolerance,
+/// sinks exactly that; with `stiff_load_ratio` below 1 its own weight puts it in the stack
+/// tier (a lone box is slender: 6 substeps, 90 Hz), where it sinks 1.5 times its spring's
+/// compression. The tolerance,
 /// 1 %, is f32 round-off on compressions of 20-70 micrometres at y = 0.5.
 #[test]
 fn creep_softens_a_resting_contact_by_one_plus_beta_in_the_creeping_tiers() {
@@ -194,14 +195,68 @@ fn creep_softens_a_resting_contact_by_one_plus_beta_in_the_creeping_tiers() {
         (tier0 / expected0 - 1.0).abs() < 0.01,
         "tier 0 sank {tier0} m, expected {expected0} m (no creep)"
     );
-    let tier1 = rest_compression(Settings {
+    let stack = rest_compression(Settings {
         stiff_load_ratio: 0.9,
         ..base.clone()
     });
-    let expected1 = (1.0 + super::islands::CREEP[1])
+    let expected = (1.0 + super::islands::CREEP[super::islands::STACK as usize])
         * compression(1.5 * base.contact_hertz, base.substeps * 3 / 2);
     assert!(
-        (tier1 / expected1 - 1.0).abs() < 0.01,
-        "tier 1 sank {tier1} m, expected {expected1} m (creep 0.5)"
+        (stack / expected - 1.0).abs() < 0.01,
+        "the stack tier sank {stack} m, expected {expected} m (creep 0.5)"
     );
+}
+
+/// Adaptive stiffness tells a stack from a pyramid (`islands::island_tier`): both carry
+/// loads past `stiff_load_ratio` (12; a 20-box stack's bottom contact carries about 20 box
+/// weights, a base-20 pyramid's most loaded about 14), but the stack's most loaded contact
+/// carries the weight of every body in its island, and the pyramid's spreads over 210. Once
+/// the contacts are old enough for their loads to count (8 steps), the stack is solved on
+/// more substeps ([`islands::STACK`]) and the pyramid on the base ones with two relax passes
+/// ([`islands::BRACED`]); before that, both count as slender.
+#[test]
+fn a_stack_is_slender_and_a_pyramid_braced() {
+    let mut w = awake_world_on_floor(200.0);
+    let mut stack = Vec::new();
+    for i in 0..20 {
+        let centre = vec2(30.0, 0.5 + i as Real);
+        stack.push(
+            w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), centre))
+                .unwrap(),
+        );
+    }
+    let mut pyramid = Vec::new();
+    for row in 0..20 {
+        for i in 0..20 - row {
+            let x = -30.0 + (i as Real - (19 - row) as Real / 2.0) * 1.05;
+            let centre = vec2(x, 0.5 + row as Real);
+            pyramid.push(
+                w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), centre))
+                    .unwrap(),
+            );
+        }
+    }
+    let tier_of = |w: &World, ids: &[BodyId]| {
+        let tiers: Vec<u8> = ids
+            .iter()
+            .map(|id| w.body_tier[id.index as usize])
+            .collect();
+        assert!(
+            tiers.iter().all(|&t| t == tiers[0]),
+            "one island, one tier: {tiers:?}"
+        );
+        tiers[0]
+    };
+    w.step(1.0 / 60.0).unwrap();
+    assert_eq!(tier_of(&w, &stack), islands::STACK, "a new stack");
+    assert_eq!(
+        tier_of(&w, &pyramid),
+        islands::STACK,
+        "a new pyramid, load unknown"
+    );
+    for _ in 0..59 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    assert_eq!(tier_of(&w, &stack), islands::STACK, "a 20-box stack");
+    assert_eq!(tier_of(&w, &pyramid), islands::BRACED, "a base-20 pyramid");
 }

@@ -93,9 +93,10 @@ pub struct Settings {
     /// Soft step: give each island the work its load calls for ("leave out what a scene does
     /// not need"). An island is loaded when a contact in it has carried at least
     /// `stiff_load_ratio` times the weight of the lighter body it touches for two steps
-    /// running. A loaded island braced sideways (a pyramid, a pile: its most loaded contact
-    /// carries the weight of under half its bodies) keeps the base substeps with two relax
-    /// passes and creeping springs. A loaded slender island (a stack) is solved with 1.5
+    /// running. A loaded island braced sideways (a pyramid, a pile: less than twice as tall
+    /// as wide, along gravity, with at least `stiff_load_ratio` bodies) keeps the base
+    /// substeps with two relax passes and creeping springs. Any other loaded island (a
+    /// stack) is solved with 1.5
     /// times the substeps and contact stiffness; from 2.25 times that load (a spring's
     /// compression goes as load / omega^2), or where it joins bodies whose masses differ by
     /// `stiff_load_ratio`, with 1.75 times the substeps; where it joins masses

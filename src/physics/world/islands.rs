@@ -2,14 +2,16 @@
 //! sleep puts an island to rest when all of it has rested, and wakes it whole.
 
 use super::*;
+use crate::physics::shape::Aabb;
 
 impl World {
     /// Give every awake island a stiffness tier from its contacts ([`SUBSTEP_QUARTERS`] says
     /// what each tier does). An island is loaded where a contact's lasting force is
     /// `stiff_load_ratio` times the lighter body's weight or more, or a touching contact is
     /// too new for its load to be known. A loaded island that is braced sideways (a pyramid,
-    /// a pile: its most loaded contact carries less than [`SLENDER`] of its bodies' weight)
-    /// gets [`BRACED`]; a slender one (a stack) [`STACK`], or [`TALL_STACK`] where the load is
+    /// a pile: less than [`SLENDER`] times as tall as it is wide, along gravity, and with at
+    /// least `stiff_load_ratio` moving bodies; see `island_tier`) gets [`BRACED`]; any other
+    /// (a stack) [`STACK`], or [`TALL_STACK`] where the load is
     /// [`LOADED_RANGE`] times more. [`TALL_STACK`] also takes islands where two bodies' masses
     /// differ by `stiff_load_ratio`, and [`EXTREME`] those where they differ by
     /// `extreme_mass_ratio` or more.
@@ -30,7 +32,6 @@ impl World {
         }
         self.contact_tier.clear();
         self.contact_bodies.clear();
-        self.contact_load.clear();
         let mut top = 0u8;
         for input in &self.tier_inputs {
             let [a, b] = input.bodies;
@@ -69,7 +70,6 @@ impl World {
             top = top.max(need);
             self.contact_tier.push(need);
             self.contact_bodies.push(input.bodies);
-            self.contact_load.push(load);
         }
         if top == 0 {
             return 0;
@@ -82,16 +82,11 @@ impl World {
         unite_islands(&mut self.island_parent, n, &self.contact_bodies, |i| {
             moving(i, bodies)
         });
-        // Each island's need, most loaded contact and moving bodies, kept at its root; then
-        // its tier.
+        // Each island's need and its extent along gravity and across it (its bodies' boxes
+        // from the broad phase, found this step), kept at its root; then its tier.
         self.body_tier.clear();
         self.body_tier.resize(n, 0);
-        self.island_load.clear();
-        self.island_load.resize(n, 0.0);
-        self.island_bodies.clear();
-        self.island_bodies.resize(n, 0);
-        let contacts = self.contact_tier.iter().zip(&self.contact_load);
-        for ((&need, &load), pair) in contacts.zip(&self.contact_bodies) {
+        for (&need, pair) in self.contact_tier.iter().zip(&self.contact_bodies) {
             let i = if moving(pair[0], bodies) {
                 pair[0]
             } else {
@@ -99,21 +94,30 @@ impl World {
             };
             let root = find(&mut self.island_parent, i) as usize;
             self.body_tier[root] = self.body_tier[root].max(need);
-            self.island_load[root] = self.island_load[root].max(load);
         }
-        for i in 0..n as u32 {
-            if moving(i, bodies) {
-                self.island_bodies[find(&mut self.island_parent, i) as usize] += 1;
+        let down = if g > 1e-3 {
+            self.gravity / g
+        } else {
+            Vec2::new(0.0, -1.0)
+        };
+        let across = Vec2::new(-down.y, down.x);
+        self.island_extent.clear();
+        self.island_extent.resize(n, Extent::EMPTY);
+        self.island_bodies.clear();
+        self.island_bodies.resize(n, 0);
+        for (i, proxy) in self.proxies.iter().enumerate() {
+            if moving(i as u32, bodies) {
+                let root = find(&mut self.island_parent, i as u32) as usize;
+                self.island_extent[root].add(&proxy.aabb, down, across);
+                self.island_bodies[root] += 1;
             }
         }
         top = 0;
         for i in 0..n {
             if self.island_parent[i] as usize == i {
-                let tier = island_tier(
-                    self.body_tier[i],
-                    self.island_load[i],
-                    self.island_bodies[i],
-                );
+                let braced =
+                    self.island_bodies[i] as Real >= stiff && !self.island_extent[i].slender();
+                let tier = island_tier(self.body_tier[i], braced);
                 self.body_tier[i] = tier;
                 top = top.max(tier);
             }
@@ -302,9 +306,10 @@ pub(super) const TIERS: usize = 5;
 /// Tier of a loaded island braced sideways (a pyramid, a pile): the base substeps with two
 /// relax passes and creep.
 pub(super) const BRACED: u8 = 1;
-/// Tier of a loaded slender island (a stack): 1.5 times the substeps and stiffness.
+/// Tier of a loaded island that is not braced (a stack): 1.5 times the substeps and
+/// stiffness.
 pub(super) const STACK: u8 = 2;
-/// Tier of a slender island under [`LOADED_RANGE`] times the load (a tall stack), or with
+/// Tier of an island that is not braced under [`LOADED_RANGE`] times the load (a tall stack), or with
 /// masses `stiff_load_ratio` apart: 1.75 times the substeps and stiffness.
 pub(super) const TALL_STACK: u8 = 3;
 /// Tier of an island with masses `extreme_mass_ratio` apart: four times the substeps and
@@ -312,25 +317,63 @@ pub(super) const TALL_STACK: u8 = 3;
 pub(super) const EXTREME: u8 = 4;
 
 /// What a contact asks of its island before the island's shape is known: a load from
-/// `stiff_load_ratio` ([`STACK`] if the island is slender, else [`BRACED`]), or
-/// [`LOADED_RANGE`] times that ([`TALL_STACK`] if slender, else [`BRACED`]).
+/// `stiff_load_ratio` ([`BRACED`] if the island is braced, else [`STACK`]), or
+/// [`LOADED_RANGE`] times that ([`BRACED`] if braced, else [`TALL_STACK`]).
 const LOADED: u8 = STACK;
 const HEAVILY_LOADED: u8 = TALL_STACK;
 
-/// Adaptive stiffness: an island is slender (a stack) when it has fewer moving bodies than
-/// this many times the load ratio of its most loaded contact. A stack's bottom contact
-/// carries the weight of every box in it (a 50-box stack: 50 bodies, load ratio 50); in a
-/// pyramid or a pile the weight spreads over many contacts (a base-100 pyramid: 5,050 bodies,
-/// at most 77; the 2,000-box pile of `many_boxes`: at most 389, during its landing).
+/// Adaptive stiffness: an island is slender (a stack) when it is at least this many times
+/// as tall, along gravity, as it is wide across it (its bodies' boxes): a 20-box stack of
+/// 1 m boxes is 14 times, a pyramid about once, a pile less. The shape is known at once; a
+/// measure of how the load spreads (the most loaded contact against the island's weight)
+/// needs the loads, which take five steps to build under a new stack and spike as bodies
+/// land on a pile: it sent `many_boxes`' landing pile to 7 substeps for 100 steps.
 pub(super) const SLENDER: Real = 2.0;
 
-/// The tier of an island from its contacts' highest `need`, the load ratio of its most
-/// loaded contact, and its moving bodies. An island loaded only by contacts too new to be
-/// measured (load 0) counts as slender until they are: a 20-box stack solved as braced in
-/// its first steps sank 2.18 cm (bound 2) instead of 1.87.
-fn island_tier(need: u8, load: Real, bodies: u32) -> u8 {
+/// An island's extent (m) along gravity (up) and across it, from its bodies' boxes.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Extent {
+    up: [Real; 2],
+    side: [Real; 2],
+}
+
+impl Extent {
+    /// No body yet.
+    pub const EMPTY: Extent = Extent {
+        up: [Real::INFINITY, Real::NEG_INFINITY],
+        side: [Real::INFINITY, Real::NEG_INFINITY],
+    };
+
+    /// Take in box `aabb`, with `down` the unit vector along gravity and `across` normal to it.
+    #[inline]
+    fn add(&mut self, aabb: &Aabb, down: Vec2, across: Vec2) {
+        let centre = 0.5 * (aabb.min + aabb.max);
+        let half = 0.5 * (aabb.max - aabb.min);
+        let reach = |d: Vec2| half.x * d.x.abs() + half.y * d.y.abs();
+        let (up, side) = (-centre.dot(down), centre.dot(across));
+        let (r_up, r_side) = (reach(down), reach(across));
+        self.up = [self.up[0].min(up - r_up), self.up[1].max(up + r_up)];
+        self.side = [
+            self.side[0].min(side - r_side),
+            self.side[1].max(side + r_side),
+        ];
+    }
+
+    /// At least [`SLENDER`] times as tall as wide.
+    fn slender(&self) -> bool {
+        self.up[1] - self.up[0] >= SLENDER * (self.side[1] - self.side[0])
+    }
+}
+
+/// The tier of an island from its contacts' highest `need` and whether it is `braced`: not
+/// slender, and with at least `stiff_load_ratio` moving bodies. A smaller island cannot carry
+/// that many of its bodies' weight: it is loaded only by contacts too new to be measured,
+/// unequal masses or an impact, and it is small, so it keeps the stack tiers (a box sliding
+/// over a chain of tiles, loaded by each new contact, tilted past 1e-4 rad on the base
+/// substeps with two relax passes).
+fn island_tier(need: u8, braced: bool) -> u8 {
     let loaded = need == LOADED || need == HEAVILY_LOADED;
-    if loaded && load > 0.0 && (bodies as Real) >= SLENDER * load {
+    if loaded && braced {
         BRACED
     } else {
         need

@@ -72,12 +72,8 @@ pub struct World {
     /// are found (rebuilt by `assign_tiers` when the counts differ).
     tier_inputs: Vec<islands::TierInput>,
     body_tier: Vec<u8>,
-    /// Adaptive stiffness scratch: each contact's load ratio (its load over the lighter
-    /// body's weight), in contact order.
-    contact_load: Vec<Real>,
-    /// Adaptive stiffness scratch, at each island's root: its most loaded contact's load
-    /// ratio, and its moving bodies.
-    island_load: Vec<Real>,
+    /// Adaptive stiffness scratch: each island's extent and moving bodies, at its root.
+    island_extent: Vec<islands::Extent>,
     island_bodies: Vec<u32>,
     tier_contacts: Vec<u32>,
     tier_bodies: Vec<u32>,
@@ -129,8 +125,7 @@ impl World {
             contact_bodies: Vec::new(),
             tier_inputs: Vec::new(),
             body_tier: Vec::new(),
-            contact_load: Vec::new(),
-            island_load: Vec::new(),
+            island_extent: Vec::new(),
             island_bodies: Vec::new(),
             tier_contacts: Vec::new(),
             tier_bodies: Vec::new(),

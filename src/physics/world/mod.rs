@@ -86,6 +86,9 @@ pub struct World {
     waking_islands: Vec<u32>,
     /// Scratch for `remove_bodies`: a flag per slot, all false between calls.
     removing: Vec<bool>,
+    /// Tests: find contacts into a fresh array every step, never in place.
+    #[cfg(test)]
+    copy_contacts: bool,
 }
 
 impl Default for World {
@@ -135,6 +138,8 @@ impl World {
             changed: Vec::new(),
             waking_islands: Vec::new(),
             removing: Vec::new(),
+            #[cfg(test)]
+            copy_contacts: false,
         }
     }
 

@@ -270,3 +270,60 @@ fn a_stack_is_slender_and_a_pyramid_braced() {
         "the stack, lying along gravity"
     );
 }
+
+/// Contacts found in place over last step's (`World::find_contacts`, when the pairs keep their
+/// order) step exactly like contacts found into a fresh array every step, as bodies come and
+/// go at the front, in the middle and at the end of the key order: a row of resting boxes on
+/// the floor; the first thrown up (its contact gone from the front while it flies, back when
+/// it lands), then removed; a box added in its freed slot (new contacts at the front), one
+/// dropped onto the middle of the row (new contacts in the middle) and the last thrown up
+/// (gone from the end). Each step's state is compared to the bit, and the in-place writing
+/// must have run.
+#[test]
+fn contacts_found_in_place_step_like_contacts_found_anew() {
+    let row = |copy: bool| {
+        let mut w = awake_world_on_floor(40.0);
+        w.copy_contacts = copy;
+        let ids: Vec<BodyId> = (0..12)
+            .map(|i| {
+                let centre = vec2(-11.0 + 2.0 * i as Real, 0.5);
+                w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), centre))
+                    .unwrap()
+            })
+            .collect();
+        (w, ids)
+    };
+    let (mut in_place, ids) = row(false);
+    let (mut fresh, _) = row(true);
+    let mut kept_in_place = 0;
+    for step in 0..120 {
+        for w in [&mut in_place, &mut fresh] {
+            match step {
+                10 => w.apply_impulse(ids[0], vec2(0.0, 4.0)).unwrap(),
+                30 => drop(w.remove_body(ids[0]).unwrap()),
+                40 => drop(
+                    w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(-11.0, 0.5)))
+                        .unwrap(),
+                ),
+                60 => drop(
+                    w.add_body(&BodyDef::dynamic(Shape::rect(0.5, 0.5), vec2(1.0, 3.0)))
+                        .unwrap(),
+                ),
+                80 => w.apply_impulse(ids[11], vec2(0.0, 4.0)).unwrap(),
+                _ => {}
+            }
+        }
+        let previous = in_place.contacts.as_ptr();
+        in_place.step(1.0 / 60.0).unwrap();
+        fresh.step(1.0 / 60.0).unwrap();
+        if in_place.contacts.as_ptr() == previous {
+            kept_in_place += 1;
+        }
+        assert!(
+            in_place.state_bits().eq(fresh.state_bits()),
+            "step {step}: the states differ"
+        );
+        assert_eq!(in_place.contacts.len(), fresh.contacts.len(), "step {step}");
+    }
+    assert!(kept_in_place > 90, "in place {kept_in_place} of 120 steps");
+}

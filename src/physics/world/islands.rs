@@ -326,8 +326,8 @@ const HEAVILY_LOADED: u8 = TALL_STACK;
 /// as tall, along gravity, as it is wide across it (its bodies' boxes): a 20-box stack of
 /// 1 m boxes is 14 times, a pyramid about once, a pile less. The shape is known at once; a
 /// measure of how the load spreads (the most loaded contact against the island's weight)
-/// needs the loads, which take five steps to build under a new stack and spike as bodies
-/// land on a pile: it sent `many_boxes`' landing pile to 7 substeps for 100 steps.
+/// needs the loads, which take five steps to build under a new stack: solved braced in the
+/// meantime, a 20-box stack sank 2.18 cm (bound 2).
 pub(super) const SLENDER: Real = 2.0;
 
 /// An island's extent (m) along gravity (up) and across it, from its bodies' boxes.

@@ -74,8 +74,9 @@ impl World {
         if top == 0 {
             return 0;
         }
-        // Islands: union-find over contacts between dynamic awake bodies; an island takes
-        // the highest tier of its contacts, and so do all its contacts and bodies.
+        // Islands: union-find over contacts between dynamic awake bodies; an island's tier
+        // comes from the highest need of its contacts and its shape, and all its contacts and
+        // bodies take it.
         let n = self.solver_bodies.len();
         let moving = |i: u32, bodies: &[SolverBody]| bodies[i as usize].inv_mass > 0.0;
         let bodies = &self.solver_bodies;

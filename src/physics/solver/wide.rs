@@ -323,7 +323,12 @@ impl WideSolver {
             }
             _ => {
                 let bundles = &mut self.bundles4[..self.lists];
-                solve_bundles(bundles, bodies, inv_h, use_bias, max_push_out)
+                // As in `eight::solve_avx2`: one copy per `use_bias`.
+                if use_bias {
+                    solve_bundles(bundles, bodies, inv_h, true, max_push_out)
+                } else {
+                    solve_bundles(bundles, bodies, inv_h, false, max_push_out)
+                }
             }
         }
     }
@@ -396,7 +401,12 @@ mod eight {
         use_bias: bool,
         max_push_out: Real,
     ) {
-        solve_bundles(bundles, bodies, inv_h, use_bias, max_push_out);
+        // Two copies of the pass, so that each is compiled for its own `use_bias`.
+        if use_bias {
+            solve_bundles(bundles, bodies, inv_h, true, max_push_out);
+        } else {
+            solve_bundles(bundles, bodies, inv_h, false, max_push_out);
+        }
     }
 }
 

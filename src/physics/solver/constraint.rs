@@ -66,9 +66,6 @@ pub(crate) struct PointConstraint {
     pub relative_velocity: Real,
     /// Sequential solver: target normal velocity (m/s) from position bias or restitution.
     pub bias: Real,
-    /// Largest normal impulse applied in this step (N s): restitution only acts where the
-    /// contact actually pushed.
-    pub max_normal_impulse: Real,
 }
 
 impl PointConstraint {
@@ -109,8 +106,6 @@ pub(crate) struct PointEnd {
     pub tangent_impulse: Real,
     /// Everything the normal constraint applied this step (N s).
     pub total_normal_impulse: Real,
-    /// Largest normal impulse applied in this step (N s).
-    pub max_normal_impulse: Real,
     /// The point's slip, as the friction anchor measures it.
     pub slip: Slip,
 }

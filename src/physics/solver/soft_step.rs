@@ -169,16 +169,14 @@ pub(crate) fn solve(
     // others and no velocity): one pass over the contacts. Those that bounce wait for the
     // restitution pass, which changes their impulses; they and the scalar code's contacts
     // finish from their kept constraints.
-    wide.store(contacts, |c, i, ends| {
+    wide.store(contacts, |c, _, ends| {
         if c.restitution == 0.0 {
             finish(bodies, c, ends, substeps, inv_dt);
         } else {
-            let points = c.points[..c.count].iter_mut();
-            for ((p, k), end) in points.zip(&mut constraints[i].points).zip(ends) {
+            for (p, end) in c.points[..c.count].iter_mut().zip(ends) {
                 p.normal_impulse = end.normal_impulse;
                 p.tangent_impulse = end.tangent_impulse;
                 p.total_normal_impulse = end.total_normal_impulse;
-                k.max_normal_impulse = end.max_normal_impulse;
             }
         }
     });
@@ -190,7 +188,6 @@ pub(crate) fn solve(
                 normal_impulse: p.normal_impulse,
                 tangent_impulse: p.tangent_impulse,
                 total_normal_impulse: p.total_normal_impulse,
-                max_normal_impulse: k.max_normal_impulse,
                 slip: k.slip(),
             }
         })
@@ -368,7 +365,6 @@ fn prepare(
         kp.adjusted_separation = p.separation - (arms.rb_n - arms.ra_n);
         kp.adjusted_slip = p.slip - (arms.rb_t - arms.ra_t);
         kp.relative_velocity = relative_velocity(a, b, n, arms.rn_a, arms.rn_b);
-        kp.max_normal_impulse = 0.0;
         p.total_normal_impulse = 0.0;
         if !warm_starting {
             p.normal_impulse = 0.0;
@@ -547,7 +543,6 @@ fn accumulate_normal(
     let total = (p.normal_impulse + impulse).max(0.0);
     let applied = total - p.normal_impulse;
     p.normal_impulse = total;
-    k.max_normal_impulse = k.max_normal_impulse.max(applied);
     p.total_normal_impulse += applied;
     apply_along(a, b, n, k.arms.rn_a, k.arms.rn_b, applied);
 }
@@ -581,7 +576,6 @@ fn block_normal(
     for (i, (p, k)) in points.iter_mut().zip(k.iter_mut()).enumerate() {
         let applied = x[i] - lambda[i];
         p.normal_impulse = x[i];
-        k.max_normal_impulse = k.max_normal_impulse.max(applied);
         p.total_normal_impulse += applied;
         apply_along(a, b, n, k.arms.rn_a, k.arms.rn_b, applied);
     }
@@ -589,7 +583,10 @@ fn block_normal(
 }
 
 /// Reverse e times the pre-solve approach speed where it exceeded the threshold and the
-/// contact pushed (a contact with restitution keeps its constraint in `constraints`).
+/// point pushed this step (its total normal impulse is positive: a speculative point that
+/// never touched does not bounce). Box2D asks instead for a positive largest increment;
+/// the total is kept anyway, where the largest increment cost the solve passes a max and
+/// two lanes per bundle. A contact with restitution keeps its constraint in `constraints`.
 fn restitution(
     bodies: &mut [SolverBody],
     contacts: &mut [Contact],
@@ -605,9 +602,11 @@ fn restitution(
         let n = c.normal;
         let e = c.restitution;
         let (a, b) = pair_mut(bodies, c.a, c.b);
-        let bounces =
-            |k: &PointConstraint| k.relative_velocity < -threshold && k.max_normal_impulse > 0.0;
-        if c.count == 2 && bounces(&k.points[0]) && bounces(&k.points[1]) {
+        let bounces = |p: &ContactPoint, k: &PointConstraint| {
+            k.relative_velocity < -threshold && p.total_normal_impulse > 0.0
+        };
+        let both = [0, 1].map(|j| bounces(&c.points[j], &k.points[j]));
+        if c.count == 2 && both[0] && both[1] {
             // Both points bounce: aim each at vn' = -e vn0 together, so a flat face hitting a
             // flat face rebounds by exactly e instead of whatever order the points were solved in.
             let coeffs = [
@@ -621,7 +620,7 @@ fn restitution(
             }
         }
         for (p, kp) in c.points[..c.count].iter_mut().zip(&mut k.points) {
-            if !bounces(kp) {
+            if !bounces(p, kp) {
                 continue;
             }
             let vn = relative_velocity(a, b, n, kp.arms.rn_a, kp.arms.rn_b);

@@ -50,7 +50,6 @@ struct PointLanes<L> {
     normal_impulse: L,
     tangent_impulse: L,
     total_normal_impulse: L,
-    max_normal_impulse: L,
 }
 
 impl<L: Wide> PointLanes<L> {
@@ -476,7 +475,6 @@ fn solve_bundles<L: Wide>(
                 b.w += b.inv_inertia * (d0 * rn_b0 + d1 * rn_b1);
                 for (p, (x, dx)) in bundle.p.iter_mut().zip([(x0, d0), (x1, d1)]) {
                     p.normal_impulse = x;
-                    p.max_normal_impulse = p.max_normal_impulse.max(dx);
                     p.total_normal_impulse += dx;
                 }
             }
@@ -490,7 +488,6 @@ fn solve_bundles<L: Wide>(
                     let total = (p.normal_impulse + impulse).max(L::ZERO);
                     let applied = total - p.normal_impulse;
                     p.normal_impulse = total;
-                    p.max_normal_impulse = p.max_normal_impulse.max(applied);
                     p.total_normal_impulse += applied;
                     BodyLanes::apply(&mut a, &mut b, nx, ny, p.rn_a, p.rn_b, applied);
                 }
@@ -599,11 +596,10 @@ fn store_bundles<L: Wide>(
             // r . t is r x n and r x t is -(r . n) (`PointLanes::tangent_arms`); the signs
             // are turned on the numbers below, since this function is not compiled for AVX
             // and a lane negation here was a call per bundle.
-            let fields: [EndField<L>; 9] = [
+            let fields: [EndField<L>; 8] = [
                 (p.normal_impulse, |e| &mut e.normal_impulse),
                 (p.tangent_impulse, |e| &mut e.tangent_impulse),
                 (p.total_normal_impulse, |e| &mut e.total_normal_impulse),
-                (p.max_normal_impulse, |e| &mut e.max_normal_impulse),
                 (p.rn_a, |e| &mut e.slip.ra_t),
                 (p.rn_b, |e| &mut e.slip.rb_t),
                 (p.ra_n, |e| &mut e.slip.rt_a),
@@ -781,7 +777,6 @@ impl<L: Wide> Bundle<L> {
             normal_impulse: zero,
             tangent_impulse: zero,
             total_normal_impulse: zero,
-            max_normal_impulse: zero,
         };
         Bundle {
             kind: Kind::Points,
@@ -868,7 +863,6 @@ impl<L: Wide> Bundle<L> {
                 (&mut v.normal_impulse, p.normal_impulse),
                 (&mut v.tangent_impulse, p.tangent_impulse),
                 (&mut v.total_normal_impulse, p.total_normal_impulse),
-                (&mut v.max_normal_impulse, kp.max_normal_impulse),
             ] {
                 field.set_lane(lane, x);
             }

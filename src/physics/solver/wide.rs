@@ -49,6 +49,10 @@ struct PointLanes<L> {
     tangent_mass: L,
     normal_impulse: L,
     tangent_impulse: L,
+    /// The normal impulses this step's substeps ended with, summed, less the one the step
+    /// began with: the warm start of each substep adds the impulse the last one ended with
+    /// (the first cancels the initial -P exactly), and the store adds the last. That is all
+    /// the normal constraint applied in the step, without a write per solve pass.
     total_normal_impulse: L,
 }
 
@@ -298,6 +302,9 @@ impl WideSolver {
         fn clear<L: Wide>(bundles: &mut [Vec<Bundle<L>>]) {
             for bundle in bundles.iter_mut().flatten() {
                 for p in &mut bundle.p {
+                    // The impulse the last substep ended with counts as its share of the
+                    // total (`PointLanes::total_normal_impulse`).
+                    p.total_normal_impulse += p.normal_impulse;
                     p.normal_impulse = L::ZERO;
                     p.tangent_impulse = L::ZERO;
                 }
@@ -473,10 +480,8 @@ fn solve_bundles<L: Wide>(
                 b.vx += b.inv_mass * d * nx;
                 b.vy += b.inv_mass * d * ny;
                 b.w += b.inv_inertia * (d0 * rn_b0 + d1 * rn_b1);
-                for (p, (x, dx)) in bundle.p.iter_mut().zip([(x0, d0), (x1, d1)]) {
-                    p.normal_impulse = x;
-                    p.total_normal_impulse += dx;
-                }
+                bundle.p[0].normal_impulse = x0;
+                bundle.p[1].normal_impulse = x1;
             }
             Kind::Points => {
                 for (p, &(bias, mass_scale, impulse_scale)) in
@@ -488,7 +493,6 @@ fn solve_bundles<L: Wide>(
                     let total = (p.normal_impulse + impulse).max(L::ZERO);
                     let applied = total - p.normal_impulse;
                     p.normal_impulse = total;
-                    p.total_normal_impulse += applied;
                     BodyLanes::apply(&mut a, &mut b, nx, ny, p.rn_a, p.rn_b, applied);
                 }
             }
@@ -612,8 +616,9 @@ fn store_bundles<L: Wide>(
                 }
             }
             for end in &mut ends {
-                let slip = &mut end[j].slip;
-                (slip.rt_a, slip.rt_b) = (-slip.rt_a, -slip.rt_b);
+                let end = &mut end[j];
+                end.total_normal_impulse += end.normal_impulse;
+                (end.slip.rt_a, end.slip.rt_b) = (-end.slip.rt_a, -end.slip.rt_b);
             }
         }
         for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
@@ -862,7 +867,7 @@ impl<L: Wide> Bundle<L> {
                 (&mut v.tangent_mass, kp.tangent_mass),
                 (&mut v.normal_impulse, p.normal_impulse),
                 (&mut v.tangent_impulse, p.tangent_impulse),
-                (&mut v.total_normal_impulse, p.total_normal_impulse),
+                (&mut v.total_normal_impulse, -p.normal_impulse),
             ] {
                 field.set_lane(lane, x);
             }

@@ -682,14 +682,17 @@ function onMotion(e) {
   tilt(x, y, z);
 }
 let motionOn = false, motionSeen = false;
-async function enableMotion() {
+// `quiet`: the attempt at load, which may be refused for want of a tap (iOS); only a tap's
+// refusal is shown.
+async function enableMotion(quiet) {
   if (motionOn) return;
   try {
     if (typeof DeviceMotionEvent !== 'undefined' && typeof DeviceMotionEvent.requestPermission === 'function') {
       const r = await DeviceMotionEvent.requestPermission();
-      if (r !== 'granted') { note('motion sensor: permission ' + r); return; }
+      if (r !== 'granted') { if (!quiet) note('motion sensor: permission ' + r); return; }
     }
-  } catch (e) { note('motion sensor: ' + e.message); return; }
+  } catch (e) { if (!quiet) note('motion sensor: ' + e.message); return; }
+  if (motionOn) return;
   window.addEventListener('devicemotion', onMotion);
   motionOn = true;
   document.getElementById('motion').classList.add('on');
@@ -723,7 +726,7 @@ for (const b of document.querySelectorAll('button[data-o]')) {
     }
   });
 }
-document.getElementById('motion').addEventListener('click', enableMotion);
+document.getElementById('motion').addEventListener('click', () => enableMotion(false));
 document.getElementById('invert').addEventListener('change', e => { invert = e.target.checked; });
 document.getElementById('reset').addEventListener('click', () => send('Reset', null));
 document.getElementById('worlds').addEventListener('change', e => {
@@ -768,8 +771,10 @@ window.tiltbox = {
   hello: () => hello,
 };
 
-// Where no permission is asked (Android, desktops), listen at once; iOS waits for a tap.
-if (typeof DeviceMotionEvent === 'undefined' || typeof DeviceMotionEvent.requestPermission !== 'function') enableMotion();
+// Listen at once where no permission is asked (older Android browsers, desktops) or where it is
+// granted without a tap (Chromium asks the site's sensor permission since it has
+// `DeviceMotionEvent.requestPermission`); iOS refuses without a tap and waits for one.
+enableMotion(true);
 connect(params.get('world') || '');
 requestAnimationFrame(frame);
 })();

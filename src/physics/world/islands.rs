@@ -397,21 +397,11 @@ pub(super) const SUBSTEP_QUARTERS: [u32; TIERS] = [4, 4, 6, 7, 16];
 
 /// Adaptive stiffness: relax passes per tier, as multiples of `Settings::relax_iterations`.
 /// The stack tiers need no more than the base: friction anchors hold stuck points, and the
-/// springs' creep damps the slow bounce ([`CREEP`]). [`BRACED`] gets one more, a normal
-/// relax pass ([`NORMAL_RELAX_SCALE`]). [`EXTREME`] gets 8 (not 4) times: with 4, the 4 m
-/// box of 1000 kg on two 1 kg boxes overlapped 9.8 mm (bound 10) and slid 2.3 cm; with 8,
-/// 2.5 mm and 0.04 mm. Its islands are small.
-pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 1, 1, 1, 8];
-
-/// Adaptive stiffness: normal relax passes per tier (after the relax passes, solving the
-/// normal constraints only), as multiples of `Settings::relax_iterations`. What damps a
-/// braced island's slow bounce is a second pass over its normals; friction, solved by the
-/// full relax pass before it, need not be solved again. With a full second pass instead
-/// (18 % more of the solve's work a step on a pile of boxes), pyramid_30's top moved 0.67 cm
-/// sideways (bound 2), the base-134 pyramid's fastest body ended at 0.011 m/s and the mixed
-/// pile's at 0.0007 m/s; with the normal pass, 0.06 cm, 0.087 m/s (bound 0.5) and 0.0003 m/s.
-/// With no second pass at all, 1.86 cm, 0.68 m/s (it falls) and 0.034 m/s.
-pub(super) const NORMAL_RELAX_SCALE: [u32; TIERS] = [0, 1, 0, 0, 0];
+/// springs' creep damps the slow bounce ([`CREEP`]). [`BRACED`] gets two (see
+/// [`SUBSTEP_QUARTERS`]). [`EXTREME`] gets 8 (not 4) times: with 4, the 4 m box of 1000 kg
+/// on two 1 kg boxes overlapped 9.8 mm (bound 10) and slid 2.3 cm; with 8, 2.5 mm and 0.04
+/// mm. Its islands are small.
+pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 2, 1, 1, 8];
 
 /// Adaptive stiffness: how much of last step's compression the springs creep by, per tier
 /// (`soft_step::creep`). With 0.5 in the stack tiers, [`TALL_STACK`] holds on 7 substeps and

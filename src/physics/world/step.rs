@@ -89,24 +89,30 @@ impl World {
             );
             return;
         }
-        let mut has_contacts = [false; TIERS];
+        let mut counts = [0usize; TIERS];
         for &t in &self.contact_tier {
-            has_contacts[t as usize] = true;
+            counts[t as usize] += 1;
         }
+        let has_contacts = counts.map(|n| n > 0);
         // Usually every contact is in one tier (a stack, a pyramid, a pile): solve them all.
         // Otherwise each tier solves the list of its contacts' indices, in key order, and the
-        // contacts stay where they are.
+        // contacts stay where they are. The lists are one counting sort: a pile with one box
+        // off on its own (tier 0) paid a pass over every contact per tier.
         let split = has_contacts.iter().filter(|&&h| h).count() > 1;
         let mut ranges: [std::ops::Range<usize>; TIERS] = Default::default();
         if split {
-            self.tier_contacts.clear();
-            for (tier, range) in ranges.iter_mut().enumerate() {
-                let start = self.tier_contacts.len();
-                self.tier_contacts.extend(
-                    (0..self.contacts.len() as u32)
-                        .filter(|&k| self.contact_tier[k as usize] as usize == tier),
-                );
-                *range = start..self.tier_contacts.len();
+            let mut start = 0;
+            for (range, &n) in ranges.iter_mut().zip(&counts) {
+                *range = start..start + n;
+                start += n;
+            }
+            let mut next = ranges.clone().map(|r| r.start);
+            // Every slot is written below.
+            self.tier_contacts.resize(self.contact_tier.len(), 0);
+            for (k, &t) in self.contact_tier.iter().enumerate() {
+                let slot = &mut next[t as usize];
+                self.tier_contacts[*slot] = k as u32;
+                *slot += 1;
             }
         }
         let dynamic = self

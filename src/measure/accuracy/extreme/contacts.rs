@@ -1,4 +1,4 @@
-//! Mass ratios, deep overlap, bullets and a pile of mixed shapes.
+//! Mass ratios, deep overlap, bullets, a pile of mixed shapes and a pile of boxes.
 
 use super::*;
 use crate::measure::accuracy::{
@@ -296,3 +296,60 @@ pub fn mixed_pile(settings: &Settings) -> Verdict {
         "sleeping is off, so resting means the solver holds the pile still, not that it was put to sleep",
     )
 }
+
+/// The 2,000 boxes of the `many_boxes` benchmark (0.5 m, rained from a 40 x 50 grid into a
+/// 40 m wide container), sleeping off, each run nudged a different way (gravity tilted by
+/// [`PILE_NUDGES`] for its first 10 steps): 12 s at 60 Hz, then every step of the 13th second
+/// is looked at (sampling once a second missed a vibration that the sample steps caught at
+/// rest). Report only: it fails today (see the note).
+pub fn box_pile(settings: &Settings) -> Verdict {
+    let setup = cases::benchmark_setups()
+        .into_iter()
+        .find(|s| s.name == "many_boxes")
+        .expect("many_boxes is a benchmark set-up");
+    let mut ok = true;
+    let (mut speed_late, mut moving_late) = (0.0f64, 0usize);
+    for nudge in PILE_NUDGES {
+        let mut w = new_world(settings, setup.gravity + vec2(nudge, 0.0));
+        for def in &setup.bodies {
+            w.add_body(def).unwrap();
+        }
+        ok &= run_steps(&mut w, DT_60, 10, Breakdown::NonFinite, |_, _| {});
+        w.set_gravity(setup.gravity).unwrap();
+        let n = steps_for(12.0, DT_60) - 10;
+        ok &= run_steps(&mut w, DT_60, n, Breakdown::NonFinite, |_, _| {});
+        // The last second, each body at its resting speed (speed + spin x bounding radius,
+        // the sleep test's measure).
+        for _ in 0..steps_for(1.0, DT_60) {
+            ok &= w.step(DT_60).is_ok();
+            let resting = |b: &crate::physics::Body| {
+                let r = b.shape().bounding_radius();
+                (b.linear_velocity().length() + b.angular_velocity().abs() * r) as f64
+            };
+            let moving = w.bodies().filter(|b| resting(b) >= PILE_REST).count();
+            moving_late = moving_late.max(moving);
+            speed_late = w.bodies().map(resting).fold(speed_late, f64::max);
+        }
+    }
+    let passed = ok && moving_late == 0;
+    verdict(
+        "box_pile",
+        format!(
+            "2,000 boxes rained into a 40 m box, sleeping off, nudged {} ways: over the 13th second no box moves at {PILE_REST} m/s or more (speed + spin x bounding radius)",
+            PILE_NUDGES.len()
+        ),
+        passed,
+        vec![
+            ("fastest box, 13th second (m/s)", speed_late),
+            ("boxes moving, 13th second, worst run", moving_late as f64),
+        ],
+        "Report only, because it fails with the defaults: in the benchmark's own trajectory (no nudge) 11-29 boxes deep in the pile keep vibrating (about 1 mm at 7 Hz, up to 0.19 m/s) through 22 s, while the five nudged piles rest by 9 s. The vibration stops when the braced tier's springs do not creep (creep 0: all six rest by 10 s, but the base-134 pyramid falls), so it is creep feeding on unconverged friction; with creep at half (0.25) another nudge vibrates instead. A second relax pass that solved the normals only made it worse (up to 135 boxes through 22 s). Box2D v3's and rapier2d's piles of the same boxes rest by 8 s in the unnudged run (benchmarks/vs-peers --settle)",
+    )
+}
+
+/// How `box_pile` tilts gravity sideways for the first 10 steps of each run (m/s^2): six
+/// trajectories of one chaotic pile, so that one lucky run cannot pass for all.
+const PILE_NUDGES: [Real; 6] = [0.0, 1.0e-3, 2.0e-3, 3.0e-3, 4.0e-3, 5.0e-3];
+
+/// A body at rest moves slower than this (m/s): the default sleep threshold.
+const PILE_REST: f64 = 0.05;

@@ -13,7 +13,7 @@ mod limits;
 mod stacks;
 mod terrain;
 
-pub use contacts::{bullet, deep_overlap, mass_ratio_100, mass_ratio_1000, mixed_pile};
+pub use contacts::{box_pile, bullet, deep_overlap, mass_ratio_100, mass_ratio_1000, mixed_pile};
 pub use limits::{gravity_flip, huge_dt, large_bodies, non_finite_refused, tiny_bodies};
 pub use stacks::{
     far_from_origin, pyramid_100, pyramid_134, pyramid_20, pyramid_30, pyramid_sleeps,
@@ -50,7 +50,8 @@ const fn case(name: &'static str, title: &'static str, run: Runner) -> ExtremeCa
     }
 }
 
-/// A case too slow for CI in a debug build, run by the report only.
+/// A case run by the report only: too slow for CI in a debug build (the large pyramids), or
+/// a known failure that is measured and shown but not asserted (`box_pile`).
 const fn report_case(name: &'static str, title: &'static str, run: Runner) -> ExtremeCase {
     ExtremeCase {
         report_only: true,
@@ -58,10 +59,10 @@ const fn report_case(name: &'static str, title: &'static str, run: Runner) -> Ex
     }
 }
 
-/// Every case, in report order (the report-only pyramids last). One row a case, kept as a
+/// Every case, in report order (the report-only cases last). One row a case, kept as a
 /// table.
 #[rustfmt::skip]
-const CASES: [ExtremeCase; 20] = [
+const CASES: [ExtremeCase; 21] = [
     case("stack_20", "Stack of 20, 30 s", stack_20),
     case("stack_50", "Stack of 50, 10 s", stack_50),
     case("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
@@ -82,6 +83,7 @@ const CASES: [ExtremeCase; 20] = [
     case("non_finite_refused", "NaN / inf refused", non_finite_refused),
     report_case("pyramid_134", "Pyramid base 134 (9,045 boxes) stands", pyramid_134),
     report_case("pyramid_100", "Pyramid base 100 (5,050 boxes)", pyramid_100),
+    report_case("box_pile", "Pile of 2,000 boxes comes to rest (six nudges)", box_pile),
 ];
 
 /// Every case, in report order (the report-only pyramids last).

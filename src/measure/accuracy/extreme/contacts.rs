@@ -307,6 +307,11 @@ pub fn box_pile(settings: &Settings) -> Verdict {
         .into_iter()
         .find(|s| s.name == "many_boxes")
         .expect("many_boxes is a benchmark set-up");
+    // A body's resting speed: speed + spin x bounding radius, the sleep test's measure.
+    let resting = |b: &crate::physics::Body| {
+        let r = b.shape().bounding_radius();
+        (b.linear_velocity().length() + b.angular_velocity().abs() * r) as f64
+    };
     let mut ok = true;
     let (mut speed_late, mut moving_late) = (0.0f64, 0usize);
     for nudge in PILE_NUDGES {
@@ -318,14 +323,9 @@ pub fn box_pile(settings: &Settings) -> Verdict {
         w.set_gravity(setup.gravity).unwrap();
         let n = steps_for(12.0, DT_60) - 10;
         ok &= run_steps(&mut w, DT_60, n, Breakdown::NonFinite, |_, _| {});
-        // The last second, each body at its resting speed (speed + spin x bounding radius,
-        // the sleep test's measure).
+        // The last second, every step.
         for _ in 0..steps_for(1.0, DT_60) {
             ok &= w.step(DT_60).is_ok();
-            let resting = |b: &crate::physics::Body| {
-                let r = b.shape().bounding_radius();
-                (b.linear_velocity().length() + b.angular_velocity().abs() * r) as f64
-            };
             let moving = w.bodies().filter(|b| resting(b) >= PILE_REST).count();
             moving_late = moving_late.max(moving);
             speed_late = w.bodies().map(resting).fold(speed_late, f64::max);

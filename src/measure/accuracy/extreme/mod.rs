@@ -86,7 +86,7 @@ const CASES: [ExtremeCase; 21] = [
     report_case("box_pile", "Pile of 2,000 boxes comes to rest (six nudges)", box_pile),
 ];
 
-/// Every case, in report order (the report-only pyramids last).
+/// Every case, in report order (the report-only cases last).
 pub fn all() -> &'static [ExtremeCase] {
     &CASES
 }

@@ -27,12 +27,6 @@ pub(crate) struct ContactPoint {
     /// Everything the normal constraint applied this step, warm start included (N s): the
     /// contact force times dt, whatever the solver's substeps.
     pub total_normal_impulse: Real,
-    /// Soft step: how far B's surface has slipped along the tangent over A's at this point
-    /// since the point stuck (m), carried from step to step while static friction holds; 0
-    /// for a new point or one that slid (the friction anchor).
-    pub slip: Real,
-    /// Soft step: static friction held this point at the end of the last step.
-    pub stuck: bool,
     /// Sequential solver: the normal velocity with which a speculative point closed its gap
     /// last step (m/s), for restitution when the surfaces meet; 0 otherwise.
     pub approach_velocity: Real,

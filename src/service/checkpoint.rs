@@ -27,7 +27,9 @@ use std::thread::JoinHandle;
 /// 5: contact points carry their friction anchor (slip, and the tangent arms).
 /// 6: contacts carry what contact recycling reuses (points in both bodies' frames, the normal
 /// in A's, the pair's rotation), and `Settings` has `contact_recycling`.
-pub const FORMAT_VERSION: u32 = 7;
+/// 7: the per-step constraint left the contact (contacts carry what lasts between steps only).
+/// 8: contact points no longer carry a friction anchor (no slip, no stuck flag).
+pub const FORMAT_VERSION: u32 = 8;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

@@ -13,7 +13,7 @@ use super::BlockMass;
 use crate::physics::math::{cross, Real, Vec2};
 
 /// A point's lever arms along the normal n and tangent t: rA x n, rB x n, rA x t, rB x t,
-/// rA . n, rB . n, rA . t, rB . t. With them a point's normal velocity is
+/// rA . n, rB . n. With them a point's normal velocity is
 /// (vB - vA) . n + wB (rB x n) - wA (rA x n), and an impulse's torque is lambda (r x n): no
 /// cross products in the inner loop.
 #[derive(Clone, Copy, Debug, Default)]
@@ -24,8 +24,6 @@ pub(crate) struct Arms {
     pub rt_b: Real,
     pub ra_n: Real,
     pub rb_n: Real,
-    pub ra_t: Real,
-    pub rb_t: Real,
 }
 
 impl Arms {
@@ -39,8 +37,6 @@ impl Arms {
             rt_b: cross(rb, t),
             ra_n: ra.dot(n),
             rb_n: rb.dot(n),
-            ra_t: ra.dot(t),
-            rb_t: rb.dot(t),
         }
     }
 }
@@ -58,9 +54,6 @@ pub(crate) struct PointConstraint {
     /// Soft step: separation minus the anchors' contribution (m), so the current separation
     /// is (dpB - dpA + qB rB - qA rA) . n + adjusted_separation.
     pub adjusted_separation: Real,
-    /// Soft step: the friction anchor's slip minus the anchors' contribution (m), so the
-    /// current slip is (dpB - dpA + qB rB - qA rA) . t + adjusted_slip.
-    pub adjusted_slip: Real,
     /// Normal relative velocity before the solve (m/s): the approach speed restitution
     /// reverses.
     pub relative_velocity: Real,
@@ -68,35 +61,7 @@ pub(crate) struct PointConstraint {
     pub bias: Real,
 }
 
-impl PointConstraint {
-    /// What the friction anchor needs to measure the point's slip now (see [`Slip`]).
-    #[inline]
-    pub fn slip(&self) -> Slip {
-        Slip {
-            ra_t: self.arms.ra_t,
-            rb_t: self.arms.rb_t,
-            rt_a: self.arms.rt_a,
-            rt_b: self.arms.rt_b,
-            adjusted: self.adjusted_slip,
-        }
-    }
-}
-
-/// A point's slip along the tangent, as the friction anchor measures it: the arms
-/// rA . t, rB . t, rA x t, rB x t (m) and the adjusted slip (m; see
-/// [`PointConstraint::adjusted_slip`]). The wide solver builds it from its lanes, the
-/// scalar code from a [`PointConstraint`].
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Slip {
-    pub ra_t: Real,
-    pub rb_t: Real,
-    pub rt_a: Real,
-    pub rt_b: Real,
-    pub adjusted: Real,
-}
-
-/// A point at the end of the solve: its accumulated impulses (per substep, N s) and what
-/// measures its slip. The wide solver hands these out of its lanes to the end-of-step work,
+/// A point at the end of the solve: its accumulated impulses (per substep, N s). The wide solver hands these out of its lanes to the end-of-step work,
 /// which writes the contact once; the scalar code builds them from the contact.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct PointEnd {
@@ -106,8 +71,6 @@ pub(crate) struct PointEnd {
     pub tangent_impulse: Real,
     /// Everything the normal constraint applied this step (N s).
     pub total_normal_impulse: Real,
-    /// The point's slip, as the friction anchor measures it.
-    pub slip: Slip,
 }
 
 /// One contact's constraint for the current step.

@@ -8,7 +8,7 @@
 //! push-out speed is capped; and speculative points (separation > 0) only let the bodies
 //! close the gap in one substep, which stops fast bodies at the surface.
 
-use super::constraint::{Arms, ContactConstraint, PointConstraint, PointEnd, Slip};
+use super::constraint::{Arms, ContactConstraint, PointConstraint, PointEnd};
 use super::sequential::point_masses;
 use super::wide::WideSolver;
 use super::{
@@ -168,10 +168,10 @@ pub(crate) fn solve(
     // Each contact is finished as its impulses are stored (finishing one reads nothing of the
     // others and no velocity): one pass over the contacts. Those that bounce wait for the
     // restitution pass, which changes their impulses; they and the scalar code's contacts
-    // finish from their kept constraints.
+    // finish from the impulses kept in the contact.
     wide.store(contacts, |c, _, ends| {
         if c.restitution == 0.0 {
-            finish(bodies, c, ends, substeps, inv_dt);
+            finish(c, ends, substeps, inv_dt);
         } else {
             for (p, end) in c.points[..c.count].iter_mut().zip(ends) {
                 p.normal_impulse = end.normal_impulse;
@@ -181,15 +181,11 @@ pub(crate) fn solve(
         }
     });
     // The point ends of a contact the scalar code solved, or that bounced.
-    let kept = |c: &Contact, k: &ContactConstraint| {
-        [0, 1].map(|j| {
-            let (p, k) = (&c.points[j], &k.points[j]);
-            PointEnd {
-                normal_impulse: p.normal_impulse,
-                tangent_impulse: p.tangent_impulse,
-                total_normal_impulse: p.total_normal_impulse,
-                slip: k.slip(),
-            }
+    let kept = |c: &Contact| {
+        c.points.map(|p| PointEnd {
+            normal_impulse: p.normal_impulse,
+            tangent_impulse: p.tangent_impulse,
+            total_normal_impulse: p.total_normal_impulse,
         })
     };
     if bouncy {
@@ -203,53 +199,26 @@ pub(crate) fn solve(
         selected.for_each_index(contacts.len(), |i| {
             let c = &mut contacts[i];
             if c.restitution != 0.0 {
-                let ends = kept(c, &constraints[i]);
-                finish(bodies, c, &ends, substeps, inv_dt);
+                let ends = kept(c);
+                finish(c, &ends, substeps, inv_dt);
             }
         });
     }
     for &i in &wide.overflow {
         let c = &mut contacts[i as usize];
         if c.restitution == 0.0 {
-            let ends = kept(c, &constraints[i as usize]);
-            finish(bodies, c, &ends, substeps, inv_dt);
+            let ends = kept(c);
+            finish(c, &ends, substeps, inv_dt);
         }
     }
 }
 
-/// The end of a step for contact `c`, from its points' `ends`: each point's friction anchor,
-/// its impulses back from per substep to per step, and the contact's load (`substeps` as a
-/// number, `inv_dt` in 1/s).
+/// The end of a step for contact `c`, from its points' `ends`: their impulses back from per
+/// substep to per step, and the contact's load (`substeps` as a number, `inv_dt` in 1/s).
 #[inline]
-fn finish(
-    bodies: &[SolverBody],
-    c: &mut Contact,
-    ends: &[PointEnd; 2],
-    substeps: Real,
-    inv_dt: Real,
-) {
-    // A moving kinematic body is fixed in the solver (its motion is not in `dp`), so slip
-    // against it cannot be measured: such contacts are never anchored.
-    let moving_fixed = |s: &SolverBody| s.inv_mass == 0.0 && (s.v != Vec2::ZERO || s.w != 0.0);
-    let t = c.tangent();
-    let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
-    let dp_t = (b.dp - a.dp).dot(t);
-    let friction = c.friction;
-    let measurable = !moving_fixed(a) && !moving_fixed(b);
+fn finish(c: &mut Contact, ends: &[PointEnd; 2], substeps: Real, inv_dt: Real) {
     let mut force = 0.0;
     for (p, end) in c.points[..c.count].iter_mut().zip(ends) {
-        // Carry the slip to the next step while static friction holds the point: one that
-        // ends the step inside the friction cone (and pushing) sticks. Only a step that
-        // also began stuck adds to the slip, so the anchor undoes creep, never the end of
-        // a slide; a point that slides starts over from where it stops.
-        let max_f = friction * end.normal_impulse;
-        let stuck = measurable && max_f > 0.0 && end.tangent_impulse.abs() < STICK * max_f;
-        p.slip = if stuck && p.stuck {
-            current_slip(a, b, &end.slip, dp_t)
-        } else {
-            0.0
-        };
-        p.stuck = stuck;
         p.normal_impulse = end.normal_impulse * substeps;
         p.tangent_impulse = end.tangent_impulse * substeps;
         p.total_normal_impulse = end.total_normal_impulse;
@@ -336,10 +305,6 @@ impl Stiffness {
 /// factor (0.98: to half in 34 steps, about 0.6 s at 60 Hz).
 const HERTZ_DECAY: Real = 0.98;
 
-/// A point whose friction impulse is under this fraction of the Coulomb limit sticks: its
-/// slip is kept for the next step's friction anchor.
-const STICK: Real = 0.99;
-
 /// Work out contact `c`'s constraint `k` for this step (effective masses, adjusted
 /// separations, approach speeds, spring, block) between bodies `a` and `b`; the impulses it
 /// carries from the last step become per substep (`per_substep` = 1 / substeps).
@@ -363,7 +328,6 @@ fn prepare(
         kp.arms = arms;
         point_masses(a, b, p, kp, n, t);
         kp.adjusted_separation = p.separation - (arms.rb_n - arms.ra_n);
-        kp.adjusted_slip = p.slip - (arms.rb_t - arms.ra_t);
         kp.relative_velocity = relative_velocity(a, b, n, arms.rn_a, arms.rn_b);
         p.total_normal_impulse = 0.0;
         if !warm_starting {
@@ -497,35 +461,16 @@ fn solve_contact(
         if c.friction == 0.0 {
             return;
         }
-        let dp_t = (b.dp - a.dp).dot(t);
         for (p, kp) in c.points[..c.count].iter_mut().zip(&k.points) {
             let vt = relative_velocity(a, b, t, kp.arms.rt_a, kp.arms.rt_b);
             let max_f = c.friction * p.normal_impulse;
-            // The friction anchor: with the bias, static friction also undoes the slip of a
-            // point that began the step stuck, at the normal spring's rate (the relax passes then take the
-            // velocity this adds back out, as they do the normal's).
-            let bias = if use_bias && p.stuck {
-                (sf.mass_scale * sf.bias_rate * current_slip(a, b, &kp.slip(), dp_t))
-                    .clamp(-max_push_out, max_push_out)
-            } else {
-                0.0
-            };
-            let impulse = -kp.tangent_mass * (vt + bias);
+            let impulse = -kp.tangent_mass * vt;
             let total = (p.tangent_impulse + impulse).clamp(-max_f, max_f);
             let applied = total - p.tangent_impulse;
             p.tangent_impulse = total;
             apply_along(a, b, t, kp.arms.rt_a, kp.arms.rt_b, applied);
         }
     }
-}
-
-/// A point's slip along the tangent now: the slip at the start of the step plus how far the
-/// bodies moved this step, as the separation is found (`(q r) . t = c (r . t) + s (r x t)`).
-#[inline]
-fn current_slip(a: &SolverBody, b: &SolverBody, slip: &Slip, dp_t: Real) -> Real {
-    let rot_b = b.dq.c * slip.rb_t + b.dq.s * slip.rt_b;
-    let rot_a = a.dq.c * slip.ra_t + a.dq.s * slip.rt_a;
-    dp_t + rot_b - rot_a + slip.adjusted
 }
 
 /// Add `impulse` (N s) to a point's accumulated normal impulse, clamped so that the total

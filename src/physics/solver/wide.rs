@@ -42,9 +42,6 @@ struct PointLanes<L> {
     ra_n: L,
     rb_n: L,
     adjusted_separation: L,
-    adjusted_slip: L,
-    /// 1 where the point began the step stuck (its slip is undone), 0 elsewhere.
-    anchor: L,
     normal_mass: L,
     tangent_mass: L,
     normal_impulse: L,
@@ -57,10 +54,10 @@ struct PointLanes<L> {
 }
 
 impl<L: Wide> PointLanes<L> {
-    /// The tangent arms r x t of A and B. With t = (n_y, -n_x) they are -(r . n), and r . t
-    /// is r x n: four of `Arms`' eight words are the other four up to sign (to the bit, but
-    /// for the sign of an exact zero: IEEE negation and rounding are symmetric), so a bundle
-    /// carries four per point, 256 bytes less per eight-lane bundle for the passes to stream.
+    /// The tangent arms r x t of A and B. With t = (n_y, -n_x) they are -(r . n): two of
+    /// `Arms`' six words are two others up to sign (to the bit, but for the sign of an exact
+    /// zero: IEEE negation and rounding are symmetric), so a bundle carries four per point,
+    /// 128 bytes less per eight-lane bundle for the passes to stream.
     #[inline(always)]
     fn tangent_arms(&self) -> (L, L) {
         (-self.ra_n, -self.rb_n)
@@ -498,26 +495,14 @@ fn solve_bundles<L: Wide>(
             }
         }
 
-        // Friction, one point after the other; skipped when no lane has any. With the bias,
-        // static friction also undoes the slip of a point that began the step stuck (the
-        // friction anchor).
+        // Friction, one point after the other; skipped when no lane has any.
         let (tx, ty) = (ny, -nx);
         if L::any(bundle.friction.cmpgt(L::ZERO)) {
-            let dp_t = (b.dpx - a.dpx) * tx + (b.dpy - a.dpy) * ty;
             for p in &mut bundle.p {
                 let (rt_a, rt_b) = p.tangent_arms();
                 let vt = BodyLanes::relative(&a, &b, tx, ty, rt_a, rt_b);
                 let max_f = bundle.friction * p.normal_impulse;
-                let bias = if use_bias {
-                    // r . t is r x n (`PointLanes::tangent_arms`).
-                    let slip = dp_t + (b.qc * p.rn_b + b.qs * rt_b) - (a.qc * p.rn_a + a.qs * rt_a)
-                        + p.adjusted_slip;
-                    (p.anchor * bundle.mass_scale * bundle.bias_rate * slip)
-                        .clamp(push_out, -push_out)
-                } else {
-                    L::ZERO
-                };
-                let total = (p.tangent_impulse - p.tangent_mass * (vt + bias)).clamp(-max_f, max_f);
+                let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);
                 let applied = total - p.tangent_impulse;
                 p.tangent_impulse = total;
                 BodyLanes::apply(&mut a, &mut b, tx, ty, rt_a, rt_b, applied);
@@ -597,18 +582,10 @@ fn store_bundles<L: Wide>(
         // The lanes' point ends, field by field: each field's lanes are read out once.
         let mut ends = [[PointEnd::default(); 2]; 8];
         for (j, p) in bundle.p.iter().enumerate() {
-            // r . t is r x n and r x t is -(r . n) (`PointLanes::tangent_arms`); the signs
-            // are turned on the numbers below, since this function is not compiled for AVX
-            // and a lane negation here was a call per bundle.
-            let fields: [EndField<L>; 8] = [
+            let fields: [EndField<L>; 3] = [
                 (p.normal_impulse, |e| &mut e.normal_impulse),
                 (p.tangent_impulse, |e| &mut e.tangent_impulse),
                 (p.total_normal_impulse, |e| &mut e.total_normal_impulse),
-                (p.rn_a, |e| &mut e.slip.ra_t),
-                (p.rn_b, |e| &mut e.slip.rb_t),
-                (p.ra_n, |e| &mut e.slip.rt_a),
-                (p.rb_n, |e| &mut e.slip.rt_b),
-                (p.adjusted_slip, |e| &mut e.slip.adjusted),
             ];
             for (lanes, field) in fields {
                 for (end, &x) in ends.iter_mut().zip(lanes.to_lanes().as_ref()) {
@@ -618,7 +595,6 @@ fn store_bundles<L: Wide>(
             for end in &mut ends {
                 let end = &mut end[j];
                 end.total_normal_impulse += end.normal_impulse;
-                (end.slip.rt_a, end.slip.rt_b) = (-end.slip.rt_a, -end.slip.rt_b);
             }
         }
         for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
@@ -778,8 +754,6 @@ impl<L: Wide> Bundle<L> {
             ra_n: zero,
             rb_n: zero,
             adjusted_separation: zero,
-            adjusted_slip: zero,
-            anchor: zero,
             normal_mass: zero,
             tangent_mass: zero,
             normal_impulse: zero,
@@ -864,8 +838,6 @@ impl<L: Wide> Bundle<L> {
                 (&mut v.ra_n, arms.ra_n),
                 (&mut v.rb_n, arms.rb_n),
                 (&mut v.adjusted_separation, kp.adjusted_separation),
-                (&mut v.adjusted_slip, kp.adjusted_slip),
-                (&mut v.anchor, if p.stuck { 1.0 } else { 0.0 }),
                 (&mut v.normal_mass, kp.normal_mass),
                 (&mut v.tangent_mass, kp.tangent_mass),
                 (&mut v.normal_impulse, p.normal_impulse),

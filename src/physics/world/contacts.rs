@@ -195,8 +195,6 @@ impl World {
                     cp.normal_impulse = prev.normal_impulse;
                     cp.tangent_impulse = prev.tangent_impulse;
                     cp.approach_velocity = prev.approach_velocity;
-                    cp.slip = prev.slip;
-                    cp.stuck = prev.stuck;
                 }
             }
             self.tier_inputs.push(TierInput::of(&contact, slop));

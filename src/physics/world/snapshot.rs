@@ -77,15 +77,13 @@ pub struct SlotState {
 pub struct PointState {
     /// Feature id.
     pub id: u16,
-    /// point.x, point.y, separation, anchor_a.x, anchor_a.y, anchor_b.x, anchor_b.y, slip.
-    pub geometry: [Real; 8],
+    /// point.x, point.y, separation, anchor_a.x, anchor_a.y, anchor_b.x, anchor_b.y.
+    pub geometry: [Real; 7],
     /// normal, tangent and total normal impulse (N s).
     pub impulses: [Real; 3],
     /// Sequential solver: the approach velocity of a speculative point that closed its gap
     /// (m/s).
     pub approach_velocity: Real,
-    /// Static friction held the point at the end of the last step (its slip counts).
-    pub stuck: bool,
     /// Contact recycling: local_a.x, local_a.y, local_b.x, local_b.y, base separation.
     /// Checkpoint format version 6 on.
     pub recycle: [Real; 5],
@@ -164,11 +162,9 @@ fn contact_state(c: &Contact) -> ContactState {
                 p.anchor_a.y,
                 p.anchor_b.x,
                 p.anchor_b.y,
-                p.slip,
             ],
             impulses: [p.normal_impulse, p.tangent_impulse, p.total_normal_impulse],
             approach_velocity: p.approach_velocity,
-            stuck: p.stuck,
             recycle: [
                 p.local_a.x,
                 p.local_a.y,
@@ -258,12 +254,10 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             separation: g[2],
             anchor_a: Vec2::new(g[3], g[4]),
             anchor_b: Vec2::new(g[5], g[6]),
-            slip: g[7],
             normal_impulse: p.impulses[0],
             tangent_impulse: p.impulses[1],
             total_normal_impulse: p.impulses[2],
             approach_velocity: p.approach_velocity,
-            stuck: p.stuck,
             local_a: Vec2::new(p.recycle[0], p.recycle[1]),
             local_b: Vec2::new(p.recycle[2], p.recycle[3]),
             base_separation: p.recycle[4],

@@ -122,38 +122,6 @@ fn four_and_eight_lanes_step_bit_identically() {
     );
 }
 
-/// The friction anchor undoes a stuck point's slip: a box resting on the ground whose two
-/// contact points are told they have slipped 1 mm along the tangent (+x, box over ground)
-/// since they stuck is pulled back by that 1 mm, and stays there, since static friction
-/// (mu 0.6) holds it. Without the anchor nothing would move it (it is at rest).
-#[test]
-fn friction_anchor_pulls_a_stuck_box_back_by_its_slip() {
-    let mut w = awake_world_on_floor(10.0);
-    let id = w
-        .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)))
-        .unwrap();
-    for _ in 0..60 {
-        w.step(1.0 / 60.0).unwrap();
-    }
-    let x0 = w.body(id).unwrap().position().x;
-    assert_eq!(w.contacts.len(), 1);
-    let c = &mut w.contacts[0];
-    assert_eq!(c.count, 2);
-    assert!(c.points.iter().all(|p| p.stuck), "a resting box sticks");
-    for p in &mut c.points {
-        p.slip = 0.001;
-    }
-    for _ in 0..60 {
-        w.step(1.0 / 60.0).unwrap();
-    }
-    let moved = w.body(id).unwrap().position().x - x0;
-    assert!(
-        (moved + 0.001).abs() < 1e-4,
-        "moved {moved} m, expected -0.001 m"
-    );
-    assert!(w.body(id).unwrap().linear_velocity().length() < 1e-3);
-}
-
 /// How far a box `width` m wide and 1 m tall resting on the floor has sunk (m), after 2 s
 /// on `settings`.
 fn rest_compression(settings: Settings, width: Real) -> Real {

@@ -337,7 +337,7 @@ impl WideSolver {
     }
 
     /// Hand each contact, with its index, the ends of its points read out of the lanes
-    /// (impulses and what measures their slip), for the end-of-step work to write back (for
+    /// (their impulses), for the end-of-step work to write back (for
     /// warm starting next step, what `World::contacts` reports, and restitution).
     pub fn store(
         &self,

@@ -140,7 +140,7 @@ impl World {
             };
             if let (Some(manifold), Some(base)) = (recycled, previous) {
                 // The same points as last step: the contact carries over whole (impulses,
-                // friction anchors, load, the recycling frame) and only its geometry moves.
+                // load, the recycling frame) and only its geometry moves.
                 // Everything else in it is recomputed by the solver's prepare.
                 let contact = if in_place {
                     written += 1;

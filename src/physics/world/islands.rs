@@ -274,7 +274,7 @@ impl World {
 
 /// What adaptive stiffness reads of a contact, taken as the contact is found: 16 bytes, so
 /// that giving the contacts their tiers does not stream through the whole contacts (that
-/// pass was 7 % of large_pyramid's step when they were 400 bytes; they are 216 now).
+/// pass was 7 % of large_pyramid's step when they were 400 bytes; they are 208 now).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct TierInput {
     /// Slots of bodies A and B.
@@ -396,8 +396,8 @@ fn island_tier(need: u8, braced: bool) -> u8 {
 pub(super) const SUBSTEP_QUARTERS: [u32; TIERS] = [4, 4, 6, 7, 16];
 
 /// Adaptive stiffness: relax passes per tier, as multiples of `Settings::relax_iterations`.
-/// The stack tiers need no more than the base: friction anchors hold stuck points, and the
-/// springs' creep damps the slow bounce ([`CREEP`]). [`BRACED`] gets two (see
+/// The stack tiers need no more than the base: the springs' creep damps the slow bounce
+/// ([`CREEP`]). [`BRACED`] gets two (see
 /// [`SUBSTEP_QUARTERS`]). [`EXTREME`] gets 8 (not 4) times: with 4, the 4 m box of 1000 kg
 /// on two 1 kg boxes overlapped 9.8 mm (bound 10) and slid 2.3 cm; with 8, 2.5 mm and 0.04
 /// mm. Its islands are small.

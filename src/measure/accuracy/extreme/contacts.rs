@@ -301,7 +301,7 @@ pub fn mixed_pile(settings: &Settings) -> Verdict {
 /// 40 m wide container), sleeping off, each run nudged a different way (gravity tilted by
 /// [`PILE_NUDGES`] for its first 10 steps): 12 s at 60 Hz, then every step of the 13th second
 /// is looked at (sampling once a second missed a vibration that the sample steps caught at
-/// rest). Report only: it fails today (see the note).
+/// rest). The bar is the default sleep threshold: a pile that passes would fall asleep.
 pub fn box_pile(settings: &Settings) -> Verdict {
     let setup = cases::benchmark_setups()
         .into_iter()
@@ -343,7 +343,7 @@ pub fn box_pile(settings: &Settings) -> Verdict {
             ("fastest box, 13th second (m/s)", speed_late),
             ("boxes moving, 13th second, worst run", moving_late as f64),
         ],
-        "Report only, because it fails with the defaults: in the benchmark's own trajectory (no nudge) 11-29 boxes deep in the pile keep vibrating (about 1 mm at 7 Hz, up to 0.19 m/s) through 22 s, while the five nudged piles rest by 9 s. The vibration stops when the braced tier's springs do not creep (creep 0: all six rest by 10 s, but the base-134 pyramid falls), so it is creep feeding on unconverged friction; with creep at half (0.25) another nudge vibrates instead. A second relax pass that solved the normals only made it worse (up to 135 boxes through 22 s). Box2D v3's and rapier2d's piles of the same boxes rest by 8 s in the unnudged run (benchmarks/vs-peers --settle)",
+        "Until 2026-11-25 this failed with the defaults: friction anchors (a stuck point's slip carried across steps and undone by the biased friction pass) and the braced tier's creeping springs kept 11-29 boxes deep in the unnudged pile vibrating (about 1 mm at 7 Hz, up to 0.19 m/s) through 22 s, and in 3 of 12 nudged runs some boxes still moved in the 13th second. Without the anchors, 0 of 12 nudged runs had a box moving after the 9th second. Box2D v3's and rapier2d's piles of the same boxes rest by 8 s in the unnudged run (benchmarks/vs-peers --settle)",
     )
 }
 

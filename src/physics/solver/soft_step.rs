@@ -61,11 +61,14 @@ impl Softness {
     }
 }
 
-/// The work one solve does: the settings (the World's, or a tier's) and how much the springs
-/// creep (see [`creep`]; 0: none).
+/// The work one solve does: the settings (the World's, or a tier's), how much the springs
+/// creep (see [`creep`]; 0: none) and how many normal relax passes follow the relax passes.
 pub(crate) struct Work<'a> {
     pub settings: &'a Settings,
     pub creep: Real,
+    /// Relax passes, after the `settings.relax_iterations` full ones, that solve the normal
+    /// constraints only: friction keeps what the full passes left it.
+    pub normal_relax: u32,
 }
 
 /// Run one full step of `dt` seconds on the `selected` contacts and the `moving` bodies (the
@@ -83,7 +86,11 @@ pub(crate) fn solve(
     dt: Real,
     limits: Limits,
 ) {
-    let Work { settings, creep } = work;
+    let Work {
+        settings,
+        creep,
+        normal_relax,
+    } = work;
     let substeps = settings.substeps.max(1);
     let h = dt / substeps as Real;
     let inv_h = 1.0 / h;
@@ -144,20 +151,21 @@ pub(crate) fn solve(
                 }
             }
         }
-        for pass in 0..=settings.relax_iterations {
-            // The biased pass, then (after the positions move) the relax passes.
+        for pass in 0..=settings.relax_iterations + normal_relax {
+            // The biased pass, then (after the positions move) the relax passes, the normal
+            // relax passes last.
             let use_bias = pass == 0;
-            wide.solve(bodies, inv_h, use_bias, push_out);
+            let friction = pass <= settings.relax_iterations;
+            wide.solve(bodies, inv_h, use_bias, push_out, friction);
             for &i in &wide.overflow {
                 let i = i as usize;
-                solve_contact(
-                    bodies,
-                    &mut contacts[i],
-                    &mut constraints[i],
+                let pass = Pass {
                     inv_h,
                     use_bias,
-                    push_out,
-                );
+                    max_push_out: push_out,
+                    friction,
+                };
+                solve_contact(bodies, &mut contacts[i], &mut constraints[i], pass);
             }
             if use_bias {
                 integrate_positions(bodies, moving, h, limits);
@@ -396,16 +404,30 @@ fn warm_start(bodies: &mut [SolverBody], c: &mut Contact, k: &ContactConstraint)
     }
 }
 
-/// Solve one contact (`k`: its constraint): with the soft bias (`use_bias`), or the relax
-/// pass without.
+/// What one solve pass does to a contact: 1 / substep (1/s), with the soft bias or (a relax
+/// pass) without, the push-out cap (m/s), and whether friction is solved (not in a normal
+/// relax pass).
+#[derive(Clone, Copy, Debug)]
+struct Pass {
+    inv_h: Real,
+    use_bias: bool,
+    max_push_out: Real,
+    friction: bool,
+}
+
+/// Solve one contact (`k`: its constraint) in `pass`.
 fn solve_contact(
     bodies: &mut [SolverBody],
     c: &mut Contact,
     k: &mut ContactConstraint,
-    inv_h: Real,
-    use_bias: bool,
-    max_push_out: Real,
+    pass: Pass,
 ) {
+    let Pass {
+        inv_h,
+        use_bias,
+        max_push_out,
+        friction,
+    } = pass;
     {
         let n = c.normal;
         let t = c.tangent();
@@ -458,7 +480,7 @@ fn solve_contact(
             }
         }
 
-        if c.friction == 0.0 {
+        if !friction || c.friction == 0.0 {
             return;
         }
         for (p, kp) in c.points[..c.count].iter_mut().zip(&k.points) {

@@ -311,28 +311,29 @@ impl WideSolver {
         clear(&mut self.bundles8);
     }
 
-    /// One pass over every bundle, with the soft bias (`use_bias`) or the relax pass without.
+    /// One pass over every bundle, with the soft bias (`use_bias`) or the relax pass without;
+    /// a relax pass without `friction` solves the normal constraints only.
     pub fn solve(
         &mut self,
         bodies: &mut [SolverBody],
         inv_h: Real,
         use_bias: bool,
         max_push_out: Real,
+        friction: bool,
     ) {
+        let pass = PassKind::of(use_bias, friction);
         match self.built {
             Some(Width::Eight) => {
                 let bundles = &mut self.bundles8[..self.lists];
-                eight::solve(bundles, bodies, inv_h, use_bias, max_push_out)
+                eight::solve(bundles, bodies, inv_h, pass, max_push_out)
             }
-            _ => {
-                let bundles = &mut self.bundles4[..self.lists];
-                // As in `eight::solve_avx2`: one copy per `use_bias`.
-                if use_bias {
-                    solve_bundles(bundles, bodies, inv_h, true, max_push_out)
-                } else {
-                    solve_bundles(bundles, bodies, inv_h, false, max_push_out)
-                }
-            }
+            _ => solve_pass(
+                &mut self.bundles4[..self.lists],
+                bodies,
+                inv_h,
+                pass,
+                max_push_out,
+            ),
         }
     }
 
@@ -355,7 +356,7 @@ impl WideSolver {
 /// eight-lane bundles only if the processor has it; elsewhere never chosen (the portable
 /// `Lanes8` keeps them compiling).
 mod eight {
-    use super::{solve_bundles, warm_start_bundles, Bundle, Lanes8, Real, SolverBody};
+    use super::{solve_pass, warm_start_bundles, Bundle, Lanes8, PassKind, Real, SolverBody};
 
     /// [`warm_start_bundles`] on eight lanes.
     pub(super) fn warm_start(bundles: &mut [Vec<Bundle<Lanes8>>], bodies: &mut [SolverBody]) {
@@ -368,21 +369,21 @@ mod eight {
         warm_start_bundles(bundles, bodies)
     }
 
-    /// [`solve_bundles`] on eight lanes.
+    /// [`solve_pass`] on eight lanes.
     pub(super) fn solve(
         bundles: &mut [Vec<Bundle<Lanes8>>],
         bodies: &mut [SolverBody],
         inv_h: Real,
-        use_bias: bool,
+        pass: PassKind,
         max_push_out: Real,
     ) {
         #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
         // SAFETY: as above.
         unsafe {
-            solve_avx2(bundles, bodies, inv_h, use_bias, max_push_out)
+            solve_avx2(bundles, bodies, inv_h, pass, max_push_out)
         }
         #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
-        solve_bundles(bundles, bodies, inv_h, use_bias, max_push_out)
+        solve_pass(bundles, bodies, inv_h, pass, max_push_out)
     }
 
     /// # Safety
@@ -401,15 +402,49 @@ mod eight {
         bundles: &mut [Vec<Bundle<Lanes8>>],
         bodies: &mut [SolverBody],
         inv_h: Real,
-        use_bias: bool,
+        pass: PassKind,
         max_push_out: Real,
     ) {
-        // Two copies of the pass, so that each is compiled for its own `use_bias`.
-        if use_bias {
-            solve_bundles(bundles, bodies, inv_h, true, max_push_out);
-        } else {
-            solve_bundles(bundles, bodies, inv_h, false, max_push_out);
+        solve_pass(bundles, bodies, inv_h, pass, max_push_out);
+    }
+}
+
+/// What a solve pass solves: the biased pass (normal and friction, with the soft bias), a
+/// relax pass (both, without), or a normal relax pass (the normal constraints only, without).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PassKind {
+    Biased,
+    Relax,
+    NormalRelax,
+}
+
+impl PassKind {
+    /// The pass with the bias (`use_bias`, friction always solved) or without, with or without
+    /// `friction`.
+    fn of(use_bias: bool, friction: bool) -> PassKind {
+        match (use_bias, friction) {
+            (true, _) => PassKind::Biased,
+            (false, true) => PassKind::Relax,
+            (false, false) => PassKind::NormalRelax,
         }
+    }
+}
+
+/// One pass over every bundle: one copy of [`solve_bundles`] per kind of pass, each compiled
+/// without the arithmetic its kind leaves out (the relax passes without the bias, the normal
+/// relax also without friction).
+#[inline(always)]
+fn solve_pass<L: Wide>(
+    bundles: &mut [Vec<Bundle<L>>],
+    bodies: &mut [SolverBody],
+    inv_h: Real,
+    pass: PassKind,
+    max_push_out: Real,
+) {
+    match pass {
+        PassKind::Biased => solve_bundles(bundles, bodies, inv_h, true, true, max_push_out),
+        PassKind::Relax => solve_bundles(bundles, bodies, inv_h, false, true, max_push_out),
+        PassKind::NormalRelax => solve_bundles(bundles, bodies, inv_h, false, false, max_push_out),
     }
 }
 
@@ -430,13 +465,15 @@ fn warm_start_bundles<L: Wide>(bundles: &mut [Vec<Bundle<L>>], bodies: &mut [Sol
     }
 }
 
-/// One pass over every bundle, with the soft bias (`use_bias`) or the relax pass without.
+/// One pass over every bundle, with the soft bias (`use_bias`) or the relax pass without,
+/// with friction or (a normal relax pass) without.
 #[inline(always)]
 fn solve_bundles<L: Wide>(
     bundles: &mut [Vec<Bundle<L>>],
     bodies: &mut [SolverBody],
     inv_h: Real,
     use_bias: bool,
+    friction: bool,
     max_push_out: Real,
 ) {
     let inv_h = L::splat(inv_h);
@@ -495,9 +532,10 @@ fn solve_bundles<L: Wide>(
             }
         }
 
-        // Friction, one point after the other; skipped when no lane has any.
+        // Friction, one point after the other; skipped when no lane has any, and in a normal
+        // relax pass.
         let (tx, ty) = (ny, -nx);
-        if L::any(bundle.friction.cmpgt(L::ZERO)) {
+        if friction && L::any(bundle.friction.cmpgt(L::ZERO)) {
             for p in &mut bundle.p {
                 let (rt_a, rt_b) = p.tangent_arms();
                 let vt = BodyLanes::relative(&a, &b, tx, ty, rt_a, rt_b);

@@ -389,19 +389,31 @@ fn island_tier(need: u8, braced: bool) -> u8 {
 /// creep (`soft_step::creep`); with it, 7 substeps hold a jittered 50-box stack to 1.2 cm of
 /// drift (bound 5), 6 do not (11.5 cm), nor do 4 with two relax passes (it falls).
 /// Braced islands need the slow bounce of their rows damped rather than stiffer springs: on
-/// the base substeps with two relax passes and creep, a base-134 pyramid ends with its
-/// fastest body at 0.01 m/s (0.28 on 7 substeps and one pass, 0.58 on 4 and one pass; bound
-/// 0.5) and pyramid_30's top moves 0.66 cm (bound 2), for 16 solver passes a step instead
-/// of 21.
+/// the base substeps with a relax pass, a normal relax pass ([`NORMAL_RELAX_SCALE`]) and
+/// creep, a base-134 pyramid ends with its fastest body at 0.04 m/s (bound 0.5) and
+/// pyramid_30's top moves 0.77 cm (bound 2), for 12 solver passes and 4 normal-only ones a
+/// step instead of 21 on 7 substeps.
 pub(super) const SUBSTEP_QUARTERS: [u32; TIERS] = [4, 4, 6, 7, 16];
 
 /// Adaptive stiffness: relax passes per tier, as multiples of `Settings::relax_iterations`.
 /// The stack tiers need no more than the base: the springs' creep damps the slow bounce
-/// ([`CREEP`]). [`BRACED`] gets two (see
-/// [`SUBSTEP_QUARTERS`]). [`EXTREME`] gets 8 (not 4) times: with 4, the 4 m box of 1000 kg
-/// on two 1 kg boxes overlapped 9.8 mm (bound 10) and slid 2.3 cm; with 8, 2.5 mm and 0.04
-/// mm. Its islands are small.
-pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 2, 1, 1, 8];
+/// ([`CREEP`]). [`BRACED`] gets one more, a normal
+/// relax pass ([`NORMAL_RELAX_SCALE`]). [`EXTREME`] gets 8 (not 4) times: with 4, the 4 m
+/// box of 1000 kg on two 1 kg boxes overlapped 9.8 mm (bound 10) and slid 2.3 cm; with 8,
+/// 2.5 mm and 0.04 mm. Its islands are small.
+pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 1, 1, 1, 8];
+
+/// Adaptive stiffness: normal relax passes per tier (after the relax passes, solving the
+/// normal constraints only), as multiples of `Settings::relax_iterations`. What damps a
+/// braced island's slow bounce is a second pass over its normals; friction, solved by the
+/// full relax pass before it, need not be solved again. With a full second pass instead
+/// (about 10 % more of a pile's step), pyramid_30's top moved 0.00 cm sideways, the mixed
+/// pile's fastest body in its last second 0.0001 m/s; with the normal pass, 0.77 cm (bound 2)
+/// and 0.014 m/s (bound 0.05). With no second pass at all, 1.87 cm: too near the bound.
+/// Before friction anchors were removed the normal pass kept big piles vibrating (up to 135
+/// of many_boxes' 2,000 through 22 s); without them all 36 nudged piles tried rest by the
+/// 11th second (`box_pile` runs six).
+pub(super) const NORMAL_RELAX_SCALE: [u32; TIERS] = [0, 1, 0, 0, 0];
 
 /// Adaptive stiffness: how much of last step's compression the springs creep by, per tier
 /// (`soft_step::creep`). With 0.5 in the stack tiers, [`TALL_STACK`] holds on 7 substeps and

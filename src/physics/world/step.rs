@@ -1,6 +1,6 @@
 //! One step: the stages in order (contacts, solve, store, sleep) and the soft step's tiers.
 
-use super::islands::{CREEP, RELAX_SCALE, SUBSTEP_QUARTERS, TIERS};
+use super::islands::{CREEP, NORMAL_RELAX_SCALE, RELAX_SCALE, SUBSTEP_QUARTERS, TIERS};
 use super::*;
 use crate::physics::solver::constraint::ContactConstraint;
 use crate::physics::solver::soft_step::Work;
@@ -83,6 +83,7 @@ impl World {
                 Work {
                     settings: &self.settings,
                     creep: CREEP[0],
+                    normal_relax: self.settings.relax_iterations * NORMAL_RELAX_SCALE[0],
                 },
                 dt,
                 limits,
@@ -165,6 +166,8 @@ impl World {
                 Work {
                     settings: &settings,
                     creep: CREEP[tier as usize],
+                    normal_relax: self.settings.relax_iterations
+                        * NORMAL_RELAX_SCALE[tier as usize],
                 },
                 dt,
                 limits,

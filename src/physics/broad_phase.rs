@@ -8,6 +8,13 @@
 //! merge of the two sorted lists. Passive-passive pairs (static with static, or anything that
 //! sleeps) are never examined, so a world at rest costs almost nothing here.
 //!
+//! A sweep along x alone tests every pair whose boxes overlap in x, and a column of bodies
+//! overlaps all along itself: 2,000 boxes falling in a 40 x 50 grid took 41,000 tests a sweep
+//! for no pair, 119,000 for 6,000 as they landed. So the active bodies are swept in horizontal
+//! bands as tall as the tallest of their boxes ([`band_pairs`]), each box in the bands it
+//! reaches into, each pair reported in one band only; a pile's sweeps test about a tenth as
+//! many pairs and find the same ones.
+//!
 //! The sweep runs on *fat* boxes, each body's box grown by [`FAT_MARGIN`], and its pairs are
 //! kept. While every body's box stays inside its fat box (a pyramid or a pile at rest, awake),
 //! those kept pairs are a superset of this step's, and filtering them by overlap gives this
@@ -77,6 +84,9 @@ pub(crate) struct SweepAndPrune {
     /// Scratch for `update`: the moved bodies' boxes and their new pairs.
     moved_boxes: Vec<SortedBox>,
     new_pairs: Vec<u64>,
+    /// Scratch for [`band_pairs`]: the active boxes band by band, and where each band starts.
+    band_boxes: Vec<SortedBox>,
+    band_start: Vec<u32>,
     /// Slots freed since the lists were last compacted, flagged by slot in `dead` (removal
     /// marks them, the next query drops them in one pass: removing k bodies costs k, not k
     /// passes over the lists).
@@ -315,22 +325,89 @@ impl SweepAndPrune {
         let (active, passive) = (&self.active_boxes, &self.passive_boxes);
 
         // Active with active.
-        for (i, a) in active.iter().enumerate() {
-            for b in &active[i + 1..] {
-                if b.min_x > a.max_x {
-                    break;
-                }
-                if a.overlaps_y(b) {
-                    out.push(pair_key(a.slot, b.slot));
-                }
-            }
-        }
+        band_pairs(active, &mut self.band_boxes, &mut self.band_start, out);
 
         // Active with passive: each active box against the passive list, from both sides.
         cross_pairs(active, passive, out);
         out.sort_unstable();
     }
 }
+
+/// Push every overlapping pair of `active` (sorted by left edge), sweeping along x in
+/// horizontal bands: band k holds the boxes that reach into [y0 + k h, y0 + (k + 1) h), with h
+/// the tallest box's height (so a box is in one to three bands), each band in the list's
+/// order. A pair is pushed only in the band of the higher of its two lower edges: that edge
+/// lies in both boxes' height, so both are in its band (the band of a height is
+/// non-decreasing in it, rounding included), and it is one band. Within a band the tests are
+/// the plain sweep's, so the pairs are exactly its pairs. `boxes` and `starts` are scratch.
+fn band_pairs(
+    active: &[SortedBox],
+    boxes: &mut Vec<SortedBox>,
+    starts: &mut Vec<u32>,
+    out: &mut Vec<u64>,
+) {
+    let (mut y0, mut y1, mut height) = (Real::INFINITY, Real::NEG_INFINITY, 0.0 as Real);
+    for b in active {
+        y0 = y0.min(b.min_y);
+        y1 = y1.max(b.max_y);
+        height = height.max(b.max_y - b.min_y);
+    }
+    // At most one band per two boxes: a world of small boxes spread very far apart
+    // vertically does not pay for empty bands.
+    let most = (active.len() / 2).max(1) as Real;
+    let height = height.max((y1 - y0) / most);
+    let bands = ((y1 - y0) / height).floor() + 1.0;
+    if active.len() < BANDS_FROM || !(height > 0.0 && bands.is_finite()) || bands < 2.0 {
+        sweep_band(active, |_| true, out);
+        return;
+    }
+    let band = |y: Real| (((y - y0) / height).floor() as usize).min(bands as usize - 1);
+    // Counting sort of the boxes into their bands, keeping the sweep order in each.
+    starts.clear();
+    starts.resize(bands as usize + 1, 0);
+    for b in active {
+        for k in band(b.min_y)..=band(b.max_y) {
+            starts[k + 1] += 1;
+        }
+    }
+    for k in 1..starts.len() {
+        starts[k] += starts[k - 1];
+    }
+    boxes.clear();
+    boxes.resize(starts[starts.len() - 1] as usize, active[0]);
+    // Filling moves each band's start to its end, which is the next band's start.
+    for b in active {
+        for k in band(b.min_y)..=band(b.max_y) {
+            boxes[starts[k] as usize] = *b;
+            starts[k] += 1;
+        }
+    }
+    let mut start = 0;
+    for k in 0..bands as usize {
+        let end = starts[k] as usize;
+        sweep_band(&boxes[start..end], |y| band(y) == k, out);
+        start = end;
+    }
+}
+
+/// The plain sweep over `boxes` (sorted by left edge): every pair overlapping in x is tested
+/// in y, and pushed if it overlaps and `here` holds for the higher of its lower edges.
+#[inline]
+fn sweep_band(boxes: &[SortedBox], here: impl Fn(Real) -> bool, out: &mut Vec<u64>) {
+    for (i, a) in boxes.iter().enumerate() {
+        for b in &boxes[i + 1..] {
+            if b.min_x > a.max_x {
+                break;
+            }
+            if a.overlaps_y(b) && here(a.min_y.max(b.min_y)) {
+                out.push(pair_key(a.slot, b.slot));
+            }
+        }
+    }
+}
+
+/// Fewer active bodies than this are swept in one band.
+const BANDS_FROM: usize = 64;
 
 /// Fat-pair updates are for a few moved bodies: when more than one active body in this many
 /// left its fat box, the whole sweep runs instead (a falling pile: every body, every step).

@@ -383,8 +383,8 @@ fn band_pairs(
         }
     }
     let mut start = 0;
-    for k in 0..bands as usize {
-        let end = starts[k] as usize;
+    for (k, &end) in starts[..bands as usize].iter().enumerate() {
+        let end = end as usize;
         sweep_band(&boxes[start..end], |y| band(y) == k, out);
         start = end;
     }

@@ -361,7 +361,8 @@ fn band_pairs(
         sweep_band(active, |_| true, out);
         return;
     }
-    let band = |y: Real| (((y - y0) / height).floor() as usize).min(bands as usize - 1);
+    // Every y here is at or above y0, so truncating is flooring (and no call to floorf).
+    let band = |y: Real| (((y - y0) / height) as usize).min(bands as usize - 1);
     // Counting sort of the boxes into their bands, keeping the sweep order in each.
     starts.clear();
     starts.resize(bands as usize + 1, 0);

@@ -220,15 +220,19 @@ impl SweepAndPrune {
         };
         self.outside.clear();
         let kept = self.fat_valid && self.fat.len() == proxies.len();
+        // More than this many outside and the whole sweep runs: the count stops there.
+        let most = self.active.len() / UPDATE_FRACTION;
         if kept {
-            let outside = self
-                .active
-                .iter()
-                .chain(&self.passive)
-                .filter(|i| !inside(i));
-            self.outside.extend(outside);
+            for &i in self.active.iter().chain(&self.passive) {
+                if !inside(&i) {
+                    self.outside.push(i);
+                    if self.outside.len() > most {
+                        break;
+                    }
+                }
+            }
         }
-        if !kept || self.outside.len() > self.active.len() / UPDATE_FRACTION {
+        if !kept || self.outside.len() > most {
             self.fat.clear();
             self.fat
                 .extend(proxies.iter().map(|p| p.aabb.inflated(FAT_MARGIN)));

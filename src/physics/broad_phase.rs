@@ -366,7 +366,9 @@ fn band_pairs(
         return;
     }
     // Every y here is at or above y0, so truncating is flooring (and no call to floorf).
-    let band = |y: Real| (((y - y0) / height) as usize).min(bands as usize - 1);
+    // Multiplying by the reciprocal is as monotonic as dividing, and a pair's test pays it.
+    let per_height = 1.0 / height;
+    let band = |y: Real| (((y - y0) * per_height) as usize).min(bands as usize - 1);
     // Counting sort of the boxes into their bands, keeping the sweep order in each.
     starts.clear();
     starts.resize(bands as usize + 1, 0);

@@ -549,6 +549,16 @@ mod tests {
         assert!(out.is_empty());
     }
 
+    /// A repeatable stream of numbers in [0, 1] (xorshift32 from `seed`).
+    fn xorshift(mut seed: u32) -> impl FnMut() -> Real {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed as Real / u32::MAX as Real
+        }
+    }
+
     /// The pairs a full search finds: every active-involving pair of overlapping boxes.
     fn brute_force(proxies: &[Proxy], active: &[bool], alive: &[bool]) -> Vec<(u32, u32)> {
         let mut pairs = Vec::new();
@@ -573,13 +583,7 @@ mod tests {
     /// afresh. Reporting a pair in every band both boxes share fails it (duplicates).
     #[test]
     fn banded_sweep_finds_exactly_the_pairs_of_a_full_search() {
-        let mut seed = 0x2545_f491_u32;
-        let mut rand = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed as Real / u32::MAX as Real
-        };
+        let mut rand = xorshift(0x2545_f491);
         let mut proxies: Vec<Proxy> = (0..150)
             .map(|i| {
                 let (x, y) = ((i % 10) as Real, (i / 10) as Real);
@@ -638,13 +642,7 @@ mod tests {
         // (mostly inside its fat box, so the kept pairs are filtered) and every 25th step
         // two jump 0.3 m (past FAT_MARGIN, so their pairs are searched again); bodies fall
         // asleep, wake, and are removed. Every step must agree with a search over all pairs.
-        let mut seed = 0x9e37_79b9_u32;
-        let mut rand = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            seed as Real / u32::MAX as Real - 0.5
-        };
+        let mut rand = xorshift(0x9e37_79b9);
         let mut proxies: Vec<Proxy> = (0..60)
             .map(|i| {
                 let (x, y) = ((i % 10) as Real * 0.9, (i / 10) as Real * 0.9);
@@ -666,7 +664,7 @@ mod tests {
                     // both sides.
                     let jumps = i == step % 60 || i == (step + 1) % 60;
                     let big = if step % 25 == 0 && jumps { 60.0 } else { 1.0 };
-                    let d = vec2(rand(), rand()) * (0.008 * big);
+                    let d = vec2(rand() - 0.5, rand() - 0.5) * (0.008 * big);
                     p.aabb.min += d;
                     p.aabb.max += d;
                 }

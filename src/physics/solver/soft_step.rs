@@ -223,12 +223,15 @@ pub(crate) fn solve(
 
 /// The end of a step for contact `c`, from its points' `ends`: their impulses back from per
 /// substep to per step, and the contact's load (`substeps` as a number, `inv_dt` in 1/s).
+/// The friction impulse is clamped to the Coulomb cone of the normal impulse it ends with: a
+/// normal relax pass, after the last friction solve, can lower the normal impulse under it.
 #[inline]
 fn finish(c: &mut Contact, ends: &[PointEnd; 2], substeps: Real, inv_dt: Real) {
     let mut force = 0.0;
     for (p, end) in c.points[..c.count].iter_mut().zip(ends) {
+        let max_f = c.friction * end.normal_impulse;
         p.normal_impulse = end.normal_impulse * substeps;
-        p.tangent_impulse = end.tangent_impulse * substeps;
+        p.tangent_impulse = end.tangent_impulse.clamp(-max_f, max_f) * substeps;
         p.total_normal_impulse = end.total_normal_impulse;
         force += end.total_normal_impulse;
     }

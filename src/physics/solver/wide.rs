@@ -422,6 +422,8 @@ impl PassKind {
     /// The pass with the bias (`use_bias`, friction always solved) or without, with or without
     /// `friction`.
     fn of(use_bias: bool, friction: bool) -> PassKind {
+        // The scalar code would skip friction in a biased pass without it; no caller asks.
+        debug_assert!(!use_bias || friction, "a biased pass solves friction");
         match (use_bias, friction) {
             (true, _) => PassKind::Biased,
             (false, true) => PassKind::Relax,

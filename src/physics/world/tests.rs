@@ -76,7 +76,7 @@ fn braced_pyramid(base: usize) -> World {
 
 /// Whether any body was solved in the braced tier in the last step.
 fn ran_braced(w: &World) -> bool {
-    w.body_tier.iter().any(|&t| t == islands::BRACED)
+    w.body_tier.contains(&islands::BRACED)
 }
 
 /// The overflow path and the lanes agree in the braced tier too (a relax pass, then a normal

@@ -339,8 +339,8 @@ impl SweepAndPrune {
 
 /// Push every overlapping pair of `active` (sorted by left edge), sweeping along x in
 /// horizontal bands: band k holds the boxes that reach into [y0 + k h, y0 + (k + 1) h), with h
-/// the tallest box's height (so a box is in one to three bands), each band in the list's
-/// order. A pair is pushed only in the band of the higher of its two lower edges: that edge
+/// the tallest box's height (so a box is in one or two bands, three only by rounding), each
+/// band in the list's order. A pair is pushed only in the band of the higher of its two lower edges: that edge
 /// lies in both boxes' height, so both are in its band (the band of a height is
 /// non-decreasing in it, rounding included), and it is one band. Within a band the tests are
 /// the plain sweep's, so the pairs are exactly its pairs. `boxes` and `starts` are scratch.

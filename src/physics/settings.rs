@@ -95,7 +95,8 @@ pub struct Settings {
     /// `stiff_load_ratio` times the weight of the lighter body it touches for two steps
     /// running. A loaded island braced sideways (a pyramid, a pile: less than twice as tall
     /// as wide, along gravity, with at least `stiff_load_ratio` bodies) keeps the base
-    /// substeps with two relax passes and creeping springs. Any other loaded island (a
+    /// substeps with a relax pass, a normal relax pass and creeping springs. Any other
+    /// loaded island (a
     /// stack) is solved with 1.5
     /// times the substeps and contact stiffness; from 2.25 times that load (a spring's
     /// compression goes as load / omega^2), or where it joins bodies whose masses differ by

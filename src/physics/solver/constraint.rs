@@ -61,8 +61,9 @@ pub(crate) struct PointConstraint {
     pub bias: Real,
 }
 
-/// A point at the end of the solve: its accumulated impulses (per substep, N s). The wide solver hands these out of its lanes to the end-of-step work,
-/// which writes the contact once; the scalar code builds them from the contact.
+/// A point at the end of the solve: its accumulated impulses (per substep, N s). The wide
+/// solver hands these out of its lanes to the end-of-step work, which writes the contact
+/// once; the scalar code builds them from the contact.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct PointEnd {
     /// Accumulated normal impulse (N s, per substep).

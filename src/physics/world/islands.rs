@@ -370,8 +370,8 @@ impl Extent {
 /// slender, and with at least `stiff_load_ratio` moving bodies. A smaller island cannot carry
 /// that many of its bodies' weight: it is loaded only by contacts too new to be measured,
 /// unequal masses or an impact, and it is small, so it keeps the stack tiers (a box sliding
-/// over a chain of tiles, loaded by each new contact, tilted past 1e-4 rad on the base
-/// substeps with two relax passes).
+/// over a chain of tiles, loaded by each new contact, tilted past 1e-4 rad when it was solved
+/// braced, on the base substeps with two relax passes).
 fn island_tier(need: u8, braced: bool) -> u8 {
     let loaded = need == LOADED || need == HEAVILY_LOADED;
     if loaded && braced {
@@ -391,13 +391,13 @@ fn island_tier(need: u8, braced: bool) -> u8 {
 /// Braced islands need the slow bounce of their rows damped rather than stiffer springs: on
 /// the base substeps with a relax pass, a normal relax pass ([`NORMAL_RELAX_SCALE`]) and
 /// creep, a base-134 pyramid ends with its fastest body at 0.04 m/s (bound 0.5) and
-/// pyramid_30's top moves 0.77 cm (bound 2), for 12 solver passes and 4 normal-only ones a
+/// pyramid_30's top moves 0.74 cm (bound 2), for 12 solver passes and 4 normal-only ones a
 /// step instead of 21 on 7 substeps.
 pub(super) const SUBSTEP_QUARTERS: [u32; TIERS] = [4, 4, 6, 7, 16];
 
 /// Adaptive stiffness: relax passes per tier, as multiples of `Settings::relax_iterations`.
 /// The stack tiers need no more than the base: the springs' creep damps the slow bounce
-/// ([`CREEP`]). [`BRACED`] gets one more, a normal
+/// ([`CREEP`]). [`BRACED`] has the base's and then a normal
 /// relax pass ([`NORMAL_RELAX_SCALE`]). [`EXTREME`] gets 8 (not 4) times: with 4, the 4 m
 /// box of 1000 kg on two 1 kg boxes overlapped 9.8 mm (bound 10) and slid 2.3 cm; with 8,
 /// 2.5 mm and 0.04 mm. Its islands are small.
@@ -406,20 +406,22 @@ pub(super) const RELAX_SCALE: [u32; TIERS] = [1, 1, 1, 1, 8];
 /// Adaptive stiffness: normal relax passes per tier (after the relax passes, solving the
 /// normal constraints only), as multiples of `Settings::relax_iterations`. What damps a
 /// braced island's slow bounce is a second pass over its normals; friction, solved by the
-/// full relax pass before it, need not be solved again. With a full second pass instead
-/// (about 10 % more of a pile's step), pyramid_30's top moved 0.00 cm sideways, the mixed
-/// pile's fastest body in its last second 0.0001 m/s; with the normal pass, 0.77 cm (bound 2)
-/// and 0.014 m/s (bound 0.05). With no second pass at all, 1.87 cm: too near the bound.
+/// full relax pass before it, need not be solved again (the step clamps the friction impulse
+/// to the cone of the normal impulse it ends with, `soft_step::finish`). With a full second
+/// pass instead (about 10 % more of a pile's step), pyramid_30's top moved 0.00 cm sideways;
+/// with the normal pass 0.74 cm (bound 2), and the mixed pile's fastest body in its last
+/// second 0.0001 m/s (bound 0.05). With no second pass at all, 1.87 cm: too near the bound.
 /// Before friction anchors were removed the normal pass kept big piles vibrating (up to 135
 /// of many_boxes' 2,000 through 22 s); without them all 36 nudged piles tried rest by the
-/// 11th second (`box_pile` runs six).
+/// 12th second (`box_pile` runs six).
 pub(super) const NORMAL_RELAX_SCALE: [u32; TIERS] = [0, 1, 0, 0, 0];
 
 /// Adaptive stiffness: how much of last step's compression the springs creep by, per tier
 /// (`soft_step::creep`). With 0.5 in the stack tiers, [`TALL_STACK`] holds on 7 substeps and
 /// one relax pass where it needed 8 and two (pyramid_30's top: 0.98 cm sideways, bound 2;
 /// 7.8 cm with one pass and no creep). With 0.65 a 20-box stack's top sank 2.14 cm (bound
-/// 2); with 0.35 pyramid_30's top moved 1.32 cm. Creep leaves a spring at rest 1.5 times
+/// 2); with 0.35 pyramid_30's top moved 1.32 cm (these with friction anchors, since removed).
+/// Creep leaves a spring at rest 1.5 times
 /// softer, which the other tiers do not need: on the base settings a 10-box stack sank 1.04
 /// cm (bound 1), and in [`EXTREME`] a 1000 kg box on 1 kg overlapped 8.8 mm instead of 5.5
 /// (bound 10).

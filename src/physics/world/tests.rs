@@ -262,7 +262,7 @@ fn creep_softens_a_resting_contact_by_one_plus_beta_in_the_creeping_tiers() {
 /// weights and a base-20 pyramid's most loaded about 14, past `stiff_load_ratio`, 12), but
 /// the stack is 20 times as tall as it is wide and the pyramid about as tall as wide. The
 /// stack is solved on more substeps ([`islands::STACK`]) and the pyramid on the base ones with
-/// two relax passes ([`islands::BRACED`]), from the first step and once the loads count
+/// a relax pass and a normal relax pass ([`islands::BRACED`]), from the first step and once the loads count
 /// (after 8 steps). Turned on its side by gravity along x, the stack is the wide one.
 #[test]
 fn a_stack_is_slender_and_a_pyramid_braced() {

@@ -343,7 +343,7 @@ pub fn box_pile(settings: &Settings) -> Verdict {
             ("fastest box, 13th second (m/s)", speed_late),
             ("boxes moving, 13th second, worst run", moving_late as f64),
         ],
-        "Until 2026-11-25 this failed with the defaults: friction anchors (a stuck point's slip carried across steps and undone by the biased friction pass) and the braced tier's creeping springs kept 11-29 boxes deep in the unnudged pile vibrating (about 1 mm at 7 Hz, up to 0.19 m/s) through 22 s, and in 3 of 12 nudged runs some boxes still moved in the 13th second. Without the anchors, 0 of 12 nudged runs had a box moving after the 9th second. Box2D v3's and rapier2d's piles of the same boxes rest by 8 s in the unnudged run (benchmarks/vs-peers --settle)",
+        "Until 2026-11-25 this failed with the defaults: friction anchors (a stuck point's slip carried across steps and undone by the biased friction pass) and the braced tier's creeping springs kept 11-29 boxes deep in the unnudged pile vibrating (about 1 mm at 7 Hz, up to 0.19 m/s) through 22 s, and in 3 of 12 nudged runs some boxes still moved in the 13th second. Without the anchors (and with the friction impulse clamped to the cone at the end of each step), all of 36 nudged runs rest from the 12th second; the unnudged one is the last to settle. Box2D v3's and rapier2d's piles of the same boxes rest by 8 s in the unnudged run (benchmarks/vs-peers --settle)",
     )
 }
 

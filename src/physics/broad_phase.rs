@@ -636,6 +636,61 @@ mod tests {
         assert_eq!(sap.updates, 0, "every query swept");
     }
 
+    /// `band_pairs` on `boxes` (all active), sorted, against every pair tested directly.
+    fn bands_match_a_full_search(boxes: &[Aabb]) -> usize {
+        let mut sorted: Vec<SortedBox> = (0..boxes.len() as u32)
+            .map(|i| SortedBox::new(i, boxes))
+            .collect();
+        sorted.sort_by(|a, b| a.min_x.total_cmp(&b.min_x).then(a.slot.cmp(&b.slot)));
+        let (mut scratch, mut starts, mut out) = (Vec::new(), Vec::new(), Vec::new());
+        band_pairs(&sorted, &mut scratch, &mut starts, &mut out);
+        out.sort_unstable();
+        let mut expected = Vec::new();
+        for a in 0..boxes.len() {
+            for b in a + 1..boxes.len() {
+                if boxes[a].overlaps(&boxes[b]) {
+                    expected.push(pair_key(a as u32, b as u32));
+                }
+            }
+        }
+        assert_eq!(out, expected);
+        expected.len()
+    }
+
+    /// `band_pairs` itself, where the bands' edges bite: a 10 x 12 grid of unit boxes touching
+    /// edge to edge, so every lower edge lies exactly on a band boundary and every upper edge
+    /// on the next (each touching pair once); boxes spread 1e4 m up, so the band count hits
+    /// its cap of one band per two boxes; a box at 1e30 m beside them (bands far taller than
+    /// any box); and one at the largest finite height, whose span overflows to infinity (the
+    /// plain sweep).
+    #[test]
+    fn band_pairs_match_a_full_search_at_band_edges_caps_and_huge_spans() {
+        let unit = |x: Real, y: Real, w: Real, h: Real| Aabb {
+            min: vec2(x, y),
+            max: vec2(x + w, y + h),
+        };
+        let grid: Vec<Aabb> = (0..120)
+            .map(|i| unit((i % 10) as Real, (i / 10) as Real, 1.0, 1.0))
+            .collect();
+        assert_eq!(
+            bands_match_a_full_search(&grid),
+            9 * 12 + 10 * 11 + 2 * 9 * 11
+        );
+        let mut rand = xorshift(0x1234_5678);
+        let spread: Vec<Aabb> = (0..200)
+            .map(|_| unit(5.0 * rand(), 1.0e4 * rand(), 0.5, 0.5 + rand()))
+            .chain(grid.iter().copied())
+            .collect();
+        bands_match_a_full_search(&spread);
+        let mut far = spread.clone();
+        far.push(unit(0.0, 1.0e30, 1.0, 1.0));
+        bands_match_a_full_search(&far);
+        let mut overflow = spread;
+        overflow.push(unit(0.0, Real::MAX / 2.0, 1.0, Real::MAX / 2.0));
+        overflow.push(unit(0.0, -Real::MAX / 2.0, 1.0, 1.0));
+        bands_match_a_full_search(&overflow);
+    }
+
     #[test]
     fn kept_fat_pairs_give_exactly_the_pairs_of_a_full_search() {
         // 60 unit boxes on a jittered grid; each step every active box moves by up to 4 mm

@@ -220,6 +220,10 @@ fn usable(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
 pub struct Body {
     pub(crate) id: BodyId,
     pub(crate) shape: Shape,
+    /// `shape.bounding_radius()` (m), kept: the narrow phase and the sleep test read it for
+    /// every pair and body each step (a square root for a box, a load from the heap for a
+    /// polygon).
+    pub(crate) bounding_radius: Real,
     pub(crate) position: Vec2,
     pub(crate) angle: Real,
     pub(crate) rot: Rot,
@@ -263,6 +267,7 @@ impl Body {
         Body {
             id,
             shape: def.shape.clone(),
+            bounding_radius: def.shape.bounding_radius(),
             position: def.position,
             angle: def.angle,
             rot: Rot::from_angle(def.angle),

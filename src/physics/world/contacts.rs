@@ -96,7 +96,7 @@ impl World {
             let recycled = previous
                 .filter(|_| recycling && steady(a) && steady(b))
                 .and_then(|c| {
-                    let size = a.shape.bounding_radius().min(b.shape.bounding_radius());
+                    let size = a.bounding_radius.min(b.bounding_radius);
                     let max_drift = RECYCLE_DRIFT.min(RECYCLE_SIZE * size);
                     recycle(c, xf_a, xf_b, max_drift)
                 });
@@ -297,13 +297,13 @@ fn closing_reach(a: &Body, b: &Body, g: Vec2, dt: Real) -> Real {
         if x.kinematic {
             (
                 x.linear_velocity,
-                x.angular_velocity.abs() * x.shape.bounding_radius(),
+                x.angular_velocity.abs() * x.bounding_radius,
                 Vec2::ZERO,
             )
         } else if x.is_active() {
             (
                 x.linear_velocity,
-                x.angular_velocity.abs() * x.shape.bounding_radius(),
+                x.angular_velocity.abs() * x.bounding_radius,
                 g + x.inv_mass * x.force,
             )
         } else {
@@ -320,7 +320,7 @@ fn closing_reach(a: &Body, b: &Body, g: Vec2, dt: Real) -> Real {
 #[inline]
 fn travel(b: &Body, g: Vec2, dt: Real) -> Real {
     let accel = g + b.inv_mass * b.force;
-    dt * (b.linear_velocity.length() + b.angular_velocity.abs() * b.shape.bounding_radius())
+    dt * (b.linear_velocity.length() + b.angular_velocity.abs() * b.bounding_radius)
         + dt * dt * accel.length()
 }
 

@@ -141,8 +141,8 @@ impl World {
         let n = self.slots.len();
         for slot in self.slots.iter_mut() {
             if let Some(b) = slot.body.as_mut().filter(|b| b.is_active()) {
-                let speed = b.linear_velocity.length()
-                    + b.angular_velocity.abs() * b.shape.bounding_radius();
+                let speed =
+                    b.linear_velocity.length() + b.angular_velocity.abs() * b.bounding_radius;
                 b.sleep_time = if speed > threshold {
                     0.0
                 } else {

@@ -441,8 +441,7 @@ impl World {
         let radius = self
             .body(id)
             .ok_or(PhysicsError::UnknownBody(id))?
-            .shape
-            .bounding_radius();
+            .bounding_radius;
         self.check_speed(linear, angular, radius)?;
         let b = self.body_mut(id)?;
         if !b.is_static() {

@@ -419,6 +419,7 @@ impl World {
                             index,
                             generation: s.generation,
                         },
+                        bounding_radius: shape.bounding_radius(),
                         shape,
                         position: vec(b.position),
                         angle: b.angle,

@@ -645,14 +645,12 @@ mod tests {
         let (mut scratch, mut starts, mut out) = (Vec::new(), Vec::new(), Vec::new());
         band_pairs(&sorted, &mut scratch, &mut starts, &mut out);
         out.sort_unstable();
-        let mut expected = Vec::new();
-        for a in 0..boxes.len() {
-            for b in a + 1..boxes.len() {
-                if boxes[a].overlaps(&boxes[b]) {
-                    expected.push(pair_key(a as u32, b as u32));
-                }
-            }
-        }
+        let proxies: Vec<Proxy> = boxes.iter().map(|&aabb| Proxy { aabb }).collect();
+        let every = vec![true; boxes.len()];
+        let expected: Vec<u64> = brute_force(&proxies, &every, &every)
+            .into_iter()
+            .map(|(a, b)| pair_key(a, b))
+            .collect();
         assert_eq!(out, expected);
         expected.len()
     }

@@ -12,6 +12,40 @@ pub(crate) mod wide;
 use super::contact::Contact;
 use super::math::{Real, Rot, Vec2};
 
+/// What a soft-step solve pass solves: the biased pass (normal and friction, with the soft
+/// bias), a relax pass (both, without), or a normal relax pass (the normal constraints only,
+/// without; friction keeps what the relax passes left it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PassKind {
+    Biased,
+    Relax,
+    NormalRelax,
+}
+
+impl PassKind {
+    /// Pass number `pass` of a substep: the biased pass, then `relax` relax passes, then the
+    /// normal relax passes.
+    pub fn nth(pass: u32, relax: u32) -> PassKind {
+        if pass == 0 {
+            PassKind::Biased
+        } else if pass <= relax {
+            PassKind::Relax
+        } else {
+            PassKind::NormalRelax
+        }
+    }
+
+    /// Whether the pass applies the soft bias.
+    pub fn biased(self) -> bool {
+        self == PassKind::Biased
+    }
+
+    /// Whether the pass solves friction.
+    pub fn solves_friction(self) -> bool {
+        self != PassKind::NormalRelax
+    }
+}
+
 /// The per-body data the solver's inner loop reads and writes.
 ///
 /// Laid out as written: the first eight words (velocity, spin, motion this step, inverse

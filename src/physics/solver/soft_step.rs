@@ -13,7 +13,7 @@ use super::sequential::point_masses;
 use super::wide::WideSolver;
 use super::{
     apply_along, integrate_positions, integrate_velocities, pair_mut, relative_velocity, BlockMass,
-    Limits, Moving, Selected, SolverBody,
+    Limits, Moving, PassKind, Selected, SolverBody,
 };
 use crate::physics::contact::{Contact, ContactPoint};
 use crate::physics::math::{Real, Vec2, PI};
@@ -154,20 +154,18 @@ pub(crate) fn solve(
         for pass in 0..=settings.relax_iterations + normal_relax {
             // The biased pass, then (after the positions move) the relax passes, the normal
             // relax passes last.
-            let use_bias = pass == 0;
-            let friction = pass <= settings.relax_iterations;
-            wide.solve(bodies, inv_h, use_bias, push_out, friction);
+            let kind = PassKind::nth(pass, settings.relax_iterations);
+            wide.solve(bodies, inv_h, kind, push_out);
             for &i in &wide.overflow {
                 let i = i as usize;
                 let pass = Pass {
                     inv_h,
-                    use_bias,
+                    kind,
                     max_push_out: push_out,
-                    friction,
                 };
                 solve_contact(bodies, &mut contacts[i], &mut constraints[i], pass);
             }
-            if use_bias {
+            if kind.biased() {
                 integrate_positions(bodies, moving, h, limits);
             }
         }
@@ -409,15 +407,13 @@ fn warm_start(bodies: &mut [SolverBody], c: &mut Contact, k: &ContactConstraint)
     }
 }
 
-/// What one solve pass does to a contact: 1 / substep (1/s), with the soft bias or (a relax
-/// pass) without, the push-out cap (m/s), and whether friction is solved (not in a normal
-/// relax pass).
+/// What one solve pass does to a contact: 1 / substep (1/s), which kind of pass, and the
+/// push-out cap (m/s).
 #[derive(Clone, Copy, Debug)]
 struct Pass {
     inv_h: Real,
-    use_bias: bool,
+    kind: PassKind,
     max_push_out: Real,
-    friction: bool,
 }
 
 /// Solve one contact (`k`: its constraint) in `pass`.
@@ -429,10 +425,10 @@ fn solve_contact(
 ) {
     let Pass {
         inv_h,
-        use_bias,
+        kind,
         max_push_out,
-        friction,
     } = pass;
+    let (use_bias, friction) = (kind.biased(), kind.solves_friction());
     {
         let n = c.normal;
         let t = c.tangent();

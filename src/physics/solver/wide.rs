@@ -13,6 +13,7 @@
 
 use super::constraint::{ContactConstraint, PointEnd};
 use super::lanes::{eight_lanes_available, prefetch, Lanes8, Wide};
+use super::PassKind;
 use super::{Selected, SolverBody};
 use crate::physics::contact::Contact;
 use crate::physics::math::{Lanes, Real};
@@ -311,17 +312,14 @@ impl WideSolver {
         clear(&mut self.bundles8);
     }
 
-    /// One pass over every bundle, with the soft bias (`use_bias`) or the relax pass without;
-    /// a relax pass without `friction` solves the normal constraints only.
+    /// One `pass` over every bundle.
     pub fn solve(
         &mut self,
         bodies: &mut [SolverBody],
         inv_h: Real,
-        use_bias: bool,
+        pass: PassKind,
         max_push_out: Real,
-        friction: bool,
     ) {
-        let pass = PassKind::of(use_bias, friction);
         match self.built {
             Some(Width::Eight) => {
                 let bundles = &mut self.bundles8[..self.lists];
@@ -406,29 +404,6 @@ mod eight {
         max_push_out: Real,
     ) {
         solve_pass(bundles, bodies, inv_h, pass, max_push_out);
-    }
-}
-
-/// What a solve pass solves: the biased pass (normal and friction, with the soft bias), a
-/// relax pass (both, without), or a normal relax pass (the normal constraints only, without).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum PassKind {
-    Biased,
-    Relax,
-    NormalRelax,
-}
-
-impl PassKind {
-    /// The pass with the bias (`use_bias`, friction always solved) or without, with or without
-    /// `friction`.
-    fn of(use_bias: bool, friction: bool) -> PassKind {
-        // The scalar code would skip friction in a biased pass without it; no caller asks.
-        debug_assert!(!use_bias || friction, "a biased pass solves friction");
-        match (use_bias, friction) {
-            (true, _) => PassKind::Biased,
-            (false, true) => PassKind::Relax,
-            (false, false) => PassKind::NormalRelax,
-        }
     }
 }
 

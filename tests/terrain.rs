@@ -2,7 +2,6 @@
 //! bodies that carry and push. Each test compares against a closed form and says where its
 //! tolerance comes from.
 
-use tiltbox::physics::segment::chain_bodies;
 use tiltbox::physics::{vec2, BodyDef, BodyId, Real, Segment, Settings, Shape, Vec2, World};
 
 const DT: Real = 1.0 / 60.0;
@@ -12,7 +11,7 @@ fn world(g: Vec2) -> World {
 }
 
 fn add_chain(w: &mut World, points: &[Vec2], closed: bool, one_sided: bool, friction: Real) {
-    for def in chain_bodies(points, closed, one_sided).unwrap() {
+    for def in BodyDef::chain(points, closed, one_sided).unwrap() {
         w.add_body(&def.with_friction(friction)).unwrap();
     }
 }

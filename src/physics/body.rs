@@ -4,38 +4,8 @@ use super::error::{finite, finite_vec, non_negative, positive, unit_interval, Ph
 use super::math::{is_finite_vec, Real, Rot, Transform, Vec2};
 use super::shape::Shape;
 use serde::{Deserialize, Serialize};
-use std::fmt;
 
-/// A stable handle to a body in a [`super::World`].
-///
-/// Ids are generational: removing a body and adding another may reuse the slot, but never the
-/// id, so a stale id is reported as unknown instead of silently naming a different body.
-/// Only a World makes ids ([`super::World::add_body`]); their parts can be read, not set.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-pub struct BodyId {
-    /// Slot in the World's body array.
-    pub(super) index: u32,
-    /// How many times the slot has been reused.
-    pub(super) generation: u32,
-}
-
-impl BodyId {
-    /// The slot in the World's body array (a small integer, reused after a removal).
-    pub fn index(self) -> u32 {
-        self.index
-    }
-
-    /// How many times the slot had been reused when this body was added.
-    pub fn generation(self) -> u32 {
-        self.generation
-    }
-}
-
-impl fmt::Display for BodyId {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}v{}", self.index, self.generation)
-    }
-}
+pub use super::id::BodyId;
 
 /// How a body's mass is given.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -154,6 +124,19 @@ impl BodyDef {
         with_friction(friction: Real) => friction = friction;
         /// Set the coefficient of restitution.
         with_restitution(restitution: Real) => restitution = restitution;
+    }
+
+    /// A chain as static bodies, one segment each (friction 0.6, restitution 0; change them
+    /// on the definitions). See [`super::segment::chain`] for the points and the refusals.
+    pub fn chain(
+        points: &[Vec2],
+        closed: bool,
+        one_sided: bool,
+    ) -> Result<Vec<BodyDef>, PhysicsError> {
+        Ok(super::segment::chain(points, closed, one_sided)?
+            .into_iter()
+            .map(|(mid, s)| BodyDef::fixed(Shape::Segment(Box::new(s)), mid))
+            .collect())
     }
 
     /// Refuse anything the engine cannot simulate, naming the field and the value.

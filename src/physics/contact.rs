@@ -71,6 +71,9 @@ pub(crate) struct Contact {
     pub force: Real,
     /// Steps this pair has been in contact, saturating at 255.
     pub age: u8,
+    /// Soft step: the contact's colour in the constraint graph (`solver::graph`), from its
+    /// first step to its last; `UNCOLOURED` while it sleeps.
+    pub colour: u8,
     /// Contact recycling: the normal in body A's frame when the manifold was last computed.
     pub local_normal: Vec2,
     /// Contact recycling: B's rotation relative to A's when the manifold was last computed.
@@ -94,7 +97,7 @@ pub struct ContactPointInfo {
     pub separation: Real,
     /// Normal impulse applied over the last step (N s): the contact force is this / dt.
     pub normal_impulse: Real,
-    /// Accumulated friction impulse at the end of the last step (N s; per substep for the soft step).
+    /// Accumulated friction impulse at the end of the last step (N s).
     pub tangent_impulse: Real,
 }
 

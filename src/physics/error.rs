@@ -1,5 +1,6 @@
 //! Typed errors for input the engine refuses.
 
+use super::id::BodyId;
 use super::math::{Real, Vec2};
 use thiserror::Error;
 
@@ -27,7 +28,7 @@ pub enum PhysicsError {
     },
     /// A body id that does not (or no longer) name a body in this World.
     #[error("no body with id {0}")]
-    UnknownBody(super::body::BodyId),
+    UnknownBody(BodyId),
     /// A shape that is not a usable convex shape (a polygon's vertex out of order, a
     /// collinear corner, too many points).
     #[error("{field} {reason}")]
@@ -39,7 +40,7 @@ pub enum PhysicsError {
     },
     /// A list of bodies names one of them twice.
     #[error("body {0} is listed twice")]
-    ListedTwice(super::body::BodyId),
+    ListedTwice(BodyId),
     /// The World already holds as many bodies as a body id can address.
     #[error("the world is full ({0} bodies)")]
     Full(usize),

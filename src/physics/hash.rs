@@ -33,7 +33,8 @@ impl Default for Fnv1a {
     }
 }
 
-/// The FNV-1a 64 hash of `bytes`.
+/// The FNV-1a 64 hash of `bytes` (checkpoints and journals checksum their payload with it).
+#[cfg_attr(not(feature = "net"), allow(dead_code))]
 pub fn fnv1a(bytes: &[u8]) -> u64 {
     let mut h = Fnv1a::new();
     h.write(bytes);

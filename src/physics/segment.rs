@@ -10,7 +10,6 @@
 //! polylines). A one-sided segment pushes only towards its left, walking from `a` to `b`:
 //! points listed left to right make a floor, a loop listed counter-clockwise holds bodies in.
 
-use super::body::BodyDef;
 use super::error::{finite, non_negative, PhysicsError};
 use super::math::{cross, Real, Vec2};
 use serde::{Deserialize, Serialize};
@@ -168,19 +167,6 @@ pub fn chain(
             };
             (mid, segment)
         })
-        .collect())
-}
-
-/// A chain as static bodies, one per segment (friction 0.6, restitution 0; change them on
-/// the definitions). See [`chain`] for the points and the refusals.
-pub fn chain_bodies(
-    points: &[Vec2],
-    closed: bool,
-    one_sided: bool,
-) -> Result<Vec<BodyDef>, PhysicsError> {
-    Ok(chain(points, closed, one_sided)?
-        .into_iter()
-        .map(|(mid, s)| BodyDef::fixed(super::shape::Shape::Segment(Box::new(s)), mid))
         .collect())
 }
 

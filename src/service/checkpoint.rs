@@ -29,7 +29,9 @@ use std::thread::JoinHandle;
 /// in A's, the pair's rotation), and `Settings` has `contact_recycling`.
 /// 7: the per-step constraint left the contact (contacts carry what lasts between steps only).
 /// 8: contact points no longer carry a friction anchor (no slip, no stuck flag).
-pub const FORMAT_VERSION: u32 = 8;
+/// 9: the solver's history (contacts, now with their colours in the constraint graph) is one
+/// record with a version of its own (`physics::world::snapshot::SolverHistory`).
+pub const FORMAT_VERSION: u32 = 9;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

@@ -3,40 +3,37 @@
 //! same split between `b2ContactSim` and `b2ContactConstraint`).
 //!
 //! A [`Contact`](crate::physics::contact::Contact) keeps only what lasts from step to step
-//! (bodies, normal, feature ids, anchors, impulses). The wide solver writes each contact's
-//! constraint straight into its bundle's lanes; a [`ContactConstraint`] is kept in memory only
-//! for the contacts the scalar code solves (the sequential solver's, the soft step's few
-//! uncoloured ones, and those that bounce).
+//! (bodies, normal, feature ids, anchors, impulses). The sequential solver keeps a
+//! [`ContactConstraint`] per contact for its step; the soft step works each one out as it
+//! packs the contact and writes it straight into the contact's lane.
 
-use super::soft_step::Softness;
-use super::BlockMass;
+use super::block::BlockMass;
+use super::softness::Softness;
+use super::SolverBody;
+use crate::physics::contact::ContactPoint;
 use crate::physics::math::{cross, Real, Vec2};
 
-/// A point's lever arms along the normal n and tangent t: rA x n, rB x n, rA x t, rB x t,
-/// rA . n, rB . n. With them a point's normal velocity is
-/// (vB - vA) . n + wB (rB x n) - wA (rA x n), and an impulse's torque is lambda (r x n): no
-/// cross products in the inner loop.
+/// A point's lever arms along the normal n: rA x n, rB x n, rA . n, rB . n (m). With them a
+/// point's normal velocity is (vB - vA) . n + wB (rB x n) - wA (rA x n), and an impulse's
+/// torque is lambda (r x n): no cross products in the inner loop. Along the tangent
+/// t = (n_y, -n_x) the arms are r x t = -(r . n).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Arms {
-    pub rn_a: Real,
-    pub rn_b: Real,
-    pub rt_a: Real,
-    pub rt_b: Real,
-    pub ra_n: Real,
-    pub rb_n: Real,
+    pub a_cross_n: Real,
+    pub b_cross_n: Real,
+    pub a_dot_n: Real,
+    pub b_dot_n: Real,
 }
 
 impl Arms {
-    /// The arms of anchors `ra`, `rb` (m) for normal `n` and tangent `t`.
+    /// The arms of anchors `ra`, `rb` (m) for normal `n`.
     #[inline]
-    pub fn new(ra: Vec2, rb: Vec2, n: Vec2, t: Vec2) -> Arms {
+    pub fn new(ra: Vec2, rb: Vec2, n: Vec2) -> Arms {
         Arms {
-            rn_a: cross(ra, n),
-            rn_b: cross(rb, n),
-            rt_a: cross(ra, t),
-            rt_b: cross(rb, t),
-            ra_n: ra.dot(n),
-            rb_n: rb.dot(n),
+            a_cross_n: cross(ra, n),
+            b_cross_n: cross(rb, n),
+            a_dot_n: ra.dot(n),
+            b_dot_n: rb.dot(n),
         }
     }
 }
@@ -61,17 +58,35 @@ pub(crate) struct PointConstraint {
     pub bias: Real,
 }
 
-/// A point at the end of the solve: its accumulated impulses (per substep, N s). The wide
-/// solver hands these out of its lanes to the end-of-step work, which writes the contact
-/// once; the scalar code builds them from the contact.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct PointEnd {
-    /// Accumulated normal impulse (N s, per substep).
-    pub normal_impulse: Real,
-    /// Accumulated friction impulse (N s, per substep).
-    pub tangent_impulse: Real,
-    /// Everything the normal constraint applied this step (N s).
-    pub total_normal_impulse: Real,
+impl PointConstraint {
+    /// The normal and tangent effective masses (eqs. 56-57) of point `p` between `a` and `b`,
+    /// for normal `n` and tangent `t`.
+    #[inline]
+    pub fn set_masses(
+        &mut self,
+        a: &SolverBody,
+        b: &SolverBody,
+        p: &ContactPoint,
+        n: Vec2,
+        t: Vec2,
+    ) {
+        self.normal_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, n);
+        self.tangent_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, t);
+    }
+}
+
+/// Effective mass 1 / (1/mA + 1/mB + (rA x d)^2 / IA + (rB x d)^2 / IB) along direction `d`
+/// (appendix eqs. 56-57, with r.r - (r.d)^2 = (r x d)^2 for unit d); 0 between fixed bodies.
+#[inline]
+pub(crate) fn effective_mass(a: &SolverBody, b: &SolverBody, ra: Vec2, rb: Vec2, d: Vec2) -> Real {
+    let rna = cross(ra, d);
+    let rnb = cross(rb, d);
+    let k = a.inv_mass + b.inv_mass + a.inv_inertia * rna * rna + b.inv_inertia * rnb * rnb;
+    if k > 0.0 {
+        1.0 / k
+    } else {
+        0.0
+    }
 }
 
 /// One contact's constraint for the current step.

@@ -2,14 +2,23 @@
 //!
 //! Both solvers work on [`SolverBody`]: a compact copy of what the inner loops touch
 //! (velocities, inverse masses, and how far each body has moved during the step).
+//!
+//! - `sequential.rs`: the appendix's sequential impulses (box2d-lite), plain scalar code;
+//! - `soft_step.rs`: Box2D v3's soft step, its stages in order, on `bundles.rs` (contacts
+//!   packed by the colours of `graph.rs`) and the one contact kernel of `contact_solver.rs`,
+//!   generic over the lane width (`lanes/`);
+//! - `constraint.rs`, `block.rs`, `softness.rs`: what both prepare per contact.
 
+pub(crate) mod block;
+pub(crate) mod bundles;
 pub(crate) mod constraint;
+pub(crate) mod contact_solver;
+pub(crate) mod graph;
 pub(crate) mod lanes;
 pub(crate) mod sequential;
 pub(crate) mod soft_step;
-pub(crate) mod wide;
+pub(crate) mod softness;
 
-use super::contact::Contact;
 use super::math::{Real, Rot, Vec2};
 
 /// What a soft-step solve pass solves: the biased pass (normal and friction, with the soft
@@ -20,30 +29,6 @@ pub(crate) enum PassKind {
     Biased,
     Relax,
     NormalRelax,
-}
-
-impl PassKind {
-    /// Pass number `pass` of a substep: the biased pass, then `relax` relax passes, then the
-    /// normal relax passes.
-    pub fn nth(pass: u32, relax: u32) -> PassKind {
-        if pass == 0 {
-            PassKind::Biased
-        } else if pass <= relax {
-            PassKind::Relax
-        } else {
-            PassKind::NormalRelax
-        }
-    }
-
-    /// Whether the pass applies the soft bias.
-    pub fn biased(self) -> bool {
-        self == PassKind::Biased
-    }
-
-    /// Whether the pass solves friction.
-    pub fn solves_friction(self) -> bool {
-        self != PassKind::NormalRelax
-    }
 }
 
 /// The per-body data the solver's inner loop reads and writes.
@@ -207,10 +192,13 @@ pub(crate) fn integrate_velocities(
 }
 
 /// Semi-implicit Euler, position half: x += h v, theta += h w (appendix eqs. 65-68),
-/// recording the motion as deltas from the start of the step.
+/// recording the motion as deltas from the start of the step. The `moving` dynamic bodies'
+/// speeds are capped first (speed, and rotation per substep); the `kinematic` bodies move by
+/// the velocity they were given, so that contacts see them where they are at every substep
+/// (Box2D moves them so too).
 pub(crate) fn integrate_positions(
     bodies: &mut [SolverBody],
-    moving: Moving,
+    (moving, kinematic): (Moving, &[u32]),
     h: Real,
     limits: Limits,
 ) {
@@ -222,18 +210,40 @@ pub(crate) fn integrate_positions(
         } else if b.w.abs() > max_w {
             b.w = max_w.copysign(b.w);
         }
-        b.dp += h * b.v;
-        b.dtheta += h * b.w;
-        // First-order rotation update q += h w q_perp, then renormalise (cheap; exact angle is
-        // kept in dtheta).
-        let dq = b.dq;
-        let (c, s) = (dq.c - h * b.w * dq.s, dq.s + h * b.w * dq.c);
+        b.advance(h);
+    });
+    for &i in kinematic {
+        bodies[i as usize].advance(h);
+    }
+}
+
+/// Kinematic bodies start a solve where the step starts: each solve (one per stiffness tier)
+/// moves them through the whole step again.
+pub(crate) fn restart_motion(bodies: &mut [SolverBody], kinematic: &[u32]) {
+    for &i in kinematic {
+        let b = &mut bodies[i as usize];
+        b.dp = Vec2::ZERO;
+        b.dtheta = 0.0;
+        b.dq = Rot::IDENTITY;
+    }
+}
+
+impl SolverBody {
+    /// Move by the velocity for `h` seconds: dp += h v, dtheta += h w, and the rotation by
+    /// the first-order update q += h w q_perp, renormalised (cheap; the exact angle is kept in
+    /// dtheta).
+    #[inline(always)]
+    fn advance(&mut self, h: Real) {
+        self.dp += h * self.v;
+        self.dtheta += h * self.w;
+        let dq = self.dq;
+        let (c, s) = (dq.c - h * self.w * dq.s, dq.s + h * self.w * dq.c);
         let len = (c * c + s * s).sqrt();
-        b.dq = Rot {
+        self.dq = Rot {
             c: c / len,
             s: s / len,
         };
-    });
+    }
 }
 
 /// `v` with its length capped at `max`; non-finite components are clamped first so the
@@ -285,29 +295,6 @@ pub(crate) fn relative_velocity(
     (b.v - a.v).dot(d) + b.w * rd_b - a.w * rd_a
 }
 
-/// Apply impulse lambda along d at a point with arms rd_a, rd_b: B gets +lambda d, A -lambda d.
-#[inline]
-pub(crate) fn apply_along(
-    a: &mut SolverBody,
-    b: &mut SolverBody,
-    d: Vec2,
-    rd_a: Real,
-    rd_b: Real,
-    lambda: Real,
-) {
-    let p = lambda * d;
-    // Static bodies are skipped rather than written with zero: a store to the ground for
-    // every ground contact would chain those contacts' solves through memory.
-    if a.inv_mass > 0.0 {
-        a.v -= a.inv_mass * p;
-        a.w -= a.inv_inertia * lambda * rd_a;
-    }
-    if b.inv_mass > 0.0 {
-        b.v += b.inv_mass * p;
-        b.w += b.inv_inertia * lambda * rd_b;
-    }
-}
-
 /// Mutable references to two distinct bodies of the solver array.
 #[inline]
 pub(crate) fn pair_mut(
@@ -319,123 +306,6 @@ pub(crate) fn pair_mut(
     debug_assert!(a < b, "contacts store the lower slot first");
     let (lo, hi) = bodies.split_at_mut(b);
     (&mut lo[a], &mut hi[0])
-}
-
-/// The 2x2 effective-mass matrix of a two-point manifold along the normal and its inverse:
-/// K_ij = 1/mA + 1/mB + (rA_i x n)(rA_j x n)/IA + (rB_i x n)(rB_j x n)/IB.
-/// Constant through a step (the anchors are), so it is built once in the prepare stage.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct BlockMass {
-    pub k: [[Real; 2]; 2],
-    pub inv: [[Real; 2]; 2],
-}
-
-impl BlockMass {
-    /// The block of a two-point contact `c` (None for one point, or when ill-conditioned).
-    #[inline]
-    pub fn of_contact(a: &SolverBody, b: &SolverBody, c: &Contact) -> Option<BlockMass> {
-        if c.count != 2 {
-            return None;
-        }
-        let ra = [c.points[0].anchor_a, c.points[1].anchor_a];
-        let rb = [c.points[0].anchor_b, c.points[1].anchor_b];
-        BlockMass::new(a, b, ra, rb, c.normal)
-    }
-
-    /// The block for anchors `ra`, `rb` along `n`, or None when it is too ill-conditioned to
-    /// invert safely (nearly coincident points): k11^2 < 1000 det, Box2D's bound.
-    #[inline]
-    pub fn new(
-        a: &SolverBody,
-        b: &SolverBody,
-        ra: [Vec2; 2],
-        rb: [Vec2; 2],
-        n: Vec2,
-    ) -> Option<BlockMass> {
-        use super::math::cross;
-        let rna = [cross(ra[0], n), cross(ra[1], n)];
-        let rnb = [cross(rb[0], n), cross(rb[1], n)];
-        let m = a.inv_mass + b.inv_mass;
-        let kij = |i: usize, j: usize| {
-            m + a.inv_inertia * rna[i] * rna[j] + b.inv_inertia * rnb[i] * rnb[j]
-        };
-        let k = [[kij(0, 0), kij(0, 1)], [kij(1, 0), kij(1, 1)]];
-        let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
-        let well_conditioned = k[0][0] * k[0][0] < 1000.0 * det;
-        if !well_conditioned {
-            return None;
-        }
-        let inv_det = 1.0 / det;
-        let inv = [
-            [inv_det * k[1][1], -inv_det * k[0][1]],
-            [-inv_det * k[1][0], inv_det * k[0][0]],
-        ];
-        Some(BlockMass { k, inv })
-    }
-
-    /// K lambda.
-    #[inline]
-    pub fn mul(&self, l: [Real; 2]) -> [Real; 2] {
-        [
-            self.k[0][0] * l[0] + self.k[0][1] * l[1],
-            self.k[1][0] * l[0] + self.k[1][1] * l[1],
-        ]
-    }
-}
-
-impl BlockMass {
-    /// The new accumulated normal impulses of a two-point contact (see [`solve_block_lcp`]).
-    ///
-    /// `vn` are the points' normal velocities (m/s) and `lambda` their accumulated impulses
-    /// (N s). Row i aims at the normal velocity `aim(i, free_i)`, where
-    /// free_i = vn_i - (K lambda)_i is its velocity with the accumulated impulse taken out.
-    #[inline]
-    pub fn solve(
-        &self,
-        lambda: [Real; 2],
-        vn: [Real; 2],
-        aim: impl Fn(usize, Real) -> Real,
-    ) -> Option<[Real; 2]> {
-        let k_lambda = self.mul(lambda);
-        let rhs = [0, 1].map(|i| {
-            let free = vn[i] - k_lambda[i];
-            free - aim(i, free)
-        });
-        solve_block_lcp(self, rhs)
-    }
-}
-
-/// Solve the two-point contact LCP exactly: find x >= 0 with w = K x + b >= 0 and x.w = 0,
-/// where x is the new accumulated normal impulse and w the excess normal velocity over the
-/// target. Enumerates the four cases (both active, only 1, only 2, none), as Box2D v2's
-/// block solver does. Solving both points together removes the left/right bias of solving
-/// them one after the other, which otherwise puts a spurious spin into every resting box.
-/// Returns None in the (round-off only) case that no case fits.
-#[inline]
-pub(crate) fn solve_block_lcp(m: &BlockMass, b: [Real; 2]) -> Option<[Real; 2]> {
-    let (k, inv) = (&m.k, &m.inv);
-    // Case 1: both points push. x = -K^-1 b.
-    let x0 = -(inv[0][0] * b[0] + inv[0][1] * b[1]);
-    let x1 = -(inv[1][0] * b[0] + inv[1][1] * b[1]);
-    if x0 >= 0.0 && x1 >= 0.0 {
-        return Some([x0, x1]);
-    }
-    // Case 2: only point 0 pushes; point 1 separates (w1 >= 0). Times the reciprocal, not
-    // divided: the point's normal mass, as the wide solver has it.
-    let x0 = -b[0] * (1.0 / k[0][0]);
-    if x0 >= 0.0 && k[1][0] * x0 + b[1] >= 0.0 {
-        return Some([x0, 0.0]);
-    }
-    // Case 3: only point 1 pushes.
-    let x1 = -b[1] * (1.0 / k[1][1]);
-    if x1 >= 0.0 && k[0][1] * x1 + b[0] >= 0.0 {
-        return Some([0.0, x1]);
-    }
-    // Case 4: neither pushes.
-    if b[0] >= 0.0 && b[1] >= 0.0 {
-        return Some([0.0, 0.0]);
-    }
-    None
 }
 
 #[cfg(test)]

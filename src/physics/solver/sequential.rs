@@ -5,40 +5,12 @@
 //! points `iterations` times, each time solving the normal impulse (clamped so bodies only
 //! push) and the friction impulse (clamped to the Coulomb cone).
 
-use super::constraint::{ContactConstraint, PointConstraint};
-use super::{apply_impulse, pair_mut, BlockMass, SolverBody};
-use crate::physics::contact::{Contact, ContactPoint};
+use super::block::BlockMass;
+use super::constraint::ContactConstraint;
+use super::{apply_impulse, pair_mut, SolverBody};
+use crate::physics::contact::Contact;
 use crate::physics::math::{cross, cross_sv, Real, Vec2};
 use crate::physics::settings::Settings;
-
-/// Effective mass 1 / (1/mA + 1/mB + (rA x d)^2 / IA + (rB x d)^2 / IB) along direction `d`
-/// (appendix eqs. 56-57, with r.r - (r.d)^2 = (r x d)^2 for unit d).
-#[inline]
-pub(crate) fn effective_mass(a: &SolverBody, b: &SolverBody, ra: Vec2, rb: Vec2, d: Vec2) -> Real {
-    let rna = cross(ra, d);
-    let rnb = cross(rb, d);
-    let k = a.inv_mass + b.inv_mass + a.inv_inertia * rna * rna + b.inv_inertia * rnb * rnb;
-    if k > 0.0 {
-        1.0 / k
-    } else {
-        0.0
-    }
-}
-
-/// A point's normal and tangent effective masses (eqs. 56-57) from its anchors, for normal
-/// `n` and tangent `t`.
-#[inline]
-pub(crate) fn point_masses(
-    a: &SolverBody,
-    b: &SolverBody,
-    p: &ContactPoint,
-    k: &mut PointConstraint,
-    n: Vec2,
-    t: Vec2,
-) {
-    k.normal_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, n);
-    k.tangent_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, t);
-}
 
 /// Prepare, warm start and iterate. Velocities in `bodies` are updated in place;
 /// `constraints` (one per contact) receive this step's constraints.
@@ -161,7 +133,7 @@ fn prepare(
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
         for (p, k) in c.points[..c.count].iter_mut().zip(&mut k.points) {
-            point_masses(a, b, p, k, n, t);
+            k.set_masses(a, b, p, n, t);
             let (ra, rb) = (p.anchor_a, p.anchor_b);
             let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
             let vn = dv.dot(n);

@@ -1,235 +1,390 @@
-//! Finding contacts: the broad phase's candidate pairs, the narrow phase's manifolds, and
-//! last step's impulses carried over to the points that persist.
+//! Finding contacts, in four parts: update the proxies (each body's box for this step), find
+//! the candidate pairs (the broad phase), merge them with last step's contacts, and update
+//! one contact (its manifold recycled, or the pair collided afresh; last step's impulses
+//! carried to the points that persist, for warm starting).
+//!
+//! Contacts are kept sorted by pair key, as the broad phase yields its pairs, and this step's
+//! are written over last step's **in place** while they come in the same order: in a scene at
+//! rest every pair keeps its contact and nothing is copied (copying every contact cost 4-5 %
+//! of a settled pyramid's step). At the first contact that is new or gone, the ones written so
+//! far are copied to a fresh array and the rest is read from last step's. A contact that
+//! begins takes a colour from the constraint graph; one that ends gives it back, in key order.
 
-use super::islands::TierInput;
+use super::tiers::TierInput;
 use super::*;
 use crate::physics::collide::{Manifold, ManifoldPoint};
 use crate::physics::math::Transform;
 
 impl World {
-    /// Broad phase, then narrow phase, then match points with last step's for warm starting.
+    /// Find this step's contacts, then wake what they must wake.
     ///
-    /// `speculative` > 0 also keeps points that are up to that far apart, plus however far
-    /// the pair can close in `dt` (so fast bodies meet the surface instead of tunnelling).
-    /// A sleeping body that an awake one is about to touch wakes with its island.
-    pub(super) fn find_contacts(&mut self, dt: Real, speculative: Real) {
-        // Proxies: each body's box grown by half the speculative distance plus how far it can
-        // travel this step.
-        let g = self.gravity;
-        self.proxies.clear();
-        self.proxies
-            .extend(self.slots.iter().map(|slot| match &slot.body {
-                Some(b) => {
-                    let reach = if b.is_active() || b.kinematic {
-                        travel(b, g, dt)
-                    } else {
-                        0.0
-                    };
-                    Proxy {
-                        aabb: b
-                            .shape
-                            .aabb(b.transform())
-                            .inflated(0.5 * speculative + reach),
-                    }
-                }
-                None => Proxy {
-                    aabb: crate::physics::shape::Aabb {
-                        min: Vec2::ZERO,
-                        max: Vec2::ZERO,
-                    },
-                },
-            }));
-        self.broad_phase
-            .find_pairs(&self.proxies, &mut self.pair_keys);
-
-        // This step's contacts are written over last step's, in place, while they come in the
-        // same order: in a scene at rest every pair keeps its contact and nothing is copied
-        // (copying each recycled contact to a new array was 4-5 % of a settled pyramid's
-        // step). At the first contact that is new or gone, the ones written so far are copied
-        // to a fresh array, and the rest is read from last step's (`previous`).
-        let mut in_place = true;
-        // In place: contacts[..written] are this step's, the rest last step's.
-        let mut written = 0usize;
-        #[cfg(test)]
-        if self.copy_contacts {
-            stop_in_place(&mut self.contacts, &mut self.previous, 0);
-            in_place = false;
-        }
-        self.tier_inputs.clear();
-        let mut old = 0usize;
-        let fm = self.settings.friction_mixing;
-        let rm = self.settings.restitution_mixing;
-        let recycling = self.settings.contact_recycling;
-        let slop = self.settings.linear_slop;
-        for &key in &self.pair_keys {
-            let (ia, ib) = pair_of(key);
-            let (Some(a), Some(b)) = (&self.slots[ia as usize].body, &self.slots[ib as usize].body)
-            else {
-                continue;
-            };
-            if a.inv_mass == 0.0 && b.inv_mass == 0.0 {
-                // A kinematic body meets static and kinematic ones without a contact.
-                continue;
-            }
-            // Both lists are sorted by key: advance the cursor in the old one. In place, a
-            // contact passed over is gone.
-            if in_place && self.contacts.get(written).is_some_and(|c| c.key < key) {
-                stop_in_place(&mut self.contacts, &mut self.previous, written);
-                (in_place, old) = (false, written);
-            }
-            if !in_place {
-                while old < self.previous.len() && self.previous[old].key < key {
-                    old += 1;
-                }
-            }
-            let last = if in_place {
-                &self.contacts[written..]
-            } else {
-                &self.previous[old..]
-            };
-            let previous = last.first().filter(|c| c.key == key);
-            // Recycled only between awake dynamic bodies and bodies that do not move (static,
-            // or kinematic at rest): nothing to wake, no motion the solver does not see.
-            let steady =
-                |x: &Body| x.is_active() || (x.inv_mass == 0.0 && !x.is_moving_kinematic());
-            let (xf_a, xf_b) = (a.transform(), b.transform());
-            let recycled = previous
-                .filter(|_| recycling && steady(a) && steady(b))
-                .and_then(|c| {
-                    let size = a.bounding_radius.min(b.bounding_radius);
-                    let max_drift = RECYCLE_DRIFT.min(RECYCLE_SIZE * size);
-                    recycle(c, xf_a, xf_b, max_drift)
-                });
-            let manifold = match recycled {
-                Some(manifold) => manifold,
-                None => {
-                    let reach = closing_reach(a, b, g, dt);
-                    let manifold = collide(&a.shape, xf_a, &b.shape, xf_b, speculative + reach);
-                    if manifold.count == 0 {
-                        continue;
-                    }
-                    // Wake a sleeping body only if the gap can close this step. A speculative
-                    // point farther out than that treats the sleeper as fixed; waking on it made
-                    // a body resting 2 cm from an awake neighbour sleep and wake every 0.5 s
-                    // forever.
-                    let nearest = manifold
-                        .points()
-                        .iter()
-                        .map(|p| p.separation)
-                        .fold(Real::INFINITY, Real::min);
-                    // A kinematic body at rest wakes nothing (it is ground until it moves).
-                    let resting_kinematic = |x: &Body| x.kinematic && !x.is_moving_kinematic();
-                    let mut woken = false;
-                    if nearest <= reach + self.settings.linear_slop
-                        && !resting_kinematic(a)
-                        && !resting_kinematic(b)
-                    {
-                        for (i, body) in [(ia, a), (ib, b)] {
-                            if !body.awake {
-                                self.wake_queue.push(i);
-                                woken = true;
-                            }
-                        }
-                    }
-                    if !(a.is_active() || b.is_active() || woken) {
-                        // A sleeper beside a kinematic body at rest: nothing to solve.
-                        continue;
-                    }
-                    manifold
-                }
-            };
-            if let (Some(manifold), Some(base)) = (recycled, previous) {
-                // The same points as last step: the contact carries over whole (impulses,
-                // load, the recycling frame) and only its geometry moves.
-                // Everything else in it is recomputed by the solver's prepare.
-                let contact = if in_place {
-                    written += 1;
-                    &mut self.contacts[written - 1]
-                } else {
-                    self.contacts.push(*base);
-                    self.contacts.last_mut().expect("just pushed")
-                };
-                let age = contact.age;
-                contact.normal = manifold.normal;
-                contact.friction = fm.mix(a.friction, b.friction);
-                contact.restitution = rm.mix(a.restitution, b.restitution);
-                contact.age = age.saturating_add(1);
-                for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {
-                    cp.point = mp.point;
-                    cp.separation = mp.separation;
-                    cp.anchor_a = mp.point - a.position;
-                    cp.anchor_b = mp.point - b.position;
-                }
-                self.tier_inputs.push(TierInput::of(contact, slop));
-                continue;
-            }
-            let mut contact = Contact {
-                key,
-                a: ia,
-                b: ib,
-                normal: manifold.normal,
-                friction: fm.mix(a.friction, b.friction),
-                restitution: rm.mix(a.restitution, b.restitution),
-                touches_static: a.inv_mass == 0.0 || b.inv_mass == 0.0,
-                points: [ContactPoint::default(); 2],
-                count: manifold.count,
-                hertz: previous.map_or(0.0, |c| c.hertz),
-                load: previous.map_or(0.0, |c| c.load),
-                force: previous.map_or(0.0, |c| c.force),
-                age: previous.map_or(0, |c| c.age.saturating_add(1)),
-                local_normal: xf_a.q.inv_rotate(manifold.normal),
-                base_rotation: relative_rotation(xf_a.q, xf_b.q),
-            };
-            for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {
-                cp.id = mp.id;
-                cp.point = mp.point;
-                cp.separation = mp.separation;
-                cp.anchor_a = mp.point - a.position;
-                cp.anchor_b = mp.point - b.position;
-                cp.local_a = xf_a.apply_inv(mp.point);
-                cp.local_b = xf_b.apply_inv(mp.point);
-                cp.base_separation = mp.separation;
-                if let Some(prev) =
-                    previous.and_then(|c| c.points[..c.count].iter().find(|p| p.id == mp.id))
-                {
-                    cp.normal_impulse = prev.normal_impulse;
-                    cp.tangent_impulse = prev.tangent_impulse;
-                    cp.approach_velocity = prev.approach_velocity;
-                }
-            }
-            self.tier_inputs.push(TierInput::of(&contact, slop));
-            if in_place && previous.is_none() && written < self.contacts.len() {
-                // A new contact before last step's others: from here, the old way.
-                stop_in_place(&mut self.contacts, &mut self.previous, written);
-                (in_place, old) = (false, written);
-            }
-            if in_place {
-                // Over its own last step's contact, or appended after them all.
-                if written < self.contacts.len() {
-                    self.contacts[written] = contact;
-                } else {
-                    self.contacts.push(contact);
-                }
-                written += 1;
-            } else {
-                self.contacts.push(contact);
-            }
-        }
-        if in_place {
-            // Last step's contacts after the last one kept are gone.
-            self.contacts.truncate(written);
-        }
+    /// Points are kept up to `Settings::speculative_distance` apart, plus however far the pair
+    /// can close in `dt` (so fast bodies meet the surface instead of tunnelling). A sleeping
+    /// body that an awake one is about to touch wakes with its island.
+    pub(super) fn find_contacts(&mut self, dt: Real) {
+        self.update_proxies(dt);
+        let bp = &mut self.broad_phase;
+        bp.sweep.find_pairs(&bp.proxies, &mut bp.pair_keys);
+        self.merge_contacts(dt);
         self.wake_queued();
+    }
+
+    /// Each body's box grown by half the speculative distance plus how far it can travel
+    /// this step.
+    fn update_proxies(&mut self, dt: Real) {
+        let g = self.gravity;
+        let margin = 0.5 * self.settings.speculative_distance;
+        let proxies = &mut self.broad_phase.proxies;
+        proxies.clear();
+        proxies.extend(self.bodies.slots.iter().map(|slot| match &slot.body {
+            Some(b) => {
+                let reach = if b.is_active() || b.kinematic {
+                    travel(b, g, dt)
+                } else {
+                    0.0
+                };
+                Proxy {
+                    aabb: b.shape.aabb(b.transform()).inflated(margin + reach),
+                }
+            }
+            None => Proxy {
+                aabb: crate::physics::shape::Aabb {
+                    min: Vec2::ZERO,
+                    max: Vec2::ZERO,
+                },
+            },
+        }));
+    }
+
+    /// Walk the candidate pairs in key order beside last step's contacts: each pair's contact
+    /// updated or begun, the pairs no longer in contact ended.
+    fn merge_contacts(&mut self, dt: Real) {
+        let World {
+            settings,
+            gravity,
+            bodies,
+            contacts,
+            broad_phase,
+            tiers,
+            islands,
+            ..
+        } = self;
+        let pairs = PairInput {
+            slots: &bodies.slots,
+            settings,
+            gravity: *gravity,
+            dt,
+        };
+        tiers.inputs.clear();
+        let mut merge = Merge::begin(contacts);
+        for &key in &broad_phase.pair_keys {
+            if let Some(input) = pairs.update(key, &mut merge, contacts, &mut islands.wake_queue) {
+                tiers.inputs.push(input);
+            }
+        }
+        merge.end(contacts);
     }
 }
 
-/// Stop writing this step's contacts in place: last step's become `previous` (the first
-/// `written` of them already overwritten by this step's), and this step's so far are copied
-/// to a fresh `contacts`.
-fn stop_in_place(contacts: &mut Vec<Contact>, previous: &mut Vec<Contact>, written: usize) {
-    std::mem::swap(contacts, previous);
-    contacts.clear();
-    contacts.extend_from_slice(&previous[..written]);
+/// Where the merge stands: in place (this step's contacts are `awake[..written]`, last
+/// step's the rest) or copying (this step's are pushed to a fresh `awake`, last step's are
+/// `previous[old..]`).
+struct Merge {
+    in_place: bool,
+    written: usize,
+    old: usize,
+}
+
+impl Merge {
+    /// Start the walk, in place (tests may ask to copy from the start).
+    fn begin(contacts: &mut Contacts) -> Merge {
+        #[cfg_attr(not(test), allow(unused_mut))]
+        let mut merge = Merge {
+            in_place: true,
+            written: 0,
+            old: 0,
+        };
+        #[cfg(test)]
+        if contacts.copy_for_tests {
+            merge.copy_from_here(contacts);
+        }
+        #[cfg(not(test))]
+        let _ = contacts;
+        merge
+    }
+
+    /// Stop writing in place: last step's contacts become `previous` (those before `written`
+    /// already overwritten by this step's), and this step's so far are copied to `awake`.
+    fn copy_from_here(&mut self, contacts: &mut Contacts) {
+        std::mem::swap(&mut contacts.awake, &mut contacts.previous);
+        contacts.awake.clear();
+        contacts
+            .awake
+            .extend_from_slice(&contacts.previous[..self.written]);
+        (self.in_place, self.old) = (false, self.written);
+    }
+
+    /// Move to `key` among last step's contacts, ending those passed over; whether last step
+    /// had a contact for `key` ([`Merge::last`]).
+    fn seek(&mut self, contacts: &mut Contacts, key: u64) -> bool {
+        if self.in_place
+            && contacts
+                .awake
+                .get(self.written)
+                .is_some_and(|c| c.key < key)
+        {
+            self.copy_from_here(contacts);
+        }
+        if self.in_place {
+            return contacts
+                .awake
+                .get(self.written)
+                .is_some_and(|c| c.key == key);
+        }
+        while let Some(gone) = contacts.previous.get(self.old).filter(|c| c.key < key) {
+            contacts.graph.remove(gone.colour, [gone.a, gone.b]);
+            self.old += 1;
+        }
+        contacts
+            .previous
+            .get(self.old)
+            .is_some_and(|c| c.key == key)
+    }
+
+    /// Last step's contact for the key just sought (only after [`Merge::seek`] said there is
+    /// one).
+    fn last<'c>(&self, contacts: &'c Contacts) -> &'c Contact {
+        if self.in_place {
+            &contacts.awake[self.written]
+        } else {
+            &contacts.previous[self.old]
+        }
+    }
+
+    /// Keep last step's contact for this key as this step's, to be updated in place.
+    fn keep<'c>(&mut self, contacts: &'c mut Contacts) -> &'c mut Contact {
+        if self.in_place {
+            self.written += 1;
+            &mut contacts.awake[self.written - 1]
+        } else {
+            contacts.awake.push(contacts.previous[self.old]);
+            self.old += 1;
+            contacts.awake.last_mut().expect("just pushed")
+        }
+    }
+
+    /// Write `contact` as this step's for its key; `continued` when it replaces last step's.
+    fn write(&mut self, contacts: &mut Contacts, contact: Contact, continued: bool) {
+        if self.in_place && !continued && self.written < contacts.awake.len() {
+            // A new contact before last step's others: from here, copying.
+            self.copy_from_here(contacts);
+        }
+        if self.in_place {
+            // Over its own last step's contact, or appended after them all.
+            if self.written < contacts.awake.len() {
+                contacts.awake[self.written] = contact;
+            } else {
+                contacts.awake.push(contact);
+            }
+            self.written += 1;
+        } else {
+            contacts.awake.push(contact);
+            self.old += usize::from(continued);
+        }
+    }
+
+    /// Finish the walk: last step's contacts not reached are gone.
+    fn end(self, contacts: &mut Contacts) {
+        let gone = if self.in_place {
+            &contacts.awake[self.written..]
+        } else {
+            &contacts.previous[self.old..]
+        };
+        for c in gone {
+            contacts.graph.remove(c.colour, [c.a, c.b]);
+        }
+        if self.in_place {
+            contacts.awake.truncate(self.written);
+        }
+    }
+}
+
+/// What updating a pair's contact reads.
+struct PairInput<'a> {
+    slots: &'a [Slot],
+    settings: &'a Settings,
+    gravity: Vec2,
+    dt: Real,
+}
+
+impl PairInput<'_> {
+    /// The pair `key`'s contact this step: last step's with its manifold recycled, or the pair
+    /// collided afresh (waking sleepers it is about to touch), or none. Returns what adaptive
+    /// stiffness reads of the contact written.
+    fn update(
+        &self,
+        key: u64,
+        merge: &mut Merge,
+        contacts: &mut Contacts,
+        wake_queue: &mut Vec<u32>,
+    ) -> Option<TierInput> {
+        let (ia, ib) = pair_of(key);
+        let (Some(a), Some(b)) = (&self.slots[ia as usize].body, &self.slots[ib as usize].body)
+        else {
+            return None;
+        };
+        if a.inv_mass == 0.0 && b.inv_mass == 0.0 {
+            // A kinematic body meets static and kinematic ones without a contact.
+            return None;
+        }
+        let continued = merge.seek(contacts, key);
+        let slop = self.settings.linear_slop;
+        if continued {
+            if let Some(manifold) = self.recycled(merge.last(contacts), a, b) {
+                let contact = merge.keep(contacts);
+                self.set_geometry(contact, &manifold, (a, b));
+                return Some(TierInput::of(contact, slop));
+            }
+        }
+        let manifold = self.collide(a, b, [ia, ib], wake_queue)?;
+        // (A copy: the graph beside it changes.)
+        let previous = continued.then(|| *merge.last(contacts));
+        let graph = &mut contacts.graph;
+        let contact = self.fresh_contact(key, &manifold, (a, b), previous.as_ref(), graph);
+        let input = TierInput::of(&contact, slop);
+        merge.write(contacts, contact, continued);
+        Some(input)
+    }
+
+    /// Last step's manifold of `c`, moved with its bodies, if the pair may recycle it: only
+    /// between awake dynamic bodies and bodies that do not move (static, or kinematic at
+    /// rest), so there is nothing to wake and no motion the solver does not see.
+    #[inline(always)]
+    fn recycled(&self, c: &Contact, a: &Body, b: &Body) -> Option<Manifold> {
+        let steady = |x: &Body| x.is_active() || (x.inv_mass == 0.0 && !x.is_moving_kinematic());
+        if !(self.settings.contact_recycling && steady(a) && steady(b)) {
+            return None;
+        }
+        let size = a.bounding_radius.min(b.bounding_radius);
+        let max_drift = RECYCLE_DRIFT.min(RECYCLE_SIZE * size);
+        recycle(c, a.transform(), b.transform(), max_drift)
+    }
+
+    /// A recycled contact's new geometry: the same points, moved (everything else in it is
+    /// worked out again by the solver's prepare stage).
+    fn set_geometry(&self, contact: &mut Contact, manifold: &Manifold, (a, b): (&Body, &Body)) {
+        let mixing = (
+            self.settings.friction_mixing,
+            self.settings.restitution_mixing,
+        );
+        contact.normal = manifold.normal;
+        contact.friction = mixing.0.mix(a.friction, b.friction);
+        contact.restitution = mixing.1.mix(a.restitution, b.restitution);
+        contact.age = contact.age.saturating_add(1);
+        for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {
+            cp.point = mp.point;
+            cp.separation = mp.separation;
+            cp.anchor_a = mp.point - a.position;
+            cp.anchor_b = mp.point - b.position;
+        }
+    }
+
+    /// The pair's manifold, collided afresh, or None when it has no point or nothing to solve.
+    /// A sleeping body wakes only if the gap can close this step: a speculative point farther
+    /// out treats the sleeper as fixed (waking on it made a body resting 2 cm from an awake
+    /// neighbour sleep and wake every 0.5 s forever). A kinematic body at rest wakes nothing.
+    fn collide(
+        &self,
+        a: &Body,
+        b: &Body,
+        slots: [u32; 2],
+        wake_queue: &mut Vec<u32>,
+    ) -> Option<Manifold> {
+        let (g, dt) = (self.gravity, self.dt);
+        let reach = closing_reach(a, b, g, dt);
+        let margin = self.settings.speculative_distance + reach;
+        let manifold = collide(&a.shape, a.transform(), &b.shape, b.transform(), margin);
+        if manifold.count == 0 {
+            return None;
+        }
+        let nearest = manifold
+            .points()
+            .iter()
+            .map(|p| p.separation)
+            .fold(Real::INFINITY, Real::min);
+        let resting_kinematic = |x: &Body| x.kinematic && !x.is_moving_kinematic();
+        let mut woken = false;
+        if nearest <= reach + self.settings.linear_slop
+            && !resting_kinematic(a)
+            && !resting_kinematic(b)
+        {
+            for (i, body) in slots.into_iter().zip([a, b]) {
+                if !body.awake {
+                    wake_queue.push(i);
+                    woken = true;
+                }
+            }
+        }
+        // A sleeper beside a kinematic body at rest: nothing to solve.
+        (a.is_active() || b.is_active() || woken).then_some(manifold)
+    }
+
+    /// A contact from a fresh `manifold` between `a` and `b`: it continues last step's
+    /// contact `previous` where there was one (its colour, load and age, and the impulses of
+    /// the points with the same feature ids), or begins, taking a colour from `graph`.
+    fn fresh_contact(
+        &self,
+        key: u64,
+        manifold: &Manifold,
+        (a, b): (&Body, &Body),
+        previous: Option<&Contact>,
+        graph: &mut ConstraintGraph,
+    ) -> Contact {
+        let (ia, ib) = pair_of(key);
+        let (xf_a, xf_b) = (a.transform(), b.transform());
+        let colour = match previous {
+            Some(c) => c.colour,
+            None => graph.add([ia, ib], [a.inv_mass > 0.0, b.inv_mass > 0.0]),
+        };
+        let mut contact = Contact {
+            key,
+            a: ia,
+            b: ib,
+            normal: manifold.normal,
+            friction: 0.0,
+            restitution: 0.0,
+            touches_static: a.inv_mass == 0.0 || b.inv_mass == 0.0,
+            points: [ContactPoint::default(); 2],
+            count: manifold.count,
+            hertz: previous.map_or(0.0, |c| c.hertz),
+            load: previous.map_or(0.0, |c| c.load),
+            force: previous.map_or(0.0, |c| c.force),
+            age: previous.map_or(0, |c| c.age),
+            colour,
+            local_normal: xf_a.q.inv_rotate(manifold.normal),
+            base_rotation: relative_rotation(xf_a.q, xf_b.q),
+        };
+        // Geometry as a recycled contact's (which also ages it a step)...
+        self.set_geometry(&mut contact, manifold, (a, b));
+        if previous.is_none() {
+            contact.age = 0;
+        }
+        // ...plus what recycling will read, and the impulses of the points that persist.
+        for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {
+            cp.id = mp.id;
+            cp.local_a = xf_a.apply_inv(mp.point);
+            cp.local_b = xf_b.apply_inv(mp.point);
+            cp.base_separation = mp.separation;
+            if let Some(prev) =
+                previous.and_then(|c| c.points[..c.count].iter().find(|p| p.id == mp.id))
+            {
+                cp.normal_impulse = prev.normal_impulse;
+                cp.tangent_impulse = prev.tangent_impulse;
+                cp.approach_velocity = prev.approach_velocity;
+            }
+        }
+        contact
+    }
 }
 
 /// Contact recycling: how far (m) a point may drift from where it was computed before the
@@ -349,7 +504,7 @@ mod tests {
 
     /// The floor's and the box's transforms, and the box's shape.
     fn poses(w: &World) -> (Transform, Transform, Shape) {
-        let body = |i: usize| w.slots[i].body.as_ref().unwrap();
+        let body = |i: usize| w.bodies.slots[i].body.as_ref().unwrap();
         (
             body(0).transform(),
             body(1).transform(),
@@ -374,11 +529,11 @@ mod tests {
     #[test]
     fn a_recycled_manifold_is_the_fresh_one_for_a_small_motion() {
         let w = box_on_floor(true, 30);
-        let contact = w.contacts[0];
+        let contact = w.contacts.awake[0];
         let (xf_floor, xf_box, shape) = poses(&w);
         let xf = moved(xf_box, vec2(4.0e-4, -3.0e-4), 1.0e-3);
         let recycled = recycle(&contact, xf_floor, xf, 2.0e-3).expect("a small motion recycles");
-        let floor = w.slots[0].body.as_ref().unwrap().shape.clone();
+        let floor = w.bodies.slots[0].body.as_ref().unwrap().shape.clone();
         let fresh = collide(&floor, xf_floor, &shape, xf, 0.02);
         assert_eq!((recycled.count, fresh.count), (2, 2));
         assert!((recycled.normal - fresh.normal).length() < 1e-6);
@@ -402,7 +557,7 @@ mod tests {
     #[test]
     fn recycling_stops_when_a_pair_drifts_or_turns() {
         let w = box_on_floor(true, 30);
-        let contact = w.contacts[0];
+        let contact = w.contacts.awake[0];
         let (xf_floor, xf_box, _) = poses(&w);
         let drifted = moved(xf_box, vec2(1.2e-3, 0.0), 0.0);
         assert!(recycle(&contact, xf_floor, drifted, 1.0e-3).is_none());
@@ -438,6 +593,7 @@ mod tests {
         }
         let reused = on
             .contacts
+            .awake
             .iter()
             .flat_map(|c| c.points[..c.count].iter())
             .filter(|p| p.separation != p.base_separation)
@@ -445,6 +601,7 @@ mod tests {
         assert!(reused > 0, "no contact was recycled");
         let fresh = off
             .contacts
+            .awake
             .iter()
             .flat_map(|c| c.points[..c.count].iter())
             .all(|p| p.separation == p.base_separation);

@@ -1,9 +1,10 @@
 //! The World: bodies, gravity, settings, and `step(dt)`.
 //!
 //! - `mod.rs`: the World and its API (bodies, forces, queries, energy);
-//! - `step.rs`: the step's stages in order, and the soft step's tiers;
-//! - `contacts.rs`: finding contacts (broad phase, narrow phase, matching last step's);
-//! - `islands.rs`: islands, adaptive stiffness tiers, sleep and waking;
+//! - `step.rs`: the step's stages in order, and the soft step by stiffness tier;
+//! - `contacts.rs`: finding contacts (broad phase, narrow phase, merging with last step's);
+//! - `tiers.rs`: adaptive stiffness, a tier for each island;
+//! - `islands.rs`: islands, sleep and waking;
 //! - `snapshot.rs`: the full state as plain data (checkpoints).
 
 use super::body::{Body, BodyDef, BodyId};
@@ -13,9 +14,11 @@ use super::contact::{Contact, ContactInfo, ContactPoint, ContactPointInfo};
 use super::error::{finite, finite_vec, positive, PhysicsError};
 use super::math::{cross, Real, Rot, Vec2};
 use super::settings::{Settings, SolverKind};
+use super::solver::bundles::ContactBundles;
 use super::solver::constraint::ContactConstraint;
-use super::solver::wide::WideSolver;
-use super::solver::{self, clamp_speed, Limits, Moving, Selected, SolverBody};
+use super::solver::graph::ConstraintGraph;
+use super::solver::sequential::SplitImpulse;
+use super::solver::{clamp_speed, SolverBody};
 
 /// Export and import of the full state (checkpoints); a child module so it reads private fields.
 pub mod snapshot;
@@ -25,6 +28,7 @@ mod islands;
 mod step;
 #[cfg(test)]
 mod tests;
+mod tiers;
 
 /// One entry of the body array: a body, or a free slot remembering its generation.
 #[derive(Clone, Debug)]
@@ -36,59 +40,75 @@ struct Slot {
 /// A 2D rigid-body world.
 ///
 /// Units throughout: metres, seconds, radians, kilograms. Every method that takes input
-/// validates it and refuses what cannot be simulated, so a World never holds NaN.
+/// validates it and refuses what cannot be simulated, so a World never holds NaN. Buffers are
+/// kept from step to step, so a steady step does not allocate.
 #[derive(Clone, Debug)]
 pub struct World {
     settings: Settings,
     gravity: Vec2,
-    slots: Vec<Slot>,
-    free: Vec<u32>,
-    body_count: usize,
+    /// Simulated time (s) and steps taken.
     time: f64,
     steps: u64,
-    broad_phase: SweepAndPrune,
-    // Buffers reused every step, so a steady step does not allocate.
-    proxies: Vec<Proxy>,
-    pair_keys: Vec<u64>,
-    contacts: Vec<Contact>,
-    previous: Vec<Contact>,
-    /// Contacts between bodies that sleep (or sleep and static): kept for warm starting and to
-    /// wake islands, never solved.
-    sleeping_contacts: Vec<Contact>,
-    /// This step's constraint per contact, where the scalar code solves it (see
-    /// `solver::constraint`); indexed like `contacts`.
-    constraints: Vec<ContactConstraint>,
-    solver_bodies: Vec<SolverBody>,
-    wide: WideSolver,
-    split_impulse: solver::sequential::SplitImpulse,
-    // Adaptive stiffness, reused every step: each contact's and each slot's tier, the
-    // contacts' indices grouped by tier while tiers are solved apart, and the bodies of the
-    // tier being solved.
-    contact_tier: Vec<u8>,
-    /// Adaptive stiffness scratch: each contact's two bodies, in contact order, so the
-    /// island passes read 8 bytes a contact instead of the whole contact.
-    contact_bodies: Vec<[u32; 2]>,
-    /// Adaptive stiffness: each contact's inputs, in contact order, filled as the contacts
-    /// are found (rebuilt by `assign_tiers` when the counts differ).
-    tier_inputs: Vec<islands::TierInput>,
-    body_tier: Vec<u8>,
-    /// Adaptive stiffness scratch: each island's extent and moving bodies, at its root.
-    island_extent: Vec<islands::Extent>,
-    island_bodies: Vec<u32>,
-    tier_contacts: Vec<u32>,
-    tier_bodies: Vec<u32>,
-    // Sleep bookkeeping, reused every step.
-    wake_queue: Vec<u32>,
-    island_parent: Vec<u32>,
-    island_rest: Vec<Real>,
-    changed: Vec<u32>,
-    /// Scratch for `wake_queued`: the sleeping islands to wake, sorted.
-    waking_islands: Vec<u32>,
+    bodies: Bodies,
+    contacts: Contacts,
+    broad_phase: BroadPhase,
+    solver: SolverScratch,
+    tiers: tiers::TierScratch,
+    islands: islands::IslandScratch,
+}
+
+/// The bodies: a slot array with a free list.
+#[derive(Clone, Debug, Default)]
+struct Bodies {
+    slots: Vec<Slot>,
+    /// Free slots, reused last first.
+    free: Vec<u32>,
+    /// Live bodies.
+    count: usize,
     /// Scratch for `remove_bodies`: a flag per slot, all false between calls.
     removing: Vec<bool>,
+}
+
+/// The contacts, sorted by pair key, and the constraint graph that colours them.
+#[derive(Clone, Debug, Default)]
+struct Contacts {
+    /// Contacts with an awake body: solved.
+    awake: Vec<Contact>,
+    /// Last step's, while this step's are found into `awake` (swapped, so neither allocates).
+    previous: Vec<Contact>,
+    /// Contacts between sleeping bodies (or sleeping and static): kept with their impulses to
+    /// warm start their island when it wakes, never solved, not in the graph.
+    sleeping: Vec<Contact>,
+    /// Every awake contact's colour.
+    graph: ConstraintGraph,
     /// Tests: find contacts into a fresh array every step, never in place.
     #[cfg(test)]
-    copy_contacts: bool,
+    copy_for_tests: bool,
+}
+
+/// The broad phase and what it reads each step.
+#[derive(Clone, Debug, Default)]
+struct BroadPhase {
+    sweep: SweepAndPrune,
+    /// Each slot's box for this step.
+    proxies: Vec<Proxy>,
+    /// This step's candidate pairs, by key.
+    pair_keys: Vec<u64>,
+}
+
+/// The solvers' buffers for one step.
+#[derive(Clone, Debug, Default)]
+struct SolverScratch {
+    /// A solver body per slot (fixed for all but awake dynamic ones), and one fixed body more.
+    bodies: Vec<SolverBody>,
+    /// The slots of the kinematic bodies that move.
+    kinematic: Vec<u32>,
+    /// Sequential solver: the constraint per contact, indexed like `Contacts::awake`.
+    constraints: Vec<ContactConstraint>,
+    /// Sequential solver: the position correction.
+    split_impulse: SplitImpulse,
+    /// Soft step: the contacts packed for the lanes.
+    bundles: ContactBundles,
 }
 
 impl Default for World {
@@ -109,37 +129,14 @@ impl World {
         World {
             settings,
             gravity,
-            slots: Vec::new(),
-            free: Vec::new(),
-            body_count: 0,
             time: 0.0,
             steps: 0,
-            broad_phase: SweepAndPrune::default(),
-            proxies: Vec::new(),
-            pair_keys: Vec::new(),
-            contacts: Vec::new(),
-            previous: Vec::new(),
-            sleeping_contacts: Vec::new(),
-            constraints: Vec::new(),
-            solver_bodies: Vec::new(),
-            wide: WideSolver::default(),
-            split_impulse: Default::default(),
-            contact_tier: Vec::new(),
-            contact_bodies: Vec::new(),
-            tier_inputs: Vec::new(),
-            body_tier: Vec::new(),
-            island_extent: Vec::new(),
-            island_bodies: Vec::new(),
-            tier_contacts: Vec::new(),
-            tier_bodies: Vec::new(),
-            wake_queue: Vec::new(),
-            island_parent: Vec::new(),
-            island_rest: Vec::new(),
-            changed: Vec::new(),
-            waking_islands: Vec::new(),
-            removing: Vec::new(),
-            #[cfg(test)]
-            copy_contacts: false,
+            bodies: Bodies::default(),
+            contacts: Contacts::default(),
+            broad_phase: BroadPhase::default(),
+            solver: SolverScratch::default(),
+            tiers: Default::default(),
+            islands: Default::default(),
         }
     }
 
@@ -190,19 +187,19 @@ impl World {
             def.angular_velocity,
             def.shape.bounding_radius(),
         )?;
-        let index = match self.free.pop() {
+        let index = match self.bodies.free.pop() {
             Some(i) => i,
             None => {
-                let i = u32::try_from(self.slots.len())
-                    .map_err(|_| PhysicsError::Full(self.body_count))?;
-                self.slots.push(Slot {
+                let i = u32::try_from(self.bodies.slots.len())
+                    .map_err(|_| PhysicsError::Full(self.bodies.count))?;
+                self.bodies.slots.push(Slot {
                     generation: 0,
                     body: None,
                 });
                 i
             }
         };
-        let slot = &mut self.slots[index as usize];
+        let slot = &mut self.bodies.slots[index as usize];
         let id = BodyId {
             index,
             generation: slot.generation,
@@ -210,8 +207,8 @@ impl World {
         let body = Body::from_def(id, def);
         let passive = body.is_static();
         slot.body = Some(body);
-        self.body_count += 1;
-        self.broad_phase.insert(index, passive);
+        self.bodies.count += 1;
+        self.broad_phase.sweep.insert(index, passive);
         Ok(id)
     }
 
@@ -226,8 +223,8 @@ impl World {
     /// (removing them one at a time costs a pass each). Returns the bodies in the order given.
     pub fn remove_bodies(&mut self, ids: &[BodyId]) -> Result<Vec<Body>, PhysicsError> {
         // Flags set for the ids only (and cleared again), so a short list costs little.
-        let mut gone = std::mem::take(&mut self.removing);
-        gone.resize(self.slots.len(), false);
+        let mut gone = std::mem::take(&mut self.bodies.removing);
+        gone.resize(self.bodies.slots.len(), false);
         let clear = |gone: &mut Vec<bool>| {
             for id in ids {
                 if let Some(flag) = gone.get_mut(id.index as usize) {
@@ -245,35 +242,42 @@ impl World {
             };
             if let Some(e) = refused {
                 clear(&mut gone);
-                self.removing = gone;
+                self.bodies.removing = gone;
                 return Err(e);
             }
         }
         let is_gone = |i: u32| gone[i as usize];
         // Whatever rested on these bodies must notice they are gone.
-        for c in self.contacts.iter().chain(&self.sleeping_contacts) {
+        for c in self.contacts.awake.iter().chain(&self.contacts.sleeping) {
             if is_gone(c.a) && !is_gone(c.b) {
-                self.wake_queue.push(c.b);
+                self.islands.wake_queue.push(c.b);
             } else if is_gone(c.b) && !is_gone(c.a) {
-                self.wake_queue.push(c.a);
+                self.islands.wake_queue.push(c.a);
             }
         }
         self.wake_queued();
         let touches_gone = |c: &Contact| is_gone(c.a) || is_gone(c.b);
-        self.sleeping_contacts.retain(|c| !touches_gone(c));
-        self.contacts.retain(|c| !touches_gone(c));
+        self.contacts.sleeping.retain(|c| !touches_gone(c));
+        let graph = &mut self.contacts.graph;
+        self.contacts.awake.retain(|c| {
+            let gone = touches_gone(c);
+            if gone {
+                graph.remove(c.colour, [c.a, c.b]);
+            }
+            !gone
+        });
         clear(&mut gone);
-        self.removing = gone;
+        self.bodies.removing = gone;
         let mut removed = Vec::with_capacity(ids.len());
         let slots: Vec<u32> = ids.iter().map(|id| id.index).collect();
-        self.broad_phase.remove(&slots);
+        self.broad_phase.sweep.remove(&slots);
         for &id in ids {
-            let slot = &mut self.slots[id.index as usize];
+            let slot = &mut self.bodies.slots[id.index as usize];
             removed.push(slot.body.take().expect("checked above"));
             slot.generation = slot.generation.wrapping_add(1);
-            self.free.push(id.index);
+            self.bodies.free.push(id.index);
         }
-        self.body_count -= ids.len();
+        self.bodies.count -= ids.len();
         Ok(removed)
     }
 
@@ -309,18 +313,20 @@ impl World {
 
     /// Remove every body and contact; settings, gravity and time are kept.
     pub fn clear(&mut self) {
-        self.slots.clear();
-        self.free.clear();
-        self.body_count = 0;
-        self.broad_phase.clear();
-        self.contacts.clear();
-        self.previous.clear();
-        self.sleeping_contacts.clear();
+        self.bodies.slots.clear();
+        self.bodies.free.clear();
+        self.bodies.count = 0;
+        self.broad_phase.sweep.clear();
+        self.contacts.awake.clear();
+        self.contacts.previous.clear();
+        self.contacts.sleeping.clear();
+        self.contacts.graph.clear();
     }
 
     /// The body with this id, if it is still in the world.
     pub fn body(&self, id: BodyId) -> Option<&Body> {
-        self.slots
+        self.bodies
+            .slots
             .get(id.index as usize)
             .filter(|s| s.generation == id.generation)
             .and_then(|s| s.body.as_ref())
@@ -329,10 +335,11 @@ impl World {
     /// A body by id, woken (with its island) first: anything that pushes a body wakes it.
     fn body_mut(&mut self, id: BodyId) -> Result<&mut Body, PhysicsError> {
         if self.body(id).is_some_and(|b| !b.awake) {
-            self.wake_queue.push(id.index);
+            self.islands.wake_queue.push(id.index);
             self.wake_queued();
         }
-        self.slots
+        self.bodies
+            .slots
             .get_mut(id.index as usize)
             .filter(|s| s.generation == id.generation)
             .and_then(|s| s.body.as_mut())
@@ -341,12 +348,12 @@ impl World {
 
     /// Every body, in slot order.
     pub fn bodies(&self) -> impl Iterator<Item = &Body> + '_ {
-        self.slots.iter().filter_map(|s| s.body.as_ref())
+        self.bodies.slots.iter().filter_map(|s| s.body.as_ref())
     }
 
     /// Number of bodies.
     pub fn body_count(&self) -> usize {
-        self.body_count
+        self.bodies.count
     }
 
     /// Number of dynamic bodies that are awake (the ones a step moves).
@@ -357,11 +364,14 @@ impl World {
     /// Wake every sleeping body.
     pub fn wake_all(&mut self) {
         let sleeping = self
+            .bodies
             .slots
             .iter()
             .enumerate()
             .filter(|(_, s)| s.body.as_ref().is_some_and(|b| !b.awake));
-        self.wake_queue.extend(sleeping.map(|(i, _)| i as u32));
+        self.islands
+            .wake_queue
+            .extend(sleeping.map(|(i, _)| i as u32));
         self.wake_queued();
     }
 
@@ -453,18 +463,19 @@ impl World {
 
     /// Number of contacts (touching or speculative pairs), sleeping ones included.
     pub fn contact_count(&self) -> usize {
-        self.contacts.len() + self.sleeping_contacts.len()
+        self.contacts.awake.len() + self.contacts.sleeping.len()
     }
 
     /// The contacts found in the last step, with the impulses the solver applied.
     pub fn contacts(&self) -> impl Iterator<Item = ContactInfo> + '_ {
         self.contacts
+            .awake
             .iter()
-            .chain(&self.sleeping_contacts)
+            .chain(&self.contacts.sleeping)
             .map(move |c| {
                 let id = |i: u32| BodyId {
                     index: i,
-                    generation: self.slots[i as usize].generation,
+                    generation: self.bodies.slots[i as usize].generation,
                 };
                 let mut points = [ContactPointInfo {
                     point: Vec2::ZERO,

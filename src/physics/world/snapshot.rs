@@ -3,23 +3,28 @@
 //! it was taken from.
 //!
 //! Everything that carries over from one step to the next is here: every slot (generation and
-//! body, forces and sleep state included), the free list, time and step count, settings,
-//! gravity, and the persistent contacts (awake and sleeping) with their warm-start impulses.
-//! The broad phase is rebuilt from the bodies: its output is sorted, so its internal order
-//! does not change what a step computes. Per-step scratch buffers, and the contacts' per-step
-//! constraints (arms, effective masses, springs: worked out afresh by every step before
-//! anything reads them), are not stored.
+//! body, forces and sleep state included), the free list, time and step count, settings and
+//! gravity, in the open; and the solver's history, which nothing can recompute, as one record
+//! with a version of its own ([`SolverHistory`]): the persistent contacts (awake and sleeping)
+//! with their warm-start impulses, their colours in the constraint graph, the loads and spring
+//! frequencies adaptive stiffness holds, and what contact recycling reuses. A change to a
+//! solver heuristic changes that record's version, not the shape of the rest. The broad phase
+//! and the graph's per-body masks are rebuilt (the broad phase's output is sorted, so its
+//! internal order does not change what a step computes); per-step scratch and the contacts'
+//! per-step constraints are not stored.
 //!
 //! A child module of `world`, so it reads the World's private fields without widening their
-//! visibility. One concept over 600 lines: the state's shape, its export, and its checked
-//! import (every field validated before anything is replaced).
+//! visibility: the state's shape, its export, and its checked import (every field validated
+//! before anything is replaced).
 
 use super::super::body::{Body, BodyId};
 use super::super::contact::{Contact, ContactPoint};
+use super::super::error::PhysicsError;
 use super::super::hash::Fnv1a;
 use super::super::math::{Real, Rot, Vec2};
 use super::super::settings::Settings;
 use super::super::shape::Shape;
+use super::super::solver::graph::{ConstraintGraph, OVERFLOW, UNCOLOURED};
 use super::{Slot, World};
 use serde::{Deserialize, Serialize};
 
@@ -72,53 +77,63 @@ pub struct SlotState {
     pub body: Option<BodyState>,
 }
 
+/// The version of [`SolverHistory`] this build writes and reads. 1: contacts with their
+/// impulses, colours, held loads, spring frequencies, ages and recycling frames.
+pub const SOLVER_HISTORY_VERSION: u32 = 1;
+
+/// The solver's history: what it carries from step to step and cannot work out again. Opaque
+/// to callers: written by [`World::export_state`], read back by [`World::import_state`], which
+/// refuses another version.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SolverHistory {
+    /// [`SOLVER_HISTORY_VERSION`] of the build that wrote it.
+    pub version: u32,
+    /// Awake contacts, sorted by key.
+    contacts: Vec<ContactRecord>,
+    /// Sleeping contacts, in the World's order.
+    sleeping: Vec<ContactRecord>,
+}
+
 /// One contact point with its solver state.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PointState {
+struct PointRecord {
     /// Feature id.
-    pub id: u16,
+    id: u16,
     /// point.x, point.y, separation, anchor_a.x, anchor_a.y, anchor_b.x, anchor_b.y.
-    pub geometry: [Real; 7],
+    geometry: [Real; 7],
     /// normal, tangent and total normal impulse (N s).
-    pub impulses: [Real; 3],
+    impulses: [Real; 3],
     /// Sequential solver: the approach velocity of a speculative point that closed its gap
     /// (m/s).
-    pub approach_velocity: Real,
+    approach_velocity: Real,
     /// Contact recycling: local_a.x, local_a.y, local_b.x, local_b.y, base separation.
-    /// Checkpoint format version 6 on.
-    pub recycle: [Real; 5],
+    recycle: [Real; 5],
 }
 
 /// A persistent contact.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ContactState {
-    /// Pair key.
-    pub key: u64,
-    /// Slot of body A.
-    pub a: u32,
-    /// Slot of body B.
-    pub b: u32,
-    /// Normal.
-    pub normal: [Real; 2],
-    /// Mixed friction.
-    pub friction: Real,
-    /// Mixed restitution.
-    pub restitution: Real,
-    /// A or B static.
-    pub touches_static: bool,
+struct ContactRecord {
+    /// Pair key; slots of A and B.
+    key: u64,
+    a: u32,
+    b: u32,
+    normal: [Real; 2],
+    /// Mixed friction and restitution.
+    friction: Real,
+    restitution: Real,
+    touches_static: bool,
     /// The live points (1 or 2).
-    pub points: Vec<PointState>,
-    /// Soft step spring frequency last step (Hz).
-    pub hertz: Real,
-    /// Normal force carried, held from step to step (N): adaptive stiffness reads it.
-    pub load: Real,
-    /// Normal force of the last step alone (N).
-    pub force: Real,
-    /// Steps in contact (saturating at 255).
-    pub age: u8,
-    /// Contact recycling: the normal in A's frame and B's rotation relative to A's (cos,
-    /// sin) when the manifold was computed. Checkpoint format version 6 on.
-    pub recycle: [Real; 4],
+    points: Vec<PointRecord>,
+    /// Spring frequency last step (Hz), held load (N), last step's force (N), age (steps).
+    hertz: Real,
+    load: Real,
+    force: Real,
+    age: u8,
+    /// Colour in the constraint graph (`UNCOLOURED` while asleep).
+    colour: u8,
+    /// Contact recycling: the normal in A's frame and B's rotation relative to A's (cos, sin)
+    /// when the manifold was computed.
+    recycle: [Real; 4],
 }
 
 /// Everything a World carries from one step to the next.
@@ -136,10 +151,8 @@ pub struct WorldState {
     pub time: f64,
     /// Steps taken.
     pub steps: u64,
-    /// Awake contacts, sorted by key.
-    pub contacts: Vec<ContactState>,
-    /// Sleeping contacts, in the World's order.
-    pub sleeping_contacts: Vec<ContactState>,
+    /// The solver's history.
+    pub solver: SolverHistory,
 }
 
 fn v2(v: Vec2) -> [Real; 2] {
@@ -149,88 +162,80 @@ fn vec(a: [Real; 2]) -> Vec2 {
     Vec2::new(a[0], a[1])
 }
 
-fn contact_state(c: &Contact) -> ContactState {
-    let points = c.points[..c.count.min(2)]
-        .iter()
-        .map(|p| PointState {
-            id: p.id,
-            geometry: [
-                p.point.x,
-                p.point.y,
-                p.separation,
-                p.anchor_a.x,
-                p.anchor_a.y,
-                p.anchor_b.x,
-                p.anchor_b.y,
-            ],
-            impulses: [p.normal_impulse, p.tangent_impulse, p.total_normal_impulse],
-            approach_velocity: p.approach_velocity,
+impl ContactRecord {
+    fn of(c: &Contact) -> ContactRecord {
+        let points = c.points[..c.count.min(2)]
+            .iter()
+            .map(|p| PointRecord {
+                id: p.id,
+                geometry: [
+                    p.point.x,
+                    p.point.y,
+                    p.separation,
+                    p.anchor_a.x,
+                    p.anchor_a.y,
+                    p.anchor_b.x,
+                    p.anchor_b.y,
+                ],
+                impulses: [p.normal_impulse, p.tangent_impulse, p.total_normal_impulse],
+                approach_velocity: p.approach_velocity,
+                recycle: [
+                    p.local_a.x,
+                    p.local_a.y,
+                    p.local_b.x,
+                    p.local_b.y,
+                    p.base_separation,
+                ],
+            })
+            .collect();
+        ContactRecord {
+            key: c.key,
+            a: c.a,
+            b: c.b,
+            normal: v2(c.normal),
+            friction: c.friction,
+            restitution: c.restitution,
+            touches_static: c.touches_static,
+            points,
+            hertz: c.hertz,
+            load: c.load,
+            force: c.force,
+            age: c.age,
+            colour: c.colour,
             recycle: [
-                p.local_a.x,
-                p.local_a.y,
-                p.local_b.x,
-                p.local_b.y,
-                p.base_separation,
+                c.local_normal.x,
+                c.local_normal.y,
+                c.base_rotation.c,
+                c.base_rotation.s,
             ],
-        })
-        .collect();
-    ContactState {
-        key: c.key,
-        a: c.a,
-        b: c.b,
-        normal: v2(c.normal),
-        friction: c.friction,
-        restitution: c.restitution,
-        touches_static: c.touches_static,
-        points,
-        hertz: c.hertz,
-        load: c.load,
-        force: c.force,
-        age: c.age,
-        recycle: [
-            c.local_normal.x,
-            c.local_normal.y,
-            c.base_rotation.c,
-            c.base_rotation.s,
-        ],
+        }
     }
-}
 
-fn finite_all(what: &str, values: &[Real]) -> Result<(), StateError> {
-    if values.iter().all(|v| v.is_finite()) {
-        Ok(())
-    } else {
-        Err(StateError(format!("{what}: a value is not finite")))
-    }
-}
-
-// `..ContactPoint::default()` is deliberate: a field added to ContactPoint later starts from
-// its default here instead of breaking the build.
-#[allow(clippy::needless_update)]
-fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
-    let live = |i: u32| slots.get(i as usize).is_some_and(|s| s.body.is_some());
-    if !(s.a < s.b && live(s.a) && live(s.b)) {
-        return Err(StateError(format!(
-            "contact {:#x} joins slots {} and {}, not two live bodies in order",
-            s.key, s.a, s.b
-        )));
-    }
-    if s.key != (u64::from(s.a) << 32 | u64::from(s.b)) {
-        return Err(StateError(format!(
-            "contact key {:#x} does not match its bodies",
-            s.key
-        )));
-    }
-    if s.points.is_empty() || s.points.len() > 2 {
-        return Err(StateError(format!(
-            "contact {:#x} has {} points",
-            s.key,
-            s.points.len()
-        )));
-    }
-    finite_all(
-        "contact",
-        &[
+    /// The contact, checked against the `slots` it joins: two live bodies in order, its key,
+    /// one or two points, finite numbers.
+    fn contact(&self, slots: &[Slot]) -> Result<Contact, StateError> {
+        let s = self;
+        let live = |i: u32| slots.get(i as usize).is_some_and(|s| s.body.is_some());
+        if !(s.a < s.b && live(s.a) && live(s.b)) {
+            return Err(StateError(format!(
+                "contact {:#x} joins slots {} and {}, not two live bodies in order",
+                s.key, s.a, s.b
+            )));
+        }
+        if s.key != (u64::from(s.a) << 32 | u64::from(s.b)) {
+            return Err(StateError(format!(
+                "contact key {:#x} does not match its bodies",
+                s.key
+            )));
+        }
+        if s.points.is_empty() || s.points.len() > 2 {
+            return Err(StateError(format!(
+                "contact {:#x} has {} points",
+                s.key,
+                s.points.len()
+            )));
+        }
+        let numbers = [
             s.normal[0],
             s.normal[1],
             s.friction,
@@ -238,17 +243,50 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             s.hertz,
             s.load,
             s.force,
-        ],
-    )?;
-    finite_all("contact recycling", &s.recycle)?;
-    let mut points = [ContactPoint::default(); 2];
-    for (out, p) in points.iter_mut().zip(&s.points) {
+        ];
+        finite_all("contact", &numbers)?;
+        finite_all("contact recycling", &s.recycle)?;
+        let mut points = [ContactPoint::default(); 2];
+        for (out, p) in points.iter_mut().zip(&s.points) {
+            *out = p.point()?;
+        }
+        Ok(Contact {
+            key: s.key,
+            a: s.a,
+            b: s.b,
+            normal: vec(s.normal),
+            friction: s.friction,
+            restitution: s.restitution,
+            touches_static: s.touches_static,
+            points,
+            count: s.points.len(),
+            hertz: s.hertz,
+            load: s.load,
+            force: s.force,
+            age: s.age,
+            colour: s.colour,
+            local_normal: Vec2::new(s.recycle[0], s.recycle[1]),
+            base_rotation: Rot {
+                c: s.recycle[2],
+                s: s.recycle[3],
+            },
+        })
+    }
+}
+
+impl PointRecord {
+    /// The point, its numbers checked finite.
+    // `..ContactPoint::default()` is deliberate: a field added to ContactPoint later starts
+    // from its default here instead of breaking the build.
+    #[allow(clippy::needless_update)]
+    fn point(&self) -> Result<ContactPoint, StateError> {
+        let p = self;
         finite_all("contact point", &p.geometry)?;
         finite_all("contact point", &p.impulses)?;
         finite_all("contact point", &[p.approach_velocity])?;
         finite_all("contact point", &p.recycle)?;
         let g = &p.geometry;
-        *out = ContactPoint {
+        Ok(ContactPoint {
             id: p.id,
             point: Vec2::new(g[0], g[1]),
             separation: g[2],
@@ -262,28 +300,87 @@ fn contact_of(s: &ContactState, slots: &[Slot]) -> Result<Contact, StateError> {
             local_b: Vec2::new(p.recycle[2], p.recycle[3]),
             base_separation: p.recycle[4],
             ..ContactPoint::default()
-        };
+        })
     }
-    Ok(Contact {
-        key: s.key,
-        a: s.a,
-        b: s.b,
-        normal: vec(s.normal),
-        friction: s.friction,
-        restitution: s.restitution,
-        touches_static: s.touches_static,
-        points,
-        count: s.points.len(),
-        hertz: s.hertz,
-        load: s.load,
-        force: s.force,
-        age: s.age,
-        local_normal: Vec2::new(s.recycle[0], s.recycle[1]),
-        base_rotation: Rot {
-            c: s.recycle[2],
-            s: s.recycle[3],
-        },
-    })
+}
+
+fn finite_all(what: &str, values: &[Real]) -> Result<(), StateError> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(StateError(format!("{what}: a value is not finite")))
+    }
+}
+
+impl BodyState {
+    fn of(b: &Body) -> BodyState {
+        BodyState {
+            shape: b.shape.clone(),
+            position: v2(b.position),
+            angle: b.angle,
+            rot: b.rot.to_cos_sin(),
+            linear_velocity: v2(b.linear_velocity),
+            angular_velocity: b.angular_velocity,
+            force: v2(b.force),
+            torque: b.torque,
+            mass: [b.mass, b.inv_mass, b.inertia, b.inv_inertia],
+            friction: b.friction,
+            restitution: b.restitution,
+            awake: b.awake,
+            sleep_time: b.sleep_time,
+            sleep_island: b.sleep_island,
+            kinematic: b.kinematic,
+        }
+    }
+
+    /// The body in slot `id`, checked: a valid shape, finite numbers, masses not negative, an
+    /// island among the `slots` slots.
+    fn body(&self, id: BodyId, slots: usize) -> Result<Body, StateError> {
+        let b = self;
+        let index = id.index;
+        let shape = b.shape.clone();
+        shape.validate().map_err(|e| StateError(e.to_string()))?;
+        let mut all = vec![
+            b.angle,
+            b.angular_velocity,
+            b.torque,
+            b.friction,
+            b.restitution,
+            b.sleep_time,
+        ];
+        for pair in [b.position, b.rot, b.linear_velocity, b.force] {
+            all.extend_from_slice(&pair);
+        }
+        finite_all(&format!("body {index}"), &all)?;
+        // Static bodies have infinite mass and inertia (and zero inverses).
+        if b.mass.iter().any(|&m| m.is_nan() || m < 0.0) || b.sleep_island as usize >= slots {
+            return Err(StateError(format!(
+                "body {index}: mass or island out of range"
+            )));
+        }
+        Ok(Body {
+            id,
+            bounding_radius: shape.bounding_radius(),
+            shape,
+            position: vec(b.position),
+            angle: b.angle,
+            rot: Rot::from_cos_sin(b.rot),
+            linear_velocity: vec(b.linear_velocity),
+            angular_velocity: b.angular_velocity,
+            force: vec(b.force),
+            torque: b.torque,
+            mass: b.mass[0],
+            inv_mass: b.mass[1],
+            inertia: b.mass[2],
+            inv_inertia: b.mass[3],
+            friction: b.friction,
+            restitution: b.restitution,
+            awake: b.awake,
+            sleep_time: b.sleep_time,
+            sleep_island: b.sleep_island,
+            kinematic: b.kinematic && b.mass[1] == 0.0,
+        })
+    }
 }
 
 impl World {
@@ -322,47 +419,48 @@ impl World {
 
     /// The full state: what [`World::import_state`] needs to continue bit-identically.
     pub fn export_state(&self) -> WorldState {
+        let slots = self.bodies.slots.iter().map(|s| SlotState {
+            generation: s.generation,
+            body: s.body.as_ref().map(BodyState::of),
+        });
         WorldState {
             settings: self.settings.clone(),
             gravity: v2(self.gravity),
-            slots: self
-                .slots
-                .iter()
-                .map(|s| SlotState {
-                    generation: s.generation,
-                    body: s.body.as_ref().map(|b| BodyState {
-                        shape: b.shape.clone(),
-                        position: v2(b.position),
-                        angle: b.angle,
-                        rot: b.rot.to_cos_sin(),
-                        linear_velocity: v2(b.linear_velocity),
-                        angular_velocity: b.angular_velocity,
-                        force: v2(b.force),
-                        torque: b.torque,
-                        mass: [b.mass, b.inv_mass, b.inertia, b.inv_inertia],
-                        friction: b.friction,
-                        restitution: b.restitution,
-                        awake: b.awake,
-                        sleep_time: b.sleep_time,
-                        sleep_island: b.sleep_island,
-                        kinematic: b.kinematic,
-                    }),
-                })
-                .collect(),
-            free: self.free.clone(),
+            slots: slots.collect(),
+            free: self.bodies.free.clone(),
             time: self.time,
             steps: self.steps,
-            contacts: self.contacts.iter().map(contact_state).collect(),
-            sleeping_contacts: self.sleeping_contacts.iter().map(contact_state).collect(),
+            solver: SolverHistory {
+                version: SOLVER_HISTORY_VERSION,
+                contacts: self.contacts.awake.iter().map(ContactRecord::of).collect(),
+                sleeping: self
+                    .contacts
+                    .sleeping
+                    .iter()
+                    .map(ContactRecord::of)
+                    .collect(),
+            },
         }
     }
 
     /// A World from a state taken by [`World::export_state`] (possibly read from a file):
-    /// everything is validated (finite numbers, consistent slots, free list and contacts)
-    /// and refused with the reason otherwise.
+    /// everything is validated (finite numbers, consistent slots, free list and contacts, the
+    /// solver history's version) and refused with the reason otherwise.
     pub fn import_state(state: &WorldState) -> Result<World, StateError> {
-        let err = |e: super::super::error::PhysicsError| StateError(e.to_string());
+        let err = |e: PhysicsError| StateError(e.to_string());
         let mut world = World::new(state.settings.clone(), vec(state.gravity)).map_err(err)?;
+        world.import_slots(state)?;
+        if !state.time.is_finite() || state.time < 0.0 {
+            return Err(StateError(format!("time = {}", state.time)));
+        }
+        world.time = state.time;
+        world.steps = state.steps;
+        world.import_contacts(&state.solver)?;
+        Ok(world)
+    }
+
+    /// The slots and the free list of `state`, checked against each other.
+    fn import_slots(&mut self, state: &WorldState) -> Result<(), StateError> {
         if state.slots.len() > u32::MAX as usize {
             return Err(StateError("too many slots".into()));
         }
@@ -380,94 +478,76 @@ impl World {
             }
         }
         for (index, s) in state.slots.iter().enumerate() {
-            let index = index as u32;
+            let id = BodyId {
+                index: index as u32,
+                generation: s.generation,
+            };
             let body = match &s.body {
-                None => {
-                    if !free_seen[index as usize] {
-                        return Err(StateError(format!(
-                            "slot {index} is empty but not in the free list"
-                        )));
-                    }
-                    None
+                None if !free_seen[index] => {
+                    return Err(StateError(format!(
+                        "slot {index} is empty but not in the free list"
+                    )))
                 }
-                Some(b) => {
-                    let shape = b.shape.clone();
-                    shape.validate().map_err(err)?;
-                    let mut all = vec![
-                        b.angle,
-                        b.angular_velocity,
-                        b.torque,
-                        b.friction,
-                        b.restitution,
-                        b.sleep_time,
-                    ];
-                    all.extend_from_slice(&b.position);
-                    all.extend_from_slice(&b.rot);
-                    all.extend_from_slice(&b.linear_velocity);
-                    all.extend_from_slice(&b.force);
-                    finite_all(&format!("body {index}"), &all)?;
-                    // Static bodies have infinite mass and inertia (and zero inverses).
-                    if b.mass.iter().any(|&m| m.is_nan() || m < 0.0)
-                        || b.sleep_island as usize >= state.slots.len()
-                    {
-                        return Err(StateError(format!(
-                            "body {index}: mass or island out of range"
-                        )));
-                    }
-                    Some(Body {
-                        id: BodyId {
-                            index,
-                            generation: s.generation,
-                        },
-                        bounding_radius: shape.bounding_radius(),
-                        shape,
-                        position: vec(b.position),
-                        angle: b.angle,
-                        rot: Rot::from_cos_sin(b.rot),
-                        linear_velocity: vec(b.linear_velocity),
-                        angular_velocity: b.angular_velocity,
-                        force: vec(b.force),
-                        torque: b.torque,
-                        mass: b.mass[0],
-                        inv_mass: b.mass[1],
-                        inertia: b.mass[2],
-                        inv_inertia: b.mass[3],
-                        friction: b.friction,
-                        restitution: b.restitution,
-                        awake: b.awake,
-                        sleep_time: b.sleep_time,
-                        sleep_island: b.sleep_island,
-                        kinematic: b.kinematic && b.mass[1] == 0.0,
-                    })
-                }
+                None => None,
+                Some(b) => Some(b.body(id, state.slots.len())?),
             };
             if let Some(b) = &body {
-                world.broad_phase.insert(index, b.is_static() || !b.awake);
-                world.body_count += 1;
+                let passive = b.is_static() || !b.awake;
+                self.broad_phase.sweep.insert(id.index, passive);
+                self.bodies.count += 1;
             }
-            world.slots.push(Slot {
+            self.bodies.slots.push(Slot {
                 generation: s.generation,
                 body,
             });
         }
-        world.free = state.free.clone();
-        if !state.time.is_finite() || state.time < 0.0 {
-            return Err(StateError(format!("time = {}", state.time)));
+        self.bodies.free = state.free.clone();
+        Ok(())
+    }
+
+    /// The contacts of `history`, checked, with the constraint graph rebuilt from the awake
+    /// contacts' colours (each colour free on the dynamic bodies it joins).
+    fn import_contacts(&mut self, history: &SolverHistory) -> Result<(), StateError> {
+        if history.version != SOLVER_HISTORY_VERSION {
+            return Err(StateError(format!(
+                "solver history version {}, this build reads version {SOLVER_HISTORY_VERSION}",
+                history.version
+            )));
         }
-        world.time = state.time;
-        world.steps = state.steps;
-        for c in &state.contacts {
-            let c = contact_of(c, &world.slots)?;
-            world.contacts.push(c);
+        let slots = &self.bodies.slots;
+        let dynamic = |i: u32| {
+            slots[i as usize]
+                .body
+                .as_ref()
+                .is_some_and(|b| b.inv_mass > 0.0)
+        };
+        let mut graph = ConstraintGraph::default();
+        for record in &history.contacts {
+            let c = record.contact(slots)?;
+            let pair = [c.a, c.b];
+            if c.colour > OVERFLOW || !graph.restore(c.colour, pair, pair.map(dynamic)) {
+                return Err(StateError(format!(
+                    "contact {:#x} has colour {}, which its bodies cannot take",
+                    c.key, c.colour
+                )));
+            }
+            self.contacts.awake.push(c);
         }
-        if !world.contacts.windows(2).all(|w| w[0].key < w[1].key) {
+        if !self.contacts.awake.windows(2).all(|w| w[0].key < w[1].key) {
             return Err(StateError("contacts are not sorted by key".into()));
         }
-        for c in &state.sleeping_contacts {
-            let c = contact_of(c, &world.slots)?;
-            world.sleeping_contacts.push(c);
+        for record in &history.sleeping {
+            let c = record.contact(slots)?;
+            if c.colour != UNCOLOURED {
+                return Err(StateError(format!(
+                    "sleeping contact {:#x} has colour {}",
+                    c.key, c.colour
+                )));
+            }
+            self.contacts.sleeping.push(c);
         }
-        Ok(world)
+        self.contacts.graph = graph;
+        Ok(())
     }
 }
 

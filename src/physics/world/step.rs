@@ -1,9 +1,12 @@
-//! One step: the stages in order (contacts, solve, store, sleep) and the soft step's tiers.
+//! One step, stage by stage: find contacts, load the solver bodies, solve (the sequential
+//! solver, or the soft step tier by tier), finalize the bodies, then sleep.
 
-use super::islands::{CREEP, NORMAL_RELAX_SCALE, RELAX_SCALE, SUBSTEP_QUARTERS, TIERS};
+use super::tiers::Tier;
 use super::*;
-use crate::physics::solver::constraint::ContactConstraint;
-use crate::physics::solver::soft_step::Work;
+use crate::physics::solver::soft_step::{self, StepContext};
+use crate::physics::solver::{
+    integrate_positions, integrate_velocities, sequential, Limits, Moving, Selected,
+};
 
 impl World {
     /// Advance the world by `dt` seconds.
@@ -11,177 +14,176 @@ impl World {
     /// The pipeline of the appendix: (1) integrate forces and gravity into velocities,
     /// (2) find contacts, (3) solve contact impulses, (4) integrate positions. Contacts depend
     /// on positions only, so they are found first (which also wakes whatever an awake body is
-    /// about to touch); the soft-step solver runs (1), (3) and (4) inside each substep. Then
-    /// resting islands fall asleep. Forces and torques are cleared after the step.
+    /// about to touch); the soft step runs (1), (3) and (4) inside each substep. Then resting
+    /// islands fall asleep. Forces and torques are cleared after the step.
     pub fn step(&mut self, dt: Real) -> Result<(), PhysicsError> {
         positive("dt", dt)?;
-        if self.broad_phase.active_is_empty() {
-            // Everything is static or asleep (anything pushed would have been woken): nothing
-            // moves, nothing to find or solve.
-            self.time += dt as f64;
-            self.steps += 1;
-            return Ok(());
-        }
-        let limits = Limits {
-            max_linear_speed: self.settings.max_linear_speed,
-            max_rotation: self.settings.max_rotation,
-        };
-        self.find_contacts(dt, self.settings.speculative_distance);
-        // One constraint slot per contact. Only the scalar code's contacts use theirs, and
-        // each writes its own before reading it, so the slots are not cleared.
-        self.constraints
-            .resize(self.contacts.len(), ContactConstraint::default());
-        self.load_solver_bodies();
-        match self.settings.solver {
-            SolverKind::Sequential => {
-                solver::integrate_velocities(&mut self.solver_bodies, Moving::All, dt, limits);
-                solver::sequential::solve(
-                    &mut self.solver_bodies,
-                    &mut self.contacts,
-                    &mut self.constraints,
-                    &self.settings,
-                    dt,
-                );
-                solver::integrate_positions(&mut self.solver_bodies, Moving::All, dt, limits);
-                self.split_impulse.correct(
-                    &mut self.solver_bodies,
-                    &self.contacts,
-                    &self.constraints,
-                    &self.settings,
-                    dt,
-                );
+        if !self.broad_phase.sweep.active_is_empty() {
+            // (Otherwise everything is static or asleep, and anything pushed would have been
+            // woken: nothing moves, nothing to find or solve.)
+            self.find_contacts(dt);
+            self.load_solver_bodies();
+            match self.settings.solver {
+                SolverKind::Sequential => self.solve_sequential(dt),
+                SolverKind::SoftStep => self.solve_soft_step(dt),
             }
-            SolverKind::SoftStep => self.solve_soft_step(dt, limits),
-        }
-        self.store_solver_bodies();
-        self.move_kinematic(dt);
-        if self.settings.enable_sleep {
-            self.update_sleep(dt);
+            self.finalize_bodies();
+            if self.settings.enable_sleep {
+                self.update_sleep(dt);
+            }
         }
         self.time += dt as f64;
         self.steps += 1;
         Ok(())
     }
 
-    /// The soft step, with adaptive stiffness: islands whose load calls for it are solved apart,
-    /// with 1.5, 1.75 or 4 times the substeps and contact stiffness (and, at 4, more relax passes)
-    /// (`Settings::adaptive_stiffness`); the rest, usually everything, in one solve as before.
-    pub(super) fn solve_soft_step(&mut self, dt: Real, limits: Limits) {
+    /// The appendix's pipeline once per step: velocities, sequential impulses, positions,
+    /// then the position correction (split impulse).
+    fn solve_sequential(&mut self, dt: Real) {
+        let limits = self.limits();
+        let (solver, contacts) = (&mut self.solver, &mut self.contacts.awake);
+        // One constraint per contact, each written by prepare before it is read.
+        solver
+            .constraints
+            .resize(contacts.len(), ContactConstraint::default());
+        integrate_velocities(&mut solver.bodies, Moving::All, dt, limits);
+        let (bodies, constraints) = (&mut solver.bodies, &mut solver.constraints);
+        sequential::solve(bodies, contacts, constraints, &self.settings, dt);
+        let movers = (Moving::All, solver.kinematic.as_slice());
+        integrate_positions(&mut solver.bodies, movers, dt, limits);
+        let (bodies, constraints) = (&mut solver.bodies, &solver.constraints);
+        let split = &mut solver.split_impulse;
+        split.correct(bodies, contacts, constraints, &self.settings, dt);
+    }
+
+    /// The soft step. With adaptive stiffness, islands whose load calls for it are solved
+    /// apart with their tier's work (`tiers.rs`); the rest, usually everything, in one solve.
+    fn solve_soft_step(&mut self, dt: Real) {
         let top = if self.settings.adaptive_stiffness {
             self.assign_tiers()
         } else {
-            0
+            Tier::Base
         };
-        if top == 0 {
-            solver::soft_step::solve(
-                &mut self.solver_bodies,
-                Moving::All,
-                &mut self.contacts,
-                &mut self.constraints,
-                Selected::All,
-                &mut self.wide,
-                Work {
-                    settings: &self.settings,
-                    creep: CREEP[0],
-                    normal_relax: self.settings.relax_iterations * NORMAL_RELAX_SCALE[0],
-                },
-                dt,
-                limits,
-            );
+        if top == Tier::Base {
+            self.solve_tier(Tier::Base, (Moving::All, Selected::All), dt);
             return;
         }
-        let mut counts = [0usize; TIERS];
-        for &t in &self.contact_tier {
-            counts[t as usize] += 1;
-        }
-        let has_contacts = counts.map(|n| n > 0);
-        // Usually every contact is in one tier (a stack, a pyramid, a pile): solve them all.
-        // Otherwise each tier solves the list of its contacts' indices, in key order, and the
-        // contacts stay where they are. The lists are one counting sort: a pile with one box
-        // off on its own (tier 0) paid a pass over every contact per tier.
-        let split = has_contacts.iter().filter(|&&h| h).count() > 1;
-        let mut ranges: [std::ops::Range<usize>; TIERS] = Default::default();
-        if split {
-            let mut start = 0;
-            for (range, &n) in ranges.iter_mut().zip(&counts) {
-                *range = start..start + n;
-                start += n;
-            }
-            let mut next = ranges.clone().map(|r| r.start);
-            // Every slot is written below.
-            self.tier_contacts.resize(self.contact_tier.len(), 0);
-            for (k, &t) in self.contact_tier.iter().enumerate() {
-                let slot = &mut next[t as usize];
-                self.tier_contacts[*slot] = k as u32;
-                *slot += 1;
-            }
-        }
+        let ranges = self.group_by_tier();
         let dynamic = self
-            .solver_bodies
+            .solver
+            .bodies
             .iter()
             .filter(|b| b.inv_mass > 0.0)
             .count();
-        for tier in 0..=top {
-            self.tier_bodies.clear();
-            let (bodies, body_tier) = (&self.solver_bodies, &self.body_tier);
-            self.tier_bodies.extend(
+        for tier in Tier::ALL.into_iter().filter(|&t| t <= top) {
+            let tiers = &mut self.tiers;
+            let (bodies, body_tier) = (&self.solver.bodies, &tiers.body_tier);
+            tiers.tier_bodies.clear();
+            tiers.tier_bodies.extend(
                 (0..body_tier.len() as u32).filter(|&i| {
                     body_tier[i as usize] == tier && bodies[i as usize].inv_mass > 0.0
                 }),
             );
-            if self.tier_bodies.is_empty() {
+            if tiers.tier_bodies.is_empty() {
                 continue;
             }
-            let settings = if tier == 0 {
-                self.settings.clone()
+            // Every moving body in this tier (a pyramid, a pile): the plain loop.
+            let moving = if tiers.tier_bodies.len() == dynamic {
+                Moving::All
             } else {
-                let t = tier as usize;
-                Settings {
-                    substeps: self.settings.substeps * SUBSTEP_QUARTERS[t] / 4,
-                    relax_iterations: self.settings.relax_iterations * RELAX_SCALE[t],
-                    contact_hertz: self.settings.contact_hertz * SUBSTEP_QUARTERS[t] as Real / 4.0,
-                    ..self.settings.clone()
-                }
+                Moving::Only(&tiers.tier_bodies)
             };
-            let selected = if split {
-                Selected::Only(&self.tier_contacts[ranges[tier as usize].clone()])
-            } else if has_contacts[tier as usize] {
-                Selected::All
-            } else {
+            let selected = match &ranges {
+                Some(ranges) => Selected::Only(&tiers.tier_contacts[ranges[tier as usize].clone()]),
+                None if tiers.contact_tier.first() == Some(&tier) => Selected::All,
                 // Bodies touching nothing: only integrated.
-                Selected::Only(&[])
+                None => Selected::Only(&[]),
             };
-            solver::soft_step::solve(
-                &mut self.solver_bodies,
-                // Every moving body in this tier (a pyramid, a pile): the plain loop.
-                if self.tier_bodies.len() == dynamic {
-                    Moving::All
-                } else {
-                    Moving::Only(&self.tier_bodies)
-                },
-                &mut self.contacts,
-                &mut self.constraints,
-                selected,
-                &mut self.wide,
-                Work {
-                    settings: &settings,
-                    creep: CREEP[tier as usize],
-                    normal_relax: self.settings.relax_iterations
-                        * NORMAL_RELAX_SCALE[tier as usize],
-                },
+            let parts = (moving, selected);
+            // (`parts` borrows the tier scratch; the solve reads the rest of the World.)
+            let World {
+                settings,
+                contacts,
+                solver,
+                ..
+            } = self;
+            let mut ctx = StepContext {
+                bodies: &mut solver.bodies,
+                moving: parts.0,
+                kinematic: &solver.kinematic,
+                contacts: &mut contacts.awake,
+                selected: parts.1,
+                bundles: &mut solver.bundles,
+                settings,
                 dt,
-                limits,
-            );
+            };
+            soft_step::solve(&mut ctx, &tier.effort(settings));
         }
     }
 
-    /// Copy what the solver needs into the compact solver array (awake dynamic bodies only;
-    /// everything else is fixed).
-    pub(super) fn load_solver_bodies(&mut self) {
+    /// One soft-step solve of `tier`'s work on the `moving` bodies and `selected` contacts.
+    fn solve_tier(&mut self, tier: Tier, (moving, selected): (Moving, Selected), dt: Real) {
+        let mut ctx = StepContext {
+            bodies: &mut self.solver.bodies,
+            moving,
+            kinematic: &self.solver.kinematic,
+            contacts: &mut self.contacts.awake,
+            selected,
+            bundles: &mut self.solver.bundles,
+            settings: &self.settings,
+            dt,
+        };
+        soft_step::solve(&mut ctx, &tier.effort(&self.settings));
+    }
+
+    /// Where the tiers' contacts are: None when every contact is in one tier (a stack, a
+    /// pyramid, a pile: each solve takes them all); otherwise each tier's range of
+    /// `tier_contacts`, which lists the contacts' indices by tier in key order (one counting
+    /// sort: a pile with one box off on its own paid a pass over every contact per tier).
+    fn group_by_tier(&mut self) -> Option<[std::ops::Range<usize>; 5]> {
+        let tiers = &mut self.tiers;
+        let mut counts = [0usize; 5];
+        for &t in &tiers.contact_tier {
+            counts[t as usize] += 1;
+        }
+        if counts.iter().filter(|&&n| n > 0).count() <= 1 {
+            return None;
+        }
+        let mut ranges: [std::ops::Range<usize>; 5] = Default::default();
+        let mut start = 0;
+        for (range, &n) in ranges.iter_mut().zip(&counts) {
+            *range = start..start + n;
+            start += n;
+        }
+        let mut next = ranges.clone().map(|r| r.start);
+        // Every slot is written below.
+        tiers.tier_contacts.resize(tiers.contact_tier.len(), 0);
+        for (k, &t) in tiers.contact_tier.iter().enumerate() {
+            let slot = &mut next[t as usize];
+            tiers.tier_contacts[*slot] = k as u32;
+            *slot += 1;
+        }
+        Some(ranges)
+    }
+
+    /// The speed limits applied while integrating.
+    fn limits(&self) -> Limits {
+        Limits {
+            max_linear_speed: self.settings.max_linear_speed,
+            max_rotation: self.settings.max_rotation,
+        }
+    }
+
+    /// Copy what the solver needs into the compact solver array: awake dynamic bodies, and
+    /// kinematic ones (infinite mass that moves: contacts see its velocity, nothing changes
+    /// it); everything else is fixed. Lists the kinematic bodies that move.
+    fn load_solver_bodies(&mut self) {
         let g = self.gravity;
-        self.solver_bodies.clear();
-        self.solver_bodies
-            .extend(self.slots.iter().map(|slot| match &slot.body {
+        let solver = &mut self.solver;
+        solver.bodies.clear();
+        solver.kinematic.clear();
+        for (i, slot) in self.bodies.slots.iter().enumerate() {
+            let body = match &slot.body {
                 Some(b) if b.is_active() => SolverBody {
                     v: b.linear_velocity,
                     w: b.angular_velocity,
@@ -193,46 +195,42 @@ impl World {
                     dtheta: 0.0,
                     dq: Rot::IDENTITY,
                 },
-                // Infinite mass that moves: contacts see its velocity, nothing changes it.
-                Some(b) if b.kinematic => SolverBody {
-                    v: b.linear_velocity,
-                    w: b.angular_velocity,
-                    ..SolverBody::FIXED
-                },
+                Some(b) if b.kinematic => {
+                    if b.is_moving_kinematic() {
+                        solver.kinematic.push(i as u32);
+                    }
+                    SolverBody {
+                        v: b.linear_velocity,
+                        w: b.angular_velocity,
+                        ..SolverBody::FIXED
+                    }
+                }
                 _ => SolverBody::FIXED,
-            }));
-        // One more fixed body, last, for the empty lanes of the wide solver's bundles.
-        self.solver_bodies.push(SolverBody::FIXED);
+            };
+            solver.bodies.push(body);
+        }
+        // One more fixed body, last, for the empty lanes of bundles.
+        solver.bodies.push(SolverBody::FIXED);
     }
 
-    /// Write velocities and the step's motion back to the bodies; clear forces.
-    pub(super) fn store_solver_bodies(&mut self) {
-        for (slot, sb) in self.slots.iter_mut().zip(&self.solver_bodies) {
+    /// Finalize: write velocities and the step's motion back to the bodies the solver moved
+    /// (awake dynamic ones, and kinematic ones by their own velocity); clear forces.
+    fn finalize_bodies(&mut self) {
+        for (slot, sb) in self.bodies.slots.iter_mut().zip(&self.solver.bodies) {
             let Some(b) = slot.body.as_mut() else {
                 continue;
             };
             b.force = Vec2::ZERO;
             b.torque = 0.0;
-            if !b.is_active() {
+            if b.is_active() {
+                b.linear_velocity = sb.v;
+                b.angular_velocity = sb.w;
+            } else if !b.is_moving_kinematic() {
                 continue;
             }
-            b.linear_velocity = sb.v;
-            b.angular_velocity = sb.w;
             b.position += sb.dp;
             b.angle += sb.dtheta;
             b.rot = Rot::from_angle(b.angle);
-        }
-    }
-
-    /// Kinematic bodies move by their own velocity over the step (they are fixed bodies to the
-    /// solver, which only reads their velocity).
-    fn move_kinematic(&mut self, dt: Real) {
-        for b in self.slots.iter_mut().filter_map(|s| s.body.as_mut()) {
-            if b.is_moving_kinematic() {
-                b.position += dt * b.linear_velocity;
-                b.angle += dt * b.angular_velocity;
-                b.rot = Rot::from_angle(b.angle);
-            }
         }
     }
 }

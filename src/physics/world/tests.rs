@@ -1,7 +1,10 @@
 //! The wide and scalar solves agree when contacts overflow the colouring.
 
+use super::tiers::Tier;
 use super::*;
 use crate::physics::math::PI;
+use crate::physics::solver::bundles::Width;
+use crate::physics::solver::graph::OVERFLOW;
 use crate::physics::{vec2, Shape};
 
 /// A World on the defaults with sleep off (g = 10 m/s^2 down) and a fixed floor `width` m wide
@@ -31,27 +34,44 @@ fn crowded_plank() -> World {
     w
 }
 
-/// The overflow path (contacts the colouring could not place, solved one by one after the
-/// bundles) and the four-lane bundles solve the same physics: stepping the crowded plank
-/// with the usual 32 colours (some contacts overflow) and with none (every contact takes
-/// the scalar path) ends with every body within 0.1 mm. The two differ only in the order
-/// the contacts are solved in, which moves a resting scene by round-off.
+/// Every awake contact of `w` moved to the overflow, and the graph told to colour none.
+fn overflow_everything(w: &mut World) {
+    let contacts = &mut w.contacts;
+    contacts.graph.limit_colours(0);
+    for c in &mut contacts.awake {
+        contacts.graph.remove(c.colour, [c.a, c.b]);
+        c.colour = OVERFLOW;
+    }
+}
+
+/// The overflow (contacts the graph could not colour, solved one by one before the colours)
+/// and the bundles solve the same physics: stepping the crowded plank with the usual colours
+/// (some contacts overflow) and with none (every contact in the overflow) ends with every body
+/// within 0.1 mm, in the braced tier, whose relax passes include a normal relax pass. The two
+/// differ only in the order the contacts are solved in, which moves a resting scene by
+/// round-off (that the kernel is the same at every width is tested bit for bit below).
 #[test]
 fn overflow_contacts_solve_like_the_wide_bundles() {
     let mut wide = crowded_plank();
     let mut scalar = crowded_plank();
-    scalar.wide.colours = Some(0);
-    let mut overflowed = 0;
+    overflow_everything(&mut scalar);
+    let (mut overflowed, mut braced) = (0, 0);
     for _ in 0..120 {
         wide.step(1.0 / 60.0).unwrap();
         scalar.step(1.0 / 60.0).unwrap();
-        overflowed = overflowed.max(wide.wide.overflow.len());
-        assert_eq!(scalar.wide.overflow.len(), scalar.contacts.len());
+        overflowed = overflowed.max(wide.solver.bundles.overflow_count());
+        braced += usize::from(ran_braced(&wide) && ran_braced(&scalar));
+        assert_eq!(
+            scalar.solver.bundles.overflow_count(),
+            scalar.contacts.awake.len()
+        );
     }
     assert!(
         overflowed > 0,
         "the plank's 40 contacts must exceed the colours"
     );
+    // The plank carries the boxes: the braced tier (a relax pass, then a normal relax pass).
+    assert!(braced > 60, "braced in {braced} of 120 steps");
     for (a, b) in wide.bodies().zip(scalar.bodies()) {
         let d = (a.position() - b.position()).length();
         assert!(d < 1e-4, "body {} differs by {d} m", a.id());
@@ -76,37 +96,7 @@ fn braced_pyramid(base: usize) -> World {
 
 /// Whether any body was solved in the braced tier in the last step.
 fn ran_braced(w: &World) -> bool {
-    w.body_tier.contains(&islands::BRACED)
-}
-
-/// The overflow path and the lanes agree in the braced tier too (a relax pass, then a normal
-/// relax pass): from one state of a base-20 pyramid settling for 1 s, one step with the usual
-/// colours and one with none (every contact on the scalar path) leave every box within 1e-5 m
-/// and every spin within 1e-4 rad/s; they differ only in the order the contacts are solved
-/// in (1.9e-6 m and 6.2e-5 rad/s here). A scalar path that skipped the normal relax pass
-/// failed it (1.0e-4 rad/s); one that also solved friction in it did not (friction barely
-/// moves in that pass), which the friction-cone test below covers instead.
-#[test]
-fn overflow_contacts_solve_like_the_wide_bundles_in_the_braced_tier() {
-    let mut wide = braced_pyramid(20);
-    for _ in 0..60 {
-        wide.step(1.0 / 60.0).unwrap();
-    }
-    let mut scalar = wide.clone();
-    scalar.wide.colours = Some(0);
-    wide.step(1.0 / 60.0).unwrap();
-    scalar.step(1.0 / 60.0).unwrap();
-    assert!(ran_braced(&wide) && ran_braced(&scalar), "both braced");
-    assert_eq!(scalar.wide.overflow.len(), scalar.contacts.len());
-    let (mut moved, mut spin): (Real, Real) = (0.0, 0.0);
-    for (a, b) in wide.bodies().zip(scalar.bodies()) {
-        moved = moved.max((a.position() - b.position()).length());
-        spin = spin.max((a.angular_velocity() - b.angular_velocity()).abs());
-    }
-    assert!(
-        moved < 1e-5 && spin < 1e-4,
-        "differ by {moved} m, {spin} rad/s"
-    );
+    w.tiers.body_tier.contains(&Tier::Braced)
 }
 
 /// Every friction impulse a step ends with lies in the Coulomb cone of its normal impulse,
@@ -120,7 +110,7 @@ fn friction_impulses_end_each_step_inside_the_coulomb_cone() {
     for step in 0..120 {
         w.step(1.0 / 60.0).unwrap();
         braced += usize::from(ran_braced(&w));
-        for c in &w.contacts {
+        for c in &w.contacts.awake {
             for p in &c.points[..c.count] {
                 let cone = c.friction * p.normal_impulse;
                 assert!(
@@ -167,29 +157,40 @@ fn mixed_pile() -> World {
     w
 }
 
-/// Four-lane and eight-lane bundles give the same World bit for bit: a contact's arithmetic
-/// does not depend on which contacts share its bundle (`solver/lanes.rs`). On a machine
-/// without AVX2 the eight-lane kernels never run, and there is nothing to compare.
+/// Bundles of one, four and eight lanes give the same World bit for bit: a contact's
+/// arithmetic does not depend on which contacts share its bundle (`solver/lanes/`), so the
+/// overflow, which runs the same kernel at width one, is the same code as the lanes. The pile
+/// has restitution, friction on and off, one- and two-point contacts: every kernel path runs.
+/// On a machine without AVX2 the eight-lane kernels never run, and only one and four are
+/// compared.
 #[test]
-fn four_and_eight_lanes_step_bit_identically() {
-    use crate::physics::solver::wide::Width;
-    if Width::detect() != Width::Eight {
-        eprintln!("no AVX2 here: only the four-lane kernels run on this machine");
-        return;
-    }
-    let mut four = mixed_pile();
-    let mut eight = mixed_pile();
-    four.wide.width = Some(Width::Four);
-    eight.wide.width = Some(Width::Eight);
+fn one_four_and_eight_lanes_step_bit_identically() {
+    let widths: &[Width] = if Width::detect() == Width::Eight {
+        &[Width::One, Width::Four, Width::Eight]
+    } else {
+        eprintln!("no AVX2 here: the eight-lane kernels never run on this machine");
+        &[Width::One, Width::Four]
+    };
+    let mut worlds: Vec<World> = widths
+        .iter()
+        .map(|&width| {
+            let mut w = mixed_pile();
+            w.solver.bundles.width = Some(width);
+            w
+        })
+        .collect();
     let mut most_contacts = 0;
     for step in 0..240 {
-        four.step(1.0 / 60.0).unwrap();
-        eight.step(1.0 / 60.0).unwrap();
-        most_contacts = most_contacts.max(four.contacts.len());
-        assert!(
-            four.state_bits().eq(eight.state_bits()),
-            "the widths differ after step {step}"
-        );
+        for w in &mut worlds {
+            w.step(1.0 / 60.0).unwrap();
+        }
+        most_contacts = most_contacts.max(worlds[0].contacts.awake.len());
+        for (w, width) in worlds.iter().zip(widths).skip(1) {
+            assert!(
+                worlds[0].state_bits().eq(w.state_bits()),
+                "{width:?} differs from one lane after step {step}"
+            );
+        }
     }
     assert!(
         most_contacts > 100,
@@ -224,7 +225,6 @@ fn rest_compression(settings: Settings, width: Real) -> Real {
 /// tolerance, 1 %, is f32 round-off on compressions of 20-110 micrometres at y = 0.5.
 #[test]
 fn creep_softens_a_resting_contact_by_one_plus_beta_in_the_creeping_tiers() {
-    use super::islands::{BRACED, CREEP, STACK};
     let base = Settings {
         enable_sleep: false,
         ..Settings::default()
@@ -240,8 +240,14 @@ fn creep_softens_a_resting_contact_by_one_plus_beta_in_the_creeping_tiers() {
     };
     let cases = [
         ("tier 0", base.clone(), 1.0, 0.0, 1.0),
-        ("braced", loaded.clone(), 1.0, CREEP[BRACED as usize], 1.0),
-        ("stack", loaded, 0.2, CREEP[STACK as usize], 1.5),
+        (
+            "braced",
+            loaded.clone(),
+            1.0,
+            Tier::Braced.spec().creep,
+            1.0,
+        ),
+        ("stack", loaded, 0.2, Tier::Stack.spec().creep, 1.5),
     ];
     for (tier, settings, width, creep, scale) in cases {
         let sank = rest_compression(settings, width);
@@ -257,12 +263,12 @@ fn creep_softens_a_resting_contact_by_one_plus_beta_in_the_creeping_tiers() {
     }
 }
 
-/// Adaptive stiffness tells a stack from a pyramid (`islands::island_tier`): both are loaded
+/// Adaptive stiffness tells a stack from a pyramid (`tiers::island_tier`): both are loaded
 /// (their contacts are new; later a 20-box stack's bottom contact carries about 20 box
 /// weights and a base-20 pyramid's most loaded about 14, past `stiff_load_ratio`, 12), but
 /// the stack is 20 times as tall as it is wide and the pyramid about as tall as wide. The
-/// stack is solved on more substeps ([`islands::STACK`]) and the pyramid on the base ones with
-/// a relax pass and a normal relax pass ([`islands::BRACED`]), from the first step and once the loads count
+/// stack is solved on more substeps ([`Tier::Stack`]) and the pyramid on the base ones with
+/// a relax pass and a normal relax pass ([`Tier::Braced`]), from the first step and once the loads count
 /// (after 8 steps). Turned on its side by gravity along x, the stack is the wide one.
 #[test]
 fn a_stack_is_slender_and_a_pyramid_braced() {
@@ -287,9 +293,9 @@ fn a_stack_is_slender_and_a_pyramid_braced() {
         }
     }
     let tier_of = |w: &World, ids: &[BodyId]| {
-        let tiers: Vec<u8> = ids
+        let tiers: Vec<Tier> = ids
             .iter()
-            .map(|id| w.body_tier[id.index as usize])
+            .map(|id| w.tiers.body_tier[id.index as usize])
             .collect();
         assert!(
             tiers.iter().all(|&t| t == tiers[0]),
@@ -298,18 +304,18 @@ fn a_stack_is_slender_and_a_pyramid_braced() {
         tiers[0]
     };
     w.step(1.0 / 60.0).unwrap();
-    assert_eq!(tier_of(&w, &stack), islands::STACK, "a new stack");
-    assert_eq!(tier_of(&w, &pyramid), islands::BRACED, "a new pyramid");
+    assert_eq!(tier_of(&w, &stack), Tier::Stack, "a new stack");
+    assert_eq!(tier_of(&w, &pyramid), Tier::Braced, "a new pyramid");
     for _ in 0..59 {
         w.step(1.0 / 60.0).unwrap();
     }
-    assert_eq!(tier_of(&w, &stack), islands::STACK, "a 20-box stack");
-    assert_eq!(tier_of(&w, &pyramid), islands::BRACED, "a base-20 pyramid");
+    assert_eq!(tier_of(&w, &stack), Tier::Stack, "a 20-box stack");
+    assert_eq!(tier_of(&w, &pyramid), Tier::Braced, "a base-20 pyramid");
     w.set_gravity(vec2(-10.0, 0.0)).unwrap();
     w.step(1.0 / 60.0).unwrap();
     assert_eq!(
         tier_of(&w, &stack),
-        islands::BRACED,
+        Tier::Braced,
         "the stack, lying along gravity"
     );
 }
@@ -326,7 +332,7 @@ fn a_stack_is_slender_and_a_pyramid_braced() {
 fn contacts_found_in_place_step_like_contacts_found_anew() {
     let row = |copy: bool| {
         let mut w = awake_world_on_floor(40.0);
-        w.copy_contacts = copy;
+        w.contacts.copy_for_tests = copy;
         let ids: Vec<BodyId> = (0..12)
             .map(|i| {
                 let centre = vec2(-11.0 + 2.0 * i as Real, 0.5);
@@ -356,17 +362,21 @@ fn contacts_found_in_place_step_like_contacts_found_anew() {
                 _ => {}
             }
         }
-        let previous = in_place.contacts.as_ptr();
+        let previous = in_place.contacts.awake.as_ptr();
         in_place.step(1.0 / 60.0).unwrap();
         fresh.step(1.0 / 60.0).unwrap();
-        if in_place.contacts.as_ptr() == previous {
+        if in_place.contacts.awake.as_ptr() == previous {
             kept_in_place += 1;
         }
         assert!(
             in_place.state_bits().eq(fresh.state_bits()),
             "step {step}: the states differ"
         );
-        assert_eq!(in_place.contacts.len(), fresh.contacts.len(), "step {step}");
+        assert_eq!(
+            in_place.contacts.awake.len(),
+            fresh.contacts.awake.len(),
+            "step {step}"
+        );
     }
     assert!(kept_in_place > 90, "in place {kept_in_place} of 120 steps");
 }
@@ -389,7 +399,7 @@ fn a_speculative_point_that_never_touches_does_not_bounce() {
     w.set_velocity(id, vec2(0.0, -2.0), 0.0).unwrap();
     w.step(1.0 / 60.0).unwrap();
     assert!(
-        !w.contacts.is_empty(),
+        !w.contacts.awake.is_empty(),
         "the floor contact must be found, speculatively"
     );
     let body = w.body(id).unwrap();

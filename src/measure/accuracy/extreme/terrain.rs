@@ -3,7 +3,6 @@
 
 use super::*;
 use crate::measure::accuracy::{new_world, Breakdown, Verdict};
-use crate::physics::segment::chain_bodies;
 use crate::physics::{vec2, BodyDef, BodyId, Real, Settings, Shape, World};
 
 /// Tiles: 20, each 2 m wide, their tops at y = 0.
@@ -85,7 +84,7 @@ pub fn tiled_floor_boxes(settings: &Settings) -> Verdict {
 pub fn tiled_floor_chain(settings: &Settings) -> Verdict {
     let mut w = new_world(settings, gravity());
     let points: Vec<_> = (0..=TILES).map(|i| vec2(i as Real * TILE, 0.0)).collect();
-    for def in chain_bodies(&points, false, true).unwrap() {
+    for def in BodyDef::chain(&points, false, true).unwrap() {
         w.add_body(&def.with_friction(0.0)).unwrap();
     }
     let s = slide(w);

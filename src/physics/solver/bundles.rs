@@ -1,0 +1,408 @@
+//! The soft step's contacts packed for the lanes: each colour of the constraint graph
+//! (`graph.rs`) in bundles of four or eight contacts, and the overflow in bundles of one.
+//!
+//! Packing runs once per solve, in the prepare stage, in contact-key order: each contact is
+//! prepared, then written straight into the open bundle of its (colour, kind), so each
+//! colour's bundles hold its contacts in key order and the constraint never passes through
+//! memory. Eight lanes run where the processor has AVX2 (detected at run time) and the solve
+//! has at least [`EIGHT_LANES_FROM`] contacts; four (SSE2 on x86-64) otherwise. Every stage
+//! then runs the overflow first (a Gauss-Seidel solve favours what it solves last, and the
+//! overflow is what the graph could not place: Box2D gives it the lowest priority too), then
+//! the colours in ascending order.
+
+use super::constraint::ContactConstraint;
+use super::contact_solver::{BounceLanes, Bundle, BundleKind, Pass, PointImpulses, NO_BOUNCE};
+use super::graph::{COLOURS, OVERFLOW};
+use super::lanes::{eight_lanes_available, prefetch, Lanes1, Lanes4, Lanes8, Wide};
+use super::{PassKind, Selected, SolverBody};
+use crate::physics::contact::Contact;
+use crate::physics::math::Real;
+
+/// Contacts from which a solve packs eight to a bundle (where the processor can): below, the
+/// bundles of each colour are mostly empty lanes (falling_bricks, 8 contacts, stepped 50 %
+/// slower on eight lanes than on four; pyramid_20, 590 contacts, 15 % faster).
+const EIGHT_LANES_FROM: usize = 64;
+
+/// How many contacts a coloured bundle holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Width {
+    /// One ([`Lanes1`]): the kernel as plain scalar code, packed as the lanes are (tests
+    /// compare it with the lanes, bit for bit).
+    One,
+    /// Four ([`Lanes4`]: SSE2 on x86-64).
+    Four,
+    /// Eight ([`Lanes8`]), compiled for AVX2 and run where the processor has it.
+    Eight,
+}
+
+impl Width {
+    /// The widest this machine runs: eight lanes with AVX2, four otherwise.
+    pub fn detect() -> Width {
+        if eight_lanes_available() {
+            Width::Eight
+        } else {
+            Width::Four
+        }
+    }
+}
+
+/// Bundles of one width, in lists per (colour, kind) flattened as colour * 2 + kind, solved in
+/// that order, with the restitution lanes of the bundles that bounce.
+#[derive(Clone, Debug)]
+struct Packed<L: Wide> {
+    lists: Vec<Vec<Bundle<L>>>,
+    bounces: Vec<BounceLanes<L>>,
+    /// Lists in use: up to the last one with a bundle (a small scene uses a few).
+    used: usize,
+}
+
+impl<L: Wide> Default for Packed<L> {
+    fn default() -> Self {
+        Packed {
+            lists: Vec::new(),
+            bounces: Vec::new(),
+            used: 0,
+        }
+    }
+}
+
+/// Which list of its colour a bundle of `kind` goes in.
+#[inline(always)]
+fn kind_slot(kind: BundleKind) -> usize {
+    match kind {
+        BundleKind::Block => 0,
+        BundleKind::Points => 1,
+    }
+}
+
+impl<L: Wide> Packed<L> {
+    /// Empty, with `lists` lists.
+    fn reset(&mut self, lists: usize) {
+        self.lists.resize_with(lists, Vec::new);
+        for list in &mut self.lists {
+            list.clear();
+        }
+        self.bounces.clear();
+        self.used = 0;
+    }
+
+    /// Write contact `c` (index `i`) with its constraint `k` into the next lane of list
+    /// `slot`, of which `filled` lanes are taken, opening a bundle (a copy of `inert`) when
+    /// the last is full.
+    #[inline(always)]
+    fn put(
+        &mut self,
+        (slot, filled): (usize, &mut usize),
+        inert: &Bundle<L>,
+        (i, c): (usize, &Contact),
+        k: &ContactConstraint,
+        bodies: &[SolverBody],
+    ) {
+        let lane = *filled % L::WIDTH;
+        *filled += 1;
+        let list = &mut self.lists[slot];
+        if lane == 0 {
+            list.push(*inert);
+        }
+        let bundle = list.last_mut().expect("a bundle is open");
+        bundle.set_contact(lane, (i as u32, c), k, bodies);
+        if c.restitution != 0.0 {
+            if bundle.bounce == NO_BOUNCE {
+                bundle.bounce = self.bounces.len() as u32;
+                self.bounces.push(BounceLanes::NONE);
+            }
+            self.bounces[bundle.bounce as usize].set(lane, c, k);
+        }
+    }
+
+    /// Mark the lists in use, once packed.
+    fn close(&mut self) {
+        self.used = self
+            .lists
+            .iter()
+            .rposition(|list| !list.is_empty())
+            .map_or(0, |i| i + 1);
+    }
+
+    /// Every bundle in use, in solve order.
+    #[inline(always)]
+    fn bundles(&mut self) -> impl Iterator<Item = &mut Bundle<L>> {
+        self.lists[..self.used].iter_mut().flatten()
+    }
+
+    /// The warm start of a substep (or, with warm starting off, zeroed impulses).
+    #[inline(always)]
+    fn warm_start(&mut self, bodies: &mut [SolverBody], warm_starting: bool) {
+        for bundle in self.bundles() {
+            if warm_starting {
+                bundle.warm_start(bodies);
+            } else {
+                bundle.clear_impulses();
+            }
+        }
+    }
+
+    /// One solve pass of `kind` over every bundle: one copy of the loop per kind of pass, each
+    /// compiled without the arithmetic its kind leaves out (the relax passes without the bias,
+    /// the normal relax also without friction).
+    #[inline(always)]
+    fn solve(&mut self, bodies: &mut [SolverBody], kind: PassKind, inv_h: Real, push_out: Real) {
+        let pass = |use_bias: bool| Pass {
+            inv_h: L::splat(inv_h),
+            use_bias,
+            push_out: L::splat(-push_out),
+        };
+        match kind {
+            PassKind::Biased => {
+                let pass = pass(true);
+                for bundle in self.bundles() {
+                    bundle.solve(bodies, &pass, true);
+                }
+            }
+            PassKind::Relax => {
+                let pass = pass(false);
+                for bundle in self.bundles() {
+                    bundle.solve(bodies, &pass, true);
+                }
+            }
+            PassKind::NormalRelax => {
+                let pass = pass(false);
+                for bundle in self.bundles() {
+                    bundle.solve(bodies, &pass, false);
+                }
+            }
+        }
+    }
+
+    /// Restitution on the bundles that bounce.
+    #[inline(always)]
+    fn apply_restitution(&mut self, bodies: &mut [SolverBody], threshold: Real) {
+        let threshold = L::splat(threshold);
+        for bundle in self.lists[..self.used].iter_mut().flatten() {
+            if bundle.bounce != NO_BOUNCE {
+                let bounce = &self.bounces[bundle.bounce as usize];
+                bundle.apply_restitution(bounce, bodies, threshold);
+            }
+        }
+    }
+
+    /// Hand each contact its points' impulses. Bundles hold contacts from all over the array:
+    /// while one bundle's are stored, the next bundle's are fetched (storing waited on those
+    /// loads for three quarters of its time).
+    fn store(
+        &self,
+        contacts: &mut [Contact],
+        then: &mut impl FnMut(&mut Contact, &[PointImpulses; 2]),
+    ) {
+        let mut bundles = self.lists[..self.used].iter().flatten().peekable();
+        while let Some(bundle) = bundles.next() {
+            if let Some(next) = bundles.peek() {
+                for &ci in next.contact.as_ref() {
+                    if let Some(c) = contacts.get(ci as usize) {
+                        prefetch(c);
+                    }
+                }
+            }
+            let ends = bundle.impulses();
+            for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
+                if let Some(c) = contacts.get_mut(ci as usize) {
+                    then(c, end);
+                }
+            }
+        }
+    }
+}
+
+/// The packed contacts of one solve, kept by the World so a steady step does not allocate.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ContactBundles {
+    one: Packed<Lanes1>,
+    four: Packed<Lanes4>,
+    eight: Packed<Lanes8>,
+    /// The overflow, one contact a bundle, in two lists (block, points).
+    overflow: Packed<Lanes1>,
+    /// Whether any contact packed bounces (restitution runs only then).
+    bouncy: bool,
+    /// Bundle width; `None` picks four below [`EIGHT_LANES_FROM`] contacts and
+    /// [`Width::detect`] from there, at each build (tests set it to compare).
+    pub width: Option<Width>,
+    /// The width of the bundles built last.
+    built: Option<Width>,
+}
+
+/// What packing reads: the bodies, the contacts, which of them to pack, and how to prepare
+/// one (its constraint from the contact and its bodies A and B; it may update the contact).
+pub(crate) struct PackInput<'a, 'b, P> {
+    pub bodies: &'a [SolverBody],
+    pub contacts: &'a mut [Contact],
+    pub selected: Selected<'b>,
+    pub prepare: P,
+}
+
+impl ContactBundles {
+    /// The prepare stage's packing: each selected contact, in key order, prepared and written
+    /// into its colour's open bundle (or the overflow). `bodies` must end with one extra fixed
+    /// body, for empty lanes.
+    pub fn build<P>(&mut self, input: PackInput<'_, '_, P>)
+    where
+        P: FnMut(&mut Contact, &SolverBody, &SolverBody) -> ContactConstraint,
+    {
+        debug_assert!(
+            input.bodies.last().is_some_and(|d| d.inv_mass == 0.0),
+            "the last solver body is the fixed dummy"
+        );
+        let width = match self.width {
+            Some(Width::Eight) if !eight_lanes_available() => Width::Four,
+            Some(width) => width,
+            None if input.selected.count(input.contacts.len()) < EIGHT_LANES_FROM => Width::Four,
+            None => Width::detect(),
+        };
+        self.built = Some(width);
+        self.overflow.reset(2);
+        self.bouncy = match width {
+            Width::One => pack(&mut self.one, &mut self.overflow, input),
+            Width::Four => pack(&mut self.four, &mut self.overflow, input),
+            Width::Eight => pack(&mut self.eight, &mut self.overflow, input),
+        };
+    }
+
+    /// The warm start of a substep, or with `warm_starting` off zeroed impulses.
+    pub fn warm_start(&mut self, bodies: &mut [SolverBody], warm_starting: bool) {
+        self.overflow.warm_start(bodies, warm_starting);
+        match self.built {
+            Some(Width::Eight) => eight::warm_start(&mut self.eight, bodies, warm_starting),
+            Some(Width::One) => self.one.warm_start(bodies, warm_starting),
+            _ => self.four.warm_start(bodies, warm_starting),
+        }
+    }
+
+    /// One solve pass of `kind`; `inv_h` is 1 / substep (1/s), `push_out` the push-out cap
+    /// (m/s).
+    pub fn solve(
+        &mut self,
+        bodies: &mut [SolverBody],
+        kind: PassKind,
+        inv_h: Real,
+        push_out: Real,
+    ) {
+        self.overflow.solve(bodies, kind, inv_h, push_out);
+        match self.built {
+            Some(Width::Eight) => eight::solve(&mut self.eight, bodies, kind, inv_h, push_out),
+            Some(Width::One) => self.one.solve(bodies, kind, inv_h, push_out),
+            _ => self.four.solve(bodies, kind, inv_h, push_out),
+        }
+    }
+
+    /// Restitution above `threshold` (m/s), where any contact bounces.
+    pub fn apply_restitution(&mut self, bodies: &mut [SolverBody], threshold: Real) {
+        if !self.bouncy {
+            return;
+        }
+        self.overflow.apply_restitution(bodies, threshold);
+        match self.built {
+            Some(Width::Eight) => eight::apply_restitution(&mut self.eight, bodies, threshold),
+            Some(Width::One) => self.one.apply_restitution(bodies, threshold),
+            _ => self.four.apply_restitution(bodies, threshold),
+        }
+    }
+
+    /// Hand each packed contact its points' impulses, for the store stage to write back.
+    pub fn store(
+        &self,
+        contacts: &mut [Contact],
+        mut then: impl FnMut(&mut Contact, &[PointImpulses; 2]),
+    ) {
+        self.overflow.store(contacts, &mut then);
+        match self.built {
+            Some(Width::Eight) => self.eight.store(contacts, &mut then),
+            Some(Width::One) => self.one.store(contacts, &mut then),
+            _ => self.four.store(contacts, &mut then),
+        }
+    }
+
+    /// Contacts in the overflow at the last build.
+    #[cfg(test)]
+    pub fn overflow_count(&self) -> usize {
+        self.overflow.lists.iter().map(Vec::len).sum()
+    }
+}
+
+/// Pack the selected contacts into `coloured` bundles and the `overflow`; whether any bounces.
+fn pack<L: Wide, P>(
+    coloured: &mut Packed<L>,
+    overflow: &mut Packed<Lanes1>,
+    input: PackInput<'_, '_, P>,
+) -> bool
+where
+    P: FnMut(&mut Contact, &SolverBody, &SolverBody) -> ContactConstraint,
+{
+    let PackInput {
+        bodies,
+        contacts,
+        selected,
+        mut prepare,
+    } = input;
+    let dummy = (bodies.len() - 1) as u32;
+    coloured.reset(COLOURS * 2);
+    let inert = [BundleKind::Block, BundleKind::Points].map(|kind| Bundle::<L>::inert(kind, dummy));
+    let inert_one = [BundleKind::Block, BundleKind::Points].map(|kind| Bundle::inert(kind, dummy));
+    let mut filled = [0usize; COLOURS * 2];
+    let mut overflowed = [0usize; 2];
+    let mut bouncy = false;
+    selected.for_each_index(contacts.len(), |i| {
+        let c = &mut contacts[i];
+        let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
+        let k = prepare(c, a, b);
+        let kind = if c.count == 2 && k.block.is_some() {
+            BundleKind::Block
+        } else {
+            BundleKind::Points
+        };
+        let s = kind_slot(kind);
+        bouncy |= c.restitution != 0.0;
+        if c.colour >= OVERFLOW {
+            overflow.put((s, &mut overflowed[s]), &inert_one[s], (i, c), &k, bodies);
+        } else {
+            let slot = c.colour as usize * 2 + s;
+            coloured.put((slot, &mut filled[slot]), &inert[s], (i, c), &k, bodies);
+        }
+    });
+    coloured.close();
+    overflow.close();
+    bouncy
+}
+
+/// The eight-lane stages: compiled for AVX2 on x86-64, where [`ContactBundles::build`] packs
+/// eight-lane bundles only if the processor has it; elsewhere never chosen.
+mod eight {
+    use super::{Lanes8, Packed, PassKind, Real, SolverBody};
+
+    /// Runs `$body` compiled for AVX2 where `Lanes8` is an AVX register, plainly elsewhere.
+    macro_rules! avx2 {
+        ($name:ident($($arg:ident: $ty:ty),*) $body:block) => {
+            pub(super) fn $name($($arg: $ty),*) {
+                #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+                {
+                    /// # Safety
+                    /// The processor must have AVX2.
+                    #[target_feature(enable = "avx2")]
+                    unsafe fn run($($arg: $ty),*) $body
+                    // SAFETY: eight-lane bundles exist only where the processor has AVX2.
+                    unsafe { run($($arg),*) }
+                }
+                #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
+                $body
+            }
+        };
+    }
+
+    avx2!(warm_start(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], warm_starting: bool) {
+        packed.warm_start(bodies, warm_starting)
+    });
+    avx2!(solve(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], kind: PassKind, inv_h: Real, push_out: Real) {
+        packed.solve(bodies, kind, inv_h, push_out)
+    });
+    avx2!(apply_restitution(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], threshold: Real) {
+        packed.apply_restitution(bodies, threshold)
+    });
+}

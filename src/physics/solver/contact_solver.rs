@@ -1,0 +1,595 @@
+//! The soft step's contact constraint, one kernel for one, four or eight contacts at a time.
+//!
+//! A [`Bundle`] holds up to `L::WIDTH` contacts of one colour (no two share a dynamic body), a
+//! contact per lane; every stage of the soft step runs on a bundle as on one contact, with
+//! each `if` of the scalar algorithm turned into a lane-wise select. The overflow (contacts the
+//! constraint graph could not colour) runs the same functions at width one ([`Lanes1`]), so
+//! there is one copy of the contact math (`sequential.rs` keeps the appendix's own). A
+//! contact's arithmetic does not depend on its bundle's width or its neighbours, so every width
+//! gives the same World bit for bit.
+//!
+//! The stages, for a bundle: [`Bundle::warm_start`], [`Bundle::solve`] (biased, relax, or
+//! normal relax: `PassKind`), [`Bundle::apply_restitution`], and [`Bundle::impulses`] (what
+//! the store stage writes back). Preparing a contact is scalar (`soft_step::prepare_contact`);
+//! its constraint is written straight into its lane by [`Bundle::set_contact`].
+//!
+//! [`Lanes1`]: super::lanes::Lanes1
+
+use super::constraint::ContactConstraint;
+use super::lanes::Wide;
+use super::SolverBody;
+use crate::physics::contact::Contact;
+use crate::physics::math::Real;
+
+/// Which normal solve a bundle's contacts take.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BundleKind {
+    /// Two points with a well-conditioned block: both normal impulses at once (2x2 LCP).
+    Block,
+    /// One point, or two solved one after the other.
+    Points,
+}
+
+/// Per-point lanes of a bundle: lane i is the point of contact i.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PointLanes<L> {
+    /// rA x n and rB x n (m).
+    a_cross_n: L,
+    b_cross_n: L,
+    /// rA . n and rB . n (m). With t = (n_y, -n_x), rA x t = -(rA . n): the tangent arms.
+    a_dot_n: L,
+    b_dot_n: L,
+    /// Separation less the anchors' part (m; `PointConstraint::adjusted_separation`).
+    adjusted_separation: L,
+    /// Effective masses along the normal and the tangent (kg).
+    normal_mass: L,
+    tangent_mass: L,
+    /// Accumulated impulses (N s, per substep).
+    normal_impulse: L,
+    tangent_impulse: L,
+    /// The normal impulses this step's substeps ended with, summed, less the one the step
+    /// began with: each substep's warm start adds the impulse the last one ended with (the
+    /// first cancels the initial -P exactly), and [`Bundle::impulses`] adds the last. That is
+    /// all the normal constraint applied in the step, without a write per solve pass.
+    total_normal_impulse: L,
+}
+
+impl<L: Wide> PointLanes<L> {
+    /// The tangent arms rA x t and rB x t: -(rA . n) and -(rB . n) to the bit (but for the
+    /// sign of an exact zero), so a bundle carries four arms per point, not six.
+    #[inline(always)]
+    fn tangent_arms(&self) -> (L, L) {
+        (-self.a_dot_n, -self.b_dot_n)
+    }
+}
+
+/// Up to `L::WIDTH` contacts packed for the lanes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Bundle<L: Wide> {
+    pub kind: BundleKind,
+    /// Where the bundle's restitution lanes are ([`BounceLanes`]), or [`NO_BOUNCE`].
+    pub bounce: u32,
+    /// Contact index per lane; `u32::MAX` for an empty lane.
+    pub contact: L::Index,
+    /// Solver-body indices of A and B per lane (the fixed dummy body for empty lanes).
+    a: L::Index,
+    b: L::Index,
+    /// The normal (unit, A to B).
+    nx: L,
+    ny: L,
+    friction: L,
+    /// The contact spring ([`super::softness::Softness`]).
+    bias_rate: L,
+    mass_scale: L,
+    impulse_scale: L,
+    /// How far the spring has crept (m; `ContactConstraint::creep`).
+    creep: L,
+    /// The block K (symmetric) and its inverse (identity for a contact without one).
+    k00: L,
+    k01: L,
+    k11: L,
+    i00: L,
+    i01: L,
+    i11: L,
+    /// Inverse masses and inertias of A and B (zero for fixed bodies and empty lanes).
+    inv_mass_a: L,
+    inv_i_a: L,
+    inv_mass_b: L,
+    inv_i_b: L,
+    p: [PointLanes<L>; 2],
+}
+
+/// A bundle none of whose contacts bounces.
+pub(crate) const NO_BOUNCE: u32 = u32::MAX;
+
+/// What restitution reads of a bundle's contacts that bounce, kept apart from the bundle so
+/// that the solve passes do not stream it and a world without restitution pays nothing.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BounceLanes<L> {
+    /// Coefficient of restitution per lane (0 for a lane that does not bounce).
+    restitution: L,
+    /// Each point's normal velocity before the solve (m/s): the approach speed to reverse.
+    relative_velocity: [L; 2],
+}
+
+impl<L: Wide> BounceLanes<L> {
+    /// No lane bounces.
+    pub const NONE: BounceLanes<L> = BounceLanes {
+        restitution: L::ZERO,
+        relative_velocity: [L::ZERO; 2],
+    };
+
+    /// Lane `lane` bounces with contact `c`'s restitution from the approach speeds its
+    /// constraint `k` recorded.
+    #[inline(always)]
+    pub fn set(&mut self, lane: usize, c: &Contact, k: &ContactConstraint) {
+        self.restitution.set_lane(lane, c.restitution);
+        for (v, kp) in self.relative_velocity.iter_mut().zip(&k.points[..c.count]) {
+            v.set_lane(lane, kp.relative_velocity);
+        }
+    }
+}
+
+/// A point's impulses at the end of the solve, read out of its lane for the store stage.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct PointImpulses {
+    /// Accumulated normal impulse (N s, per substep).
+    pub normal: Real,
+    /// Accumulated friction impulse (N s, per substep).
+    pub tangent: Real,
+    /// Everything the normal constraint applied this step (N s).
+    pub total_normal: Real,
+}
+
+/// What a solve pass does: 1 / substep (1/s), whether it applies the soft bias, and the
+/// push-out cap as a negative velocity (m/s).
+#[derive(Clone, Copy)]
+pub(crate) struct Pass<L> {
+    pub inv_h: L,
+    pub use_bias: bool,
+    pub push_out: L,
+}
+
+/// The body state a kernel reads for a bundle's lanes.
+struct BodyLanes<L> {
+    vx: L,
+    vy: L,
+    w: L,
+    dpx: L,
+    dpy: L,
+    qc: L,
+    qs: L,
+    inv_mass: L,
+    inv_inertia: L,
+}
+
+impl<L: Wide> BodyLanes<L> {
+    /// Load the lanes' bodies' velocities and how far they moved this step: each lane's
+    /// body's first eight words (`SolverBody::state`), transposed into one value per field.
+    /// The inverse masses do not change within a step: they come packed in the bundle.
+    #[inline(always)]
+    fn gather(bodies: &[SolverBody], idx: &L::Index, inv_mass: L, inv_inertia: L) -> Self {
+        let [vx, vy, w, dpx, dpy, qc, qs, _] =
+            L::columns(|lane| bodies[idx.as_ref()[lane] as usize].state());
+        BodyLanes {
+            vx,
+            vy,
+            w,
+            dpx,
+            dpy,
+            qc,
+            qs,
+            inv_mass,
+            inv_inertia,
+        }
+    }
+
+    /// Write velocities back, with the motion as it was read (a solve pass does not move
+    /// bodies): the first four words of each lane's body, one store a body. A fixed body's
+    /// lanes come back as they were read (its zero inverse mass and inertia take nothing from
+    /// an impulse), so every lane is written without asking which kind of body it holds.
+    #[inline(always)]
+    fn scatter(&self, bodies: &mut [SolverBody], idx: &L::Index) {
+        L::scatter_rows([self.vx, self.vy, self.w, self.dpx], bodies, idx);
+    }
+
+    /// Relative velocity of B over A along (dx, dy) at arms (rA x d, rB x d):
+    /// (vB - vA) . d + wB (rB x d) - wA (rA x d).
+    #[inline(always)]
+    fn relative(a: &Self, b: &Self, (dx, dy): (L, L), (rd_a, rd_b): (L, L)) -> L {
+        (b.vx - a.vx) * dx + (b.vy - a.vy) * dy + b.w * rd_b - a.w * rd_a
+    }
+
+    /// Apply impulse lambda along (dx, dy) at arms (rA x d, rB x d): B gets +, A gets -.
+    #[inline(always)]
+    fn apply(a: &mut Self, b: &mut Self, (dx, dy): (L, L), (rd_a, rd_b): (L, L), lambda: L) {
+        a.vx -= a.inv_mass * lambda * dx;
+        a.vy -= a.inv_mass * lambda * dy;
+        a.w -= a.inv_inertia * lambda * rd_a;
+        b.vx += b.inv_mass * lambda * dx;
+        b.vy += b.inv_mass * lambda * dy;
+        b.w += b.inv_inertia * lambda * rd_b;
+    }
+}
+
+/// A point's normal arms as a pair.
+#[inline(always)]
+fn normal_arms<L: Wide>(p: &PointLanes<L>) -> (L, L) {
+    (p.a_cross_n, p.b_cross_n)
+}
+
+impl<L: Wide> Bundle<L> {
+    /// A bundle with every lane empty: the fixed dummy body on both sides, zero masses and
+    /// impulses, and an identity block so the LCP stays finite.
+    pub fn inert(kind: BundleKind, dummy: u32) -> Bundle<L> {
+        let (zero, one) = (L::ZERO, L::ONE);
+        let point = PointLanes {
+            a_cross_n: zero,
+            b_cross_n: zero,
+            a_dot_n: zero,
+            b_dot_n: zero,
+            adjusted_separation: zero,
+            normal_mass: zero,
+            tangent_mass: zero,
+            normal_impulse: zero,
+            tangent_impulse: zero,
+            total_normal_impulse: zero,
+        };
+        Bundle {
+            kind,
+            bounce: NO_BOUNCE,
+            contact: L::index_splat(u32::MAX),
+            a: L::index_splat(dummy),
+            b: L::index_splat(dummy),
+            nx: zero,
+            ny: zero,
+            friction: zero,
+            bias_rate: zero,
+            mass_scale: zero,
+            impulse_scale: zero,
+            creep: zero,
+            k00: one,
+            k01: zero,
+            k11: one,
+            i00: one,
+            i01: zero,
+            i11: one,
+            inv_mass_a: zero,
+            inv_i_a: zero,
+            inv_mass_b: zero,
+            inv_i_b: zero,
+            p: [point; 2],
+        }
+    }
+
+    /// Write contact `c` (index `ci`) with its constraint `k` into lane `lane`. A contact
+    /// without a usable block keeps the inert identity; a one-point contact leaves its second
+    /// point's lanes zero.
+    #[inline(always)]
+    pub fn set_contact(
+        &mut self,
+        lane: usize,
+        (ci, c): (u32, &Contact),
+        k: &ContactConstraint,
+        bodies: &[SolverBody],
+    ) {
+        self.contact.as_mut()[lane] = ci;
+        self.a.as_mut()[lane] = c.a;
+        self.b.as_mut()[lane] = c.b;
+        let sf = k.softness;
+        let (body_a, body_b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
+        for (field, x) in [
+            (&mut self.nx, c.normal.x),
+            (&mut self.ny, c.normal.y),
+            (&mut self.friction, c.friction),
+            (&mut self.bias_rate, sf.bias_rate),
+            (&mut self.mass_scale, sf.mass_scale),
+            (&mut self.impulse_scale, sf.impulse_scale),
+            (&mut self.creep, k.creep),
+            (&mut self.inv_mass_a, body_a.inv_mass),
+            (&mut self.inv_i_a, body_a.inv_inertia),
+            (&mut self.inv_mass_b, body_b.inv_mass),
+            (&mut self.inv_i_b, body_b.inv_inertia),
+        ] {
+            field.set_lane(lane, x);
+        }
+        if let Some(m) = &k.block {
+            for (field, x) in [
+                (&mut self.k00, m.k[0][0]),
+                (&mut self.k01, m.k[0][1]),
+                (&mut self.k11, m.k[1][1]),
+                (&mut self.i00, m.inv[0][0]),
+                (&mut self.i01, m.inv[0][1]),
+                (&mut self.i11, m.inv[1][1]),
+            ] {
+                field.set_lane(lane, x);
+            }
+        }
+        for ((v, p), kp) in self.p.iter_mut().zip(&c.points[..c.count]).zip(&k.points) {
+            let arms = kp.arms;
+            for (field, x) in [
+                (&mut v.a_cross_n, arms.a_cross_n),
+                (&mut v.b_cross_n, arms.b_cross_n),
+                (&mut v.a_dot_n, arms.a_dot_n),
+                (&mut v.b_dot_n, arms.b_dot_n),
+                (&mut v.adjusted_separation, kp.adjusted_separation),
+                (&mut v.normal_mass, kp.normal_mass),
+                (&mut v.tangent_mass, kp.tangent_mass),
+                (&mut v.normal_impulse, p.normal_impulse),
+                (&mut v.tangent_impulse, p.tangent_impulse),
+                (&mut v.total_normal_impulse, -p.normal_impulse),
+            ] {
+                field.set_lane(lane, x);
+            }
+        }
+    }
+
+    /// Both sides' body lanes.
+    #[inline(always)]
+    fn gather(&self, bodies: &[SolverBody]) -> (BodyLanes<L>, BodyLanes<L>) {
+        (
+            BodyLanes::gather(bodies, &self.a, self.inv_mass_a, self.inv_i_a),
+            BodyLanes::gather(bodies, &self.b, self.inv_mass_b, self.inv_i_b),
+        )
+    }
+
+    /// Write both sides' velocities back.
+    #[inline(always)]
+    fn scatter(&self, bodies: &mut [SolverBody], a: &BodyLanes<L>, b: &BodyLanes<L>) {
+        a.scatter(bodies, &self.a);
+        b.scatter(bodies, &self.b);
+    }
+
+    /// The normal and the tangent t = (n_y, -n_x).
+    #[inline(always)]
+    fn axes(&self) -> ((L, L), (L, L)) {
+        ((self.nx, self.ny), (self.ny, -self.nx))
+    }
+
+    /// Warm start: apply each point's accumulated impulses (the start of a substep).
+    #[inline(always)]
+    pub fn warm_start(&mut self, bodies: &mut [SolverBody]) {
+        let (mut a, mut b) = self.gather(bodies);
+        let (n, t) = self.axes();
+        for p in &mut self.p {
+            p.total_normal_impulse += p.normal_impulse;
+            BodyLanes::apply(&mut a, &mut b, n, normal_arms(p), p.normal_impulse);
+            BodyLanes::apply(&mut a, &mut b, t, p.tangent_arms(), p.tangent_impulse);
+        }
+        self.scatter(bodies, &a, &b);
+    }
+
+    /// Warm starting off: zero the accumulated impulses instead (the start of a substep).
+    #[inline(always)]
+    pub fn clear_impulses(&mut self) {
+        for p in &mut self.p {
+            // The impulse the last substep ended with counts as its share of the total.
+            p.total_normal_impulse += p.normal_impulse;
+            p.normal_impulse = L::ZERO;
+            p.tangent_impulse = L::ZERO;
+        }
+    }
+
+    /// One solve pass: the normal impulses (soft where `pass.use_bias`, rigid otherwise),
+    /// then friction unless `friction` is false (a normal relax pass).
+    #[inline(always)]
+    pub fn solve(&mut self, bodies: &mut [SolverBody], pass: &Pass<L>, friction: bool) {
+        let (mut a, mut b) = self.gather(bodies);
+        let (n, t) = self.axes();
+        let dp_n = (b.dpx - a.dpx) * n.0 + (b.dpy - a.dpy) * n.1;
+        let coeffs = [0, 1].map(|j| self.coefficients(&self.p[j], &a, &b, dp_n, pass));
+        match self.kind {
+            BundleKind::Block => self.solve_block(&mut a, &mut b, &coeffs),
+            BundleKind::Points => {
+                for (p, &(bias, mass_scale, impulse_scale)) in self.p.iter_mut().zip(&coeffs) {
+                    let vn = BodyLanes::relative(&a, &b, n, normal_arms(p));
+                    let impulse = -p.normal_mass * (mass_scale * vn + bias)
+                        - impulse_scale * p.normal_impulse;
+                    let total = (p.normal_impulse + impulse).max(L::ZERO);
+                    let applied = total - p.normal_impulse;
+                    p.normal_impulse = total;
+                    BodyLanes::apply(&mut a, &mut b, n, normal_arms(p), applied);
+                }
+            }
+        }
+        // Skipped when no lane has friction.
+        if friction && L::any(self.friction.cmpgt(L::ZERO)) {
+            for p in &mut self.p {
+                let vt = BodyLanes::relative(&a, &b, t, p.tangent_arms());
+                let max_f = self.friction * p.normal_impulse;
+                let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);
+                let applied = total - p.tangent_impulse;
+                p.tangent_impulse = total;
+                BodyLanes::apply(&mut a, &mut b, t, p.tangent_arms(), applied);
+            }
+        }
+        self.scatter(bodies, &a, &b);
+    }
+
+    /// A point's (bias, mass scale, impulse scale) for this pass (Catto's soft step):
+    /// impulse = -m_eff (mass_scale vn + bias) - impulse_scale P. Where the surfaces are apart
+    /// (a speculative point) the bias lets them close the gap in one substep, no more; where
+    /// they overlap it is the spring's, mass_scale bias_rate (s + creep), capped at the
+    /// push-out speed, in the biased pass, and nothing in a relax pass. The separation is
+    /// worked out from how far the bodies moved this step: s = s0 + (dpB - dpA) . n +
+    /// (qB rB - rB) . n - (qA rA - rA) . n, where for a rotation q = (c, s),
+    /// (q r) . n = c (r . n) + s (r x n). `dp_n` is (dpB - dpA) . n.
+    #[inline(always)]
+    fn coefficients(
+        &self,
+        p: &PointLanes<L>,
+        a: &BodyLanes<L>,
+        b: &BodyLanes<L>,
+        dp_n: L,
+        pass: &Pass<L>,
+    ) -> (L, L, L) {
+        let s = dp_n + (b.qc * p.b_dot_n + b.qs * p.b_cross_n)
+            - (a.qc * p.a_dot_n + a.qs * p.a_cross_n)
+            + p.adjusted_separation;
+        let speculative = s.cmpgt(L::ZERO);
+        let (soft_bias, soft_ms, soft_is) = if pass.use_bias {
+            (
+                (self.mass_scale * self.bias_rate * (s + self.creep)).max(pass.push_out),
+                self.mass_scale,
+                self.impulse_scale,
+            )
+        } else {
+            (L::ZERO, L::ONE, L::ZERO)
+        };
+        (
+            L::select(speculative, s * pass.inv_h, soft_bias),
+            L::select(speculative, L::ONE, soft_ms),
+            L::select(speculative, L::ZERO, soft_is),
+        )
+    }
+
+    /// Both normal impulses of each lane's two-point contact at once. Row i of the soft update
+    /// asks for the normal velocity vn_i' = impulse_scale_i (vn_i - (K P)_i) - bias_i, which
+    /// is what the one-point impulse gives (using mass_scale + impulse_scale = 1), while both
+    /// accumulated impulses stay >= 0: the LCP of [`block_lcp`].
+    #[inline(always)]
+    fn solve_block(&mut self, a: &mut BodyLanes<L>, b: &mut BodyLanes<L>, coeffs: &[(L, L, L); 2]) {
+        let (vn, kl) = self.block_velocities(a, b);
+        let r = [0, 1].map(|i| {
+            let (bias, _, impulse_scale) = coeffs[i];
+            vn[i] - kl[i] - (impulse_scale * (vn[i] - kl[i]) - bias)
+        });
+        let [l0, l1] = [self.p[0].normal_impulse, self.p[1].normal_impulse];
+        let (x0, x1, _) = block_lcp(self, r, [l0, l1]);
+        self.apply_block(a, b, [x0 - l0, x1 - l1]);
+        self.p[0].normal_impulse = x0;
+        self.p[1].normal_impulse = x1;
+    }
+
+    /// Each point's normal velocity and (K P)_i for the accumulated impulses P.
+    #[inline(always)]
+    fn block_velocities(&self, a: &BodyLanes<L>, b: &BodyLanes<L>) -> ([L; 2], [L; 2]) {
+        let (n, _) = self.axes();
+        let [p0, p1] = &self.p;
+        let (l0, l1) = (p0.normal_impulse, p1.normal_impulse);
+        let kl = [self.k00 * l0 + self.k01 * l1, self.k01 * l0 + self.k11 * l1];
+        let vn = [
+            BodyLanes::relative(a, b, n, normal_arms(p0)),
+            BodyLanes::relative(a, b, n, normal_arms(p1)),
+        ];
+        (vn, kl)
+    }
+
+    /// Apply normal impulse increments `d` at the two points together.
+    #[inline(always)]
+    fn apply_block(&self, a: &mut BodyLanes<L>, b: &mut BodyLanes<L>, [d0, d1]: [L; 2]) {
+        let [p0, p1] = &self.p;
+        let (nx, ny) = (self.nx, self.ny);
+        let d = d0 + d1;
+        a.vx -= a.inv_mass * d * nx;
+        a.vy -= a.inv_mass * d * ny;
+        a.w -= a.inv_inertia * (d0 * p0.a_cross_n + d1 * p1.a_cross_n);
+        b.vx += b.inv_mass * d * nx;
+        b.vy += b.inv_mass * d * ny;
+        b.w += b.inv_inertia * (d0 * p0.b_cross_n + d1 * p1.b_cross_n);
+    }
+
+    /// Restitution, after the substeps: reverse e times the pre-solve approach speed at each
+    /// point that approached faster than `threshold` (m/s) and pushed in the step (its total
+    /// normal impulse is positive: a speculative point that never touched does not bounce).
+    /// Box2D asks for a positive largest increment instead, which cost every solve pass a max
+    /// and two lanes. Where both points of a block bounce they are aimed at vn' = -e vn0
+    /// together, so a flat face hitting a flat face rebounds by exactly e.
+    #[inline(always)]
+    pub fn apply_restitution(
+        &mut self,
+        bounce: &BounceLanes<L>,
+        bodies: &mut [SolverBody],
+        threshold: L,
+    ) {
+        let (mut a, mut b) = self.gather(bodies);
+        let (n, _) = self.axes();
+        let e = bounce.restitution;
+        let bounces = [0, 1].map(|j| {
+            let p = &self.p[j];
+            let pushed = (p.total_normal_impulse + p.normal_impulse).cmpgt(L::ZERO);
+            (-threshold).cmpgt(bounce.relative_velocity[j]) & pushed & e.cmpgt(L::ZERO)
+        });
+        let aim = bounce.relative_velocity.map(|v| e * v);
+        let mut by_block = None;
+        if self.kind == BundleKind::Block {
+            let (vn, kl) = self.block_velocities(&a, &b);
+            let r = [0, 1].map(|i| vn[i] - kl[i] + aim[i]);
+            let l = [self.p[0].normal_impulse, self.p[1].normal_impulse];
+            let (x0, x1, fits) = block_lcp(self, r, l);
+            let both = bounces[0] & bounces[1] & fits;
+            let x = [L::select(both, x0, l[0]), L::select(both, x1, l[1])];
+            self.apply_block(&mut a, &mut b, [x[0] - l[0], x[1] - l[1]]);
+            self.p[0].normal_impulse = x[0];
+            self.p[1].normal_impulse = x[1];
+            by_block = Some(both);
+        }
+        // The points not bounced together, one after the other.
+        for (j, p) in self.p.iter_mut().enumerate() {
+            let vn = BodyLanes::relative(&a, &b, n, normal_arms(p));
+            let impulse = -p.normal_mass * (vn + aim[j]);
+            let total = (p.normal_impulse + impulse).max(L::ZERO);
+            let mut new = L::select(bounces[j], total, p.normal_impulse);
+            if let Some(both) = by_block {
+                new = L::select(both, p.normal_impulse, new);
+            }
+            let applied = new - p.normal_impulse;
+            p.normal_impulse = new;
+            BodyLanes::apply(&mut a, &mut b, n, normal_arms(p), applied);
+        }
+        self.scatter(bodies, &a, &b);
+    }
+
+    /// Each lane's points' impulses at the end of the solve (lanes beyond `L::WIDTH` unused),
+    /// read out field by field: each field's lanes once, not once per lane.
+    #[inline(always)]
+    pub fn impulses(&self) -> [[PointImpulses; 2]; 8] {
+        let mut ends = [[PointImpulses::default(); 2]; 8];
+        for (j, p) in self.p.iter().enumerate() {
+            let (normal, tangent, total) = (
+                p.normal_impulse.to_lanes(),
+                p.tangent_impulse.to_lanes(),
+                p.total_normal_impulse.to_lanes(),
+            );
+            for (lane, end) in ends.iter_mut().take(L::WIDTH).enumerate() {
+                end[j] = PointImpulses {
+                    normal: normal.as_ref()[lane],
+                    tangent: tangent.as_ref()[lane],
+                    total_normal: total.as_ref()[lane] + normal.as_ref()[lane],
+                };
+            }
+        }
+        ends
+    }
+}
+
+/// The two-point contact LCP, lane by lane: find x >= 0 with w = K x + r >= 0 and x . w = 0
+/// (x the new accumulated normal impulses, w the normal velocities beyond their aims), by
+/// Box2D v2's four cases: both push, only point 0, only point 1, neither. Solving both points
+/// together removes the bias of solving them one after the other, which puts a spurious spin
+/// into every resting box. A point's normal mass is 1 / K_ii to the bit (the same sum, then its
+/// reciprocal), so the one-point cases multiply by it. Returns the impulses and which lanes a
+/// case fits; a lane no case fits (round-off only) keeps its impulses `l`.
+#[inline(always)]
+fn block_lcp<L: Wide>(bundle: &Bundle<L>, [r0, r1]: [L; 2], [l0, l1]: [L; 2]) -> (L, L, L::Mask) {
+    let zero = L::ZERO;
+    let x0_1 = -(bundle.i00 * r0 + bundle.i01 * r1);
+    let x1_1 = -(bundle.i01 * r0 + bundle.i11 * r1);
+    let case1 = x0_1.cmpge(zero) & x1_1.cmpge(zero);
+    let x0_2 = -r0 * bundle.p[0].normal_mass;
+    let case2 = x0_2.cmpge(zero) & (bundle.k01 * x0_2 + r1).cmpge(zero);
+    let x1_3 = -r1 * bundle.p[1].normal_mass;
+    let case3 = x1_3.cmpge(zero) & (bundle.k01 * x1_3 + r0).cmpge(zero);
+    let case4 = r0.cmpge(zero) & r1.cmpge(zero);
+    let x0 = L::select(
+        case1,
+        x0_1,
+        L::select(case2, x0_2, L::select(case3 | case4, zero, l0)),
+    );
+    let x1 = L::select(
+        case1,
+        x1_1,
+        L::select(case2 | case4, zero, L::select(case3, x1_3, l1)),
+    );
+    (x0, x1, case1 | case2 | case3 | case4)
+}

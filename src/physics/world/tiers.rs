@@ -1,0 +1,386 @@
+//! Adaptive stiffness (`Settings::adaptive_stiffness`): each awake island gets a tier from its
+//! contacts' loads, its bodies' masses and its shape, and each tier is solved apart with the
+//! work its islands need ([`TIERS`]). Islands of different tiers share no dynamic body, so
+//! each tier solves its own contacts, taking their colours from the one constraint graph.
+
+use super::islands::{find, unite_islands};
+use super::*;
+use crate::physics::shape::Aabb;
+use crate::physics::solver::soft_step::Effort;
+
+/// A stiffness tier, in order of the work it does.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
+#[repr(u8)]
+pub(super) enum Tier {
+    /// Nothing loaded: the World's settings.
+    #[default]
+    Base,
+    /// A loaded island braced sideways (a pyramid, a pile).
+    Braced,
+    /// A loaded island that is not braced (a stack).
+    Stack,
+    /// A stack under [`LOADED_RANGE`] times the load (a tall stack), or an island joining
+    /// masses `stiff_load_ratio` apart.
+    TallStack,
+    /// An island joining masses `extreme_mass_ratio` apart.
+    Extreme,
+}
+
+/// What a tier does, relative to the World's settings.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TierSpec {
+    /// Substeps, in quarters of `Settings::substeps`; the contact hertz scales with them,
+    /// since its ceiling is a quarter of the substep rate.
+    pub substep_quarters: u32,
+    /// Relax passes, as a multiple of `Settings::relax_iterations`.
+    pub relax_scale: u32,
+    /// Normal relax passes (after the relax passes, solving the normal constraints only), as
+    /// a multiple of `Settings::relax_iterations`.
+    pub normal_relax_scale: u32,
+    /// How much of last step's compression the springs creep by (`soft_step::creep`).
+    pub creep: Real,
+}
+
+/// The tiers' work, indexed by [`Tier`]. Why each row is what it is:
+///
+/// - **Braced** islands need the slow bounce of their rows damped rather than stiffer
+///   springs: the base substeps, a relax pass, a normal relax pass (what damps the bounce is
+///   a second pass over the normals; friction, solved by the full relax pass before it, need
+///   not be solved again, and the step clamps the friction impulse to the cone of the normal
+///   impulse it ends with) and creep.
+/// - **Stack** and **TallStack** need stiff springs, so more substeps: 1.5 and 1.75 times the
+///   base (7 substeps hold a jittered 50-box stack, 6 do not) with creep, which damps their
+///   slow bounce without more relax passes.
+/// - **Extreme** (100:1 masses) needs four times the substeps and stiffness and eight times
+///   the relax passes; its islands are small. Creep would leave its springs softer at rest,
+///   which it cannot afford.
+///
+/// docs/benchmarks.md and docs/design.md have the measurements behind each number.
+pub(super) const TIERS: [TierSpec; 5] = [
+    // Base
+    TierSpec {
+        substep_quarters: 4,
+        relax_scale: 1,
+        normal_relax_scale: 0,
+        creep: 0.0,
+    },
+    // Braced
+    TierSpec {
+        substep_quarters: 4,
+        relax_scale: 1,
+        normal_relax_scale: 1,
+        creep: 0.5,
+    },
+    // Stack
+    TierSpec {
+        substep_quarters: 6,
+        relax_scale: 1,
+        normal_relax_scale: 0,
+        creep: 0.5,
+    },
+    // TallStack
+    TierSpec {
+        substep_quarters: 7,
+        relax_scale: 1,
+        normal_relax_scale: 0,
+        creep: 0.5,
+    },
+    // Extreme
+    TierSpec {
+        substep_quarters: 16,
+        relax_scale: 8,
+        normal_relax_scale: 0,
+        creep: 0.0,
+    },
+];
+
+impl Tier {
+    /// Every tier, in order.
+    pub const ALL: [Tier; 5] = [
+        Tier::Base,
+        Tier::Braced,
+        Tier::Stack,
+        Tier::TallStack,
+        Tier::Extreme,
+    ];
+
+    /// What the tier does.
+    pub fn spec(self) -> &'static TierSpec {
+        &TIERS[self as usize]
+    }
+
+    /// The work a solve of this tier does under `settings`. The base tier is the settings
+    /// themselves.
+    pub fn effort(self, settings: &Settings) -> Effort {
+        let spec = self.spec();
+        let relax = settings.relax_iterations;
+        let (substeps, contact_hertz) = if self == Tier::Base {
+            (settings.substeps, settings.contact_hertz)
+        } else {
+            let quarters = spec.substep_quarters;
+            (
+                settings.substeps * quarters / 4,
+                settings.contact_hertz * quarters as Real / 4.0,
+            )
+        };
+        Effort {
+            substeps,
+            relax_passes: relax * spec.relax_scale,
+            normal_relax_passes: relax * spec.normal_relax_scale,
+            contact_hertz,
+            creep: spec.creep,
+        }
+    }
+}
+
+/// Adaptive stiffness's buffers, reused every step.
+#[derive(Clone, Debug, Default)]
+pub(super) struct TierScratch {
+    /// What each contact asks, in contact order, filled as the contacts are found (read again
+    /// by `assign_tiers` when the counts differ).
+    pub inputs: Vec<TierInput>,
+    /// Each contact's tier, then each slot's.
+    pub contact_tier: Vec<Tier>,
+    pub body_tier: Vec<Tier>,
+    /// Each island's extent and number of moving bodies, at its root.
+    pub island_extent: Vec<Extent>,
+    pub island_bodies: Vec<u32>,
+    /// The contacts' indices grouped by tier, while tiers are solved apart, and the bodies of
+    /// the tier being solved.
+    pub tier_contacts: Vec<u32>,
+    pub tier_bodies: Vec<u32>,
+}
+
+impl World {
+    /// Give every awake island a stiffness tier (see [`Tier`] and [`TIERS`]). An island is
+    /// loaded where a contact's lasting force is `stiff_load_ratio` times the lighter body's
+    /// weight or more, or a touching contact is too new for its load to be known. A loaded
+    /// island braced sideways (less than [`SLENDER`] times as tall as it is wide, along
+    /// gravity, with at least `stiff_load_ratio` moving bodies) is [`Tier::Braced`]; any other
+    /// a stack tier. Masses `stiff_load_ratio` apart ask for [`Tier::TallStack`] (braced if the
+    /// island is), `extreme_mass_ratio` apart for [`Tier::Extreme`]. Fills `contact_tier` and
+    /// `body_tier`; returns the highest tier.
+    pub(super) fn assign_tiers(&mut self) -> Tier {
+        if self.contact_needs() == Tier::Base {
+            return Tier::Base;
+        }
+        self.island_tiers()
+    }
+
+    /// What each contact asks of its island before the island's shape is known, into
+    /// `contact_tier` (and each contact's bodies into `islands.contact_bodies`); the most any
+    /// asks.
+    fn contact_needs(&mut self) -> Tier {
+        let g = self.gravity.length();
+        let g_ref = if g > 1e-3 { g } else { 9.81 };
+        let (stiff, extreme) = (
+            self.settings.stiff_load_ratio,
+            self.settings.extreme_mass_ratio,
+        );
+        if self.tiers.inputs.len() != self.contacts.awake.len() {
+            // Contacts joined since they were found (an island woke): read them all again.
+            let slop = self.settings.linear_slop;
+            let awake = &self.contacts.awake;
+            self.tiers.inputs.clear();
+            self.tiers
+                .inputs
+                .extend(awake.iter().map(|c| TierInput::of(c, slop)));
+        }
+        self.tiers.contact_tier.clear();
+        self.islands.contact_bodies.clear();
+        let mut top = Tier::Base;
+        for input in &self.tiers.inputs {
+            let [a, b] = input.bodies;
+            let inv_mass = |i: u32| self.solver.bodies[i as usize].inv_mass;
+            // Inverse masses: the lighter body has the larger one; static bodies have zero.
+            let (ma, mb) = (inv_mass(a), inv_mass(b));
+            let (light_inv, heavy_inv) = (ma.max(mb), ma.min(mb));
+            let load = if light_inv > 0.0 {
+                input.load * light_inv / g_ref
+            } else {
+                0.0
+            };
+            let masses = if heavy_inv > 0.0 {
+                light_inv / heavy_inv
+            } else {
+                0.0
+            };
+            // A soft contact's spring compresses by its load over m omega^2, and omega can rise
+            // with the substep rate only: 1.5 times the substeps hold 1.5^2 = 2.25 times the
+            // load at the same compression.
+            let need = if masses >= extreme {
+                Tier::Extreme
+            } else if masses >= stiff || load >= LOADED_RANGE * stiff {
+                Tier::TallStack
+            } else if load >= stiff || input.unmeasured {
+                Tier::Stack
+            } else {
+                Tier::Base
+            };
+            top = top.max(need);
+            self.tiers.contact_tier.push(need);
+            self.islands.contact_bodies.push(input.bodies);
+        }
+        top
+    }
+
+    /// Islands by union-find over the contacts between awake dynamic bodies; each island's
+    /// tier from its contacts' highest need and its shape, given to all its bodies and
+    /// contacts. Returns the highest.
+    fn island_tiers(&mut self) -> Tier {
+        let n = self.solver.bodies.len();
+        let bodies = &self.solver.bodies;
+        unite_islands(
+            &mut self.islands.parent,
+            n,
+            &self.islands.contact_bodies,
+            |i| bodies[i as usize].inv_mass > 0.0,
+        );
+        self.measure_islands();
+        let bodies = &self.solver.bodies;
+        let moving = |i: u32| bodies[i as usize].inv_mass > 0.0;
+        let (parent, tiers) = (&mut self.islands.parent, &mut self.tiers);
+        let pairs = &self.islands.contact_bodies;
+        tiers.body_tier.clear();
+        tiers.body_tier.resize(n, Tier::Base);
+        for (&need, &[a, b]) in tiers.contact_tier.iter().zip(pairs) {
+            let root = find(parent, if moving(a) { a } else { b }) as usize;
+            tiers.body_tier[root] = tiers.body_tier[root].max(need);
+        }
+        let stiff = self.settings.stiff_load_ratio;
+        let mut top = Tier::Base;
+        for i in 0..n {
+            if parent[i] as usize == i {
+                let braced =
+                    tiers.island_bodies[i] as Real >= stiff && !tiers.island_extent[i].slender();
+                tiers.body_tier[i] = island_tier(tiers.body_tier[i], braced);
+                top = top.max(tiers.body_tier[i]);
+            }
+        }
+        for i in 0..n as u32 {
+            let root = find(parent, i) as usize;
+            tiers.body_tier[i as usize] = tiers.body_tier[root];
+        }
+        for (tier, &[a, b]) in tiers.contact_tier.iter_mut().zip(pairs) {
+            *tier = tiers.body_tier[if moving(a) { a } else { b } as usize];
+        }
+        top
+    }
+
+    /// Each island's extent along gravity and across it (its bodies' boxes from the broad
+    /// phase, found this step) and its number of moving bodies, at its root.
+    fn measure_islands(&mut self) {
+        let n = self.solver.bodies.len();
+        let g = self.gravity.length();
+        let down = if g > 1e-3 {
+            self.gravity / g
+        } else {
+            Vec2::new(0.0, -1.0)
+        };
+        let across = Vec2::new(-down.y, down.x);
+        let tiers = &mut self.tiers;
+        tiers.island_extent.clear();
+        tiers.island_extent.resize(n, Extent::EMPTY);
+        tiers.island_bodies.clear();
+        tiers.island_bodies.resize(n, 0);
+        for (i, proxy) in self.broad_phase.proxies.iter().enumerate() {
+            if self.solver.bodies[i].inv_mass > 0.0 {
+                let root = find(&mut self.islands.parent, i as u32) as usize;
+                tiers.island_extent[root].add(&proxy.aabb, down, across);
+                tiers.island_bodies[root] += 1;
+            }
+        }
+    }
+}
+
+/// What adaptive stiffness reads of a contact, taken as the contact is found: 16 bytes, so
+/// that giving the contacts their tiers does not stream through the whole contacts.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TierInput {
+    /// Slots of bodies A and B.
+    pub bodies: [u32; 2],
+    /// The contact's held load (N; `Contact::load`).
+    pub load: Real,
+    /// A contact that has just closed carries a load nobody has measured yet: while a stack
+    /// settles its loads ramp up over about five steps, and at the base settings it sinks
+    /// 2.6 cm in them. Such a contact (younger than [`NEW_CONTACT_STEPS`], a point within
+    /// `linear_slop`) is solved as a loaded one until it is old enough for its load to count.
+    pub unmeasured: bool,
+}
+
+impl TierInput {
+    /// The contact's inputs; `slop` is `Settings::linear_slop` (m).
+    #[inline]
+    pub fn of(c: &Contact, slop: Real) -> TierInput {
+        TierInput {
+            bodies: [c.a, c.b],
+            load: c.load,
+            unmeasured: c.age < NEW_CONTACT_STEPS
+                && c.points[..c.count].iter().any(|p| p.separation <= slop),
+        }
+    }
+}
+
+/// An island is slender (a stack) when it is at least this many times as tall, along
+/// gravity, as it is wide across it (its bodies' boxes): a 20-box stack of 1 m boxes is 14
+/// times, a pyramid about once, a pile less. The shape is known at once; a measure of how the
+/// load spreads (the most loaded contact against the island's weight) needs the loads, which
+/// take five steps to build under a new stack.
+pub(super) const SLENDER: Real = 2.0;
+
+/// An island's extent (m) along gravity (up) and across it, from its bodies' boxes.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Extent {
+    up: [Real; 2],
+    side: [Real; 2],
+}
+
+impl Extent {
+    /// No body yet.
+    pub const EMPTY: Extent = Extent {
+        up: [Real::INFINITY, Real::NEG_INFINITY],
+        side: [Real::INFINITY, Real::NEG_INFINITY],
+    };
+
+    /// Take in box `aabb`, with `down` the unit vector along gravity and `across` normal to it.
+    #[inline]
+    fn add(&mut self, aabb: &Aabb, down: Vec2, across: Vec2) {
+        let centre = 0.5 * (aabb.min + aabb.max);
+        let half = 0.5 * (aabb.max - aabb.min);
+        let reach = |d: Vec2| half.x * d.x.abs() + half.y * d.y.abs();
+        let (up, side) = (-centre.dot(down), centre.dot(across));
+        let (r_up, r_side) = (reach(down), reach(across));
+        self.up = [self.up[0].min(up - r_up), self.up[1].max(up + r_up)];
+        self.side = [
+            self.side[0].min(side - r_side),
+            self.side[1].max(side + r_side),
+        ];
+    }
+
+    /// At least [`SLENDER`] times as tall as wide.
+    fn slender(&self) -> bool {
+        self.up[1] - self.up[0] >= SLENDER * (self.side[1] - self.side[0])
+    }
+}
+
+/// The tier of an island from its contacts' highest `need` and whether it is `braced`: not
+/// slender, and with at least `stiff_load_ratio` moving bodies. A loaded braced island (a
+/// stack tier's need: load, or masses `stiff_load_ratio` apart) is [`Tier::Braced`]. A
+/// smaller island cannot carry that many of its bodies' weight: it is loaded only by contacts
+/// too new to be measured, unequal masses or an impact, and it is small, so it keeps the
+/// stack tiers (a box sliding over a chain of tiles, loaded by each new contact, tilted past
+/// 1e-4 rad when it was solved braced).
+fn island_tier(need: Tier, braced: bool) -> Tier {
+    match need {
+        Tier::Stack | Tier::TallStack if braced => Tier::Braced,
+        _ => need,
+    }
+}
+
+/// The loads [`Tier::Stack`] holds, as a multiple of `stiff_load_ratio`: 1.5^2, the square of
+/// its substep factor (a spring's compression is load / (m omega^2)).
+pub(super) const LOADED_RANGE: Real = 2.25;
+
+/// How many steps a new touching contact is solved as a loaded one before its measured load
+/// decides.
+const NEW_CONTACT_STEPS: u8 = 8;

@@ -10,10 +10,10 @@ mod circle;
 mod polygon;
 mod segment;
 
-pub use capsule::collide_capsules;
-pub use circle::{collide_circles, collide_polygon_circle};
-pub use polygon::{collide_polygons, collide_rects};
-pub use segment::collide_segment;
+pub(crate) use capsule::collide_capsules;
+pub(crate) use circle::{collide_circles, collide_polygon_circle};
+pub(crate) use polygon::{collide_polygons, collide_rects};
+pub(crate) use segment::collide_segment;
 
 use super::convex::Polygon;
 use super::math::{Real, Transform, Vec2};

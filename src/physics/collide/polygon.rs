@@ -358,3 +358,67 @@ fn clip_to_reference(
     }
     manifold
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::math::vec2;
+
+    /// A transform at (`x`, `y`) m, turned by `angle` rad.
+    fn at(x: Real, y: Real, angle: Real) -> Transform {
+        Transform {
+            p: vec2(x, y),
+            q: Rot::from_angle(angle),
+        }
+    }
+
+    #[test]
+    fn the_rectangle_fast_path_agrees_with_the_general_polygon_routine() {
+        let poly = |h: Vec2| {
+            let corners = [
+                vec2(-h.x, -h.y),
+                vec2(h.x, -h.y),
+                vec2(h.x, h.y),
+                vec2(-h.x, h.y),
+            ];
+            Polygon::new(&corners).unwrap().0
+        };
+        // A deterministic sweep of sizes, offsets and angles, touching, overlapping and apart.
+        let mut seed: u32 = 12345;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as Real / (1u32 << 24) as Real
+        };
+        let mut compared = 0;
+        for _ in 0..2000 {
+            let ha = vec2(0.1 + next(), 0.1 + next());
+            let hb = vec2(0.1 + next(), 0.1 + next());
+            let xa = at(4.0 * next() - 2.0, 4.0 * next() - 2.0, 6.3 * next());
+            let xb = at(
+                xa.p.x + 3.0 * next() - 1.5,
+                xa.p.y + 3.0 * next() - 1.5,
+                6.3 * next(),
+            );
+            let margin = 0.2 * next();
+            let fast = collide_rects(ha, xa, hb, xb, margin);
+            let general = collide_polygons(&poly(ha), 0.0, xa, &poly(hb), 0.0, xb, margin);
+            assert_eq!(fast.count, general.count, "{ha:?} {xa:?} {hb:?} {xb:?}");
+            if fast.count > 0 {
+                compared += 1;
+                assert!(
+                    (fast.normal - general.normal).length() < 1e-4,
+                    "{fast:?} vs {general:?}"
+                );
+                for (p, q) in fast.points().iter().zip(general.points()) {
+                    assert!(
+                        (p.point - q.point).length() < 1e-4
+                            && (p.separation - q.separation).abs() < 1e-4,
+                        "{fast:?} vs {general:?}"
+                    );
+                    assert_eq!(p.id, q.id);
+                }
+            }
+        }
+        assert!(compared > 300, "only {compared} touching pairs compared");
+    }
+}

@@ -12,7 +12,7 @@ mod segment;
 
 pub(crate) use capsule::collide_capsules;
 pub(crate) use circle::{collide_circles, collide_polygon_circle};
-pub(crate) use polygon::{collide_polygons, collide_rects};
+pub(crate) use polygon::{collide_polygons, collide_rects, Rounded};
 pub(crate) use segment::collide_segment;
 
 use super::convex::Polygon;
@@ -105,7 +105,17 @@ pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: R
         }
         _ => {
             let ((core_a, ra), (core_b, rb)) = (core(a), core(b));
-            collide_polygons(&core_a, ra, xf_a, &core_b, rb, xf_b, margin)
+            let rounded_a = Rounded {
+                core: &core_a,
+                radius: ra,
+                xf: xf_a,
+            };
+            let rounded_b = Rounded {
+                core: &core_b,
+                radius: rb,
+                xf: xf_b,
+            };
+            collide_polygons(rounded_a, rounded_b, margin)
         }
     }
 }

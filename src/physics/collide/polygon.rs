@@ -18,11 +18,30 @@ use crate::physics::math::{Real, Rot, Transform, Vec2};
 /// normal is the better answer.
 const CORE_GAP: Real = 5.0e-4;
 
-/// The edge of `p1` along which `p2` is farthest out, and that separation (m).
+/// A convex core grown by a radius and placed in the world: one side of a polygon pair.
+#[derive(Clone, Copy)]
+pub(crate) struct Rounded<'a> {
+    /// The core, in its body's frame.
+    pub core: &'a Polygon,
+    /// Radius the core is grown by (m); 0 for a sharp polygon.
+    pub radius: Real,
+    /// The body's transform.
+    pub xf: Transform,
+}
+
+/// A polygon's best candidate for the separating axis: the edge along which the other
+/// polygon is farthest out, and that separation of the cores (m).
+#[derive(Clone, Copy)]
+struct Face {
+    edge: usize,
+    separation: Real,
+}
+
+/// The face of `p1` along which `p2` is farthest out.
 ///
 /// For each edge normal n_i of p1 the separation is min_j n_i . (v2_j - v1_i): the appendix's
 /// f_A components, generalised. The largest is the best separating-axis candidate.
-fn max_separation(p1: &Polygon, p2: &Polygon) -> (usize, Real) {
+fn max_separation(p1: &Polygon, p2: &Polygon) -> Face {
     let mut best_edge = 0;
     let mut best = Real::NEG_INFINITY;
     for i in 0..p1.count {
@@ -37,7 +56,10 @@ fn max_separation(p1: &Polygon, p2: &Polygon) -> (usize, Real) {
             best_edge = i;
         }
     }
-    (best_edge, best)
+    Face {
+        edge: best_edge,
+        separation: best,
+    }
 }
 
 /// Keep the part of segment `seg` with `dot(n, v) <= offset`, each end staying in its slot.
@@ -56,38 +78,34 @@ fn clip_segment(seg: [Vec2; 2], n: Vec2, offset: Real) -> Option<[Vec2; 2]> {
     }
 }
 
-/// Contact manifold between convex polygons `a` at `xf_a` and `b` at `xf_b`, each grown by a
-/// radius (`ra`, `rb`, metres; 0 for a sharp polygon), keeping points whose separation is at
-/// most `margin` metres. The normal points from A to B.
-pub fn collide_polygons(
-    a: &Polygon,
-    ra: Real,
-    xf_a: Transform,
-    b: &Polygon,
-    rb: Real,
-    xf_b: Transform,
-    margin: Real,
-) -> Manifold {
-    let rel = relative(xf_a, xf_b);
-    let pb = b.transformed(rel);
-    let reach = margin + ra + rb;
+/// Contact manifold between convex polygons `a` and `b`, each grown by its radius (0 for a
+/// sharp polygon), keeping points whose separation is at most `margin` metres. The normal
+/// points from A to B.
+pub fn collide_polygons(a: Rounded, b: Rounded, margin: Real) -> Manifold {
+    let rel = relative(a.xf, b.xf);
+    let pb = b.core.transformed(rel);
+    let reach = margin + a.radius + b.radius;
 
-    let (edge_a, sep_a) = max_separation(a, &pb);
-    if sep_a > reach {
+    let face_a = max_separation(a.core, &pb);
+    if face_a.separation > reach {
         return Manifold::EMPTY;
     }
-    let (edge_b, sep_b) = max_separation(&pb, a);
-    if sep_b > reach {
+    let face_b = max_separation(&pb, a.core);
+    if face_b.separation > reach {
         return Manifold::EMPTY;
     }
-    let radii = Radii { a: ra, b: rb };
     clip_to_reference(
-        a,
-        &pb,
-        (edge_a, sep_a),
-        (edge_b, sep_b),
-        radii,
-        xf_a,
+        Side {
+            polygon: a.core,
+            face: face_a,
+            radius: a.radius,
+        },
+        Side {
+            polygon: &pb,
+            face: face_b,
+            radius: b.radius,
+        },
+        a.xf,
         margin,
     )
 }
@@ -100,13 +118,6 @@ fn next(i: usize, count: usize) -> usize {
     } else {
         i + 1
     }
-}
-
-/// The radii the two cores are grown by (m).
-#[derive(Clone, Copy)]
-struct Radii {
-    a: Real,
-    b: Real,
 }
 
 /// The incident edge of `polygon` against reference normal `n`: the edge whose normal is most
@@ -199,101 +210,145 @@ pub fn collide_rects(
     }
     let pa = Polygon::rect(ha);
     let pb = Polygon::rect_at(hb, rel);
-    let sharp = Radii { a: 0.0, b: 0.0 };
+    // Both sharp: rectangles are their own cores.
     clip_to_reference(
-        &pa,
-        &pb,
-        (edge_a, sep_a),
-        (edge_b, sep_b),
-        sharp,
+        Side {
+            polygon: &pa,
+            face: Face {
+                edge: edge_a,
+                separation: sep_a,
+            },
+            radius: 0.0,
+        },
+        Side {
+            polygon: &pb,
+            face: Face {
+                edge: edge_b,
+                separation: sep_b,
+            },
+            radius: 0.0,
+        },
         xf_a,
         margin,
     )
 }
 
+/// One polygon of a pair as the clipper takes it, in A's frame: the polygon, its best face,
+/// and the radius its core is grown by (m).
+#[derive(Clone, Copy)]
+struct Side<'a> {
+    polygon: &'a Polygon,
+    face: Face,
+    radius: Real,
+}
+
 /// Pick the reference face from the best face of each polygon (both in A's frame), clip the
 /// other polygon's incident edge to it, and build the manifold in world coordinates.
-fn clip_to_reference(
-    pa: &Polygon,
-    pb: &Polygon,
-    (edge_a, sep_a): (usize, Real),
-    (edge_b, sep_b): (usize, Real),
-    radii: Radii,
-    xf_a: Transform,
-    margin: Real,
-) -> Manifold {
-    // Prefer A's face unless B's is clearly better, so the reference face does not flicker
-    // between near-equal candidates from one step to the next (the appendix's eq. 79 idea).
-    const RELATIVE_TOL: Real = 0.98;
-    const ABSOLUTE_TOL: Real = 0.0005;
-    // (Written as sep_a + tol so that it favours A for gaps as well as overlaps: the
-    // appendix's 0.98 sep_a + tol only does for overlaps, and for a speculative gap it would
-    // prefer B's face even when A's separates more.)
-    let flip = sep_b > sep_a + (1.0 - RELATIVE_TOL) * sep_a.abs() + ABSOLUTE_TOL;
-    let (reference, incident, ref_edge) = if flip {
-        (pb, pa, edge_b)
-    } else {
-        (pa, pb, edge_a)
-    };
-    let (r_ref, r_inc) = if flip {
-        (radii.b, radii.a)
-    } else {
-        (radii.a, radii.b)
-    };
-
-    // Incident edge: the edge of the other polygon whose normal is most anti-parallel to the
-    // reference normal.
-    let n = reference.normals[ref_edge];
-    let i1 = incident_edge(incident, n);
-    let i2 = next(i1, incident.count);
-    let seg = [incident.vertices[i1], incident.vertices[i2]];
-    let r1 = reference.vertices[ref_edge];
-    let r2 = reference.vertices[next(ref_edge, reference.count)];
-
+fn clip_to_reference(a: Side, b: Side, xf_a: Transform, margin: Real) -> Manifold {
+    let clip = Clip::new(a, b);
     // Cores that do not touch meet where their two edges are closest, along the line between
     // those points: one point, named by the vertex of each edge nearest it.
-    let cores_apart = sep_a.max(sep_b) > CORE_GAP;
-    // (s, t) along each edge, the reference edge's point, and the way to the incident one.
-    let closest = || {
-        let (s, t) = segment_closest(r1, r2, seg[0], seg[1]);
-        let c_ref = r1 + s * (r2 - r1);
-        let c_inc = seg[0] + t * (seg[1] - seg[0]);
-        (s, t, c_ref, c_inc - c_ref)
-    };
-    let closest_points = |(s, t, c_ref, d): (Real, Real, Vec2, Vec2)| {
-        let dist = d.length();
-        let separation = dist - r_ref - r_inc;
-        if separation > margin || dist <= 0.0 {
-            return Manifold::EMPTY;
-        }
-        let n = d / dist;
-        let v_ref = if s < 0.5 {
-            ref_edge
-        } else {
-            next(ref_edge, reference.count)
-        };
-        let v_inc = if t < 0.5 { i1 } else { i2 };
-        let (va, vb, normal_in_a) = if flip {
-            (v_inc, v_ref, -n)
-        } else {
-            (v_ref, v_inc, n)
-        };
-        // Halfway between the reference surface (c_ref + r_ref n) and the incident one.
-        let mid = c_ref + (r_ref + 0.5 * separation) * n;
-        let mut manifold = Manifold::EMPTY;
-        manifold.normal = xf_a.q.rotate(normal_in_a);
-        manifold.points[0] = ManifoldPoint {
-            point: xf_a.apply(mid),
-            separation,
-            id: (va as u16) << 8 | vb as u16,
-        };
-        manifold.count = 1;
-        manifold
-    };
+    let cores_apart = a.face.separation.max(b.face.separation) > CORE_GAP;
     // If the edges are closest at a vertex of each, the shapes meet corner to corner and no
     // face normal is right (it would understate the gap, or clip away every point of a
     // speculative contact).
     if cores_apart {
+        if let Some(closest) = clip.corner_to_corner() {
+            return clip.closest_points(closest, xf_a, margin);
+        }
+    }
+    // An incident edge that lies wholly past one of the side planes (by less than the corner
+    // test's slack: a corner almost square to the reference face) still touches at its
+    // closest points.
+    match clip.side_planes() {
+        Some(seg) => clip.project(seg, xf_a, margin),
+        None if cores_apart => clip.closest_points(clip.closest(), xf_a, margin),
+        None => Manifold::EMPTY,
+    }
+}
+
+/// The reference face and the incident edge against it, in A's frame: what the clipper
+/// measures, and the vertex numbers it names points by.
+struct Clip {
+    /// B holds the reference face: the normal is reversed and the ids' halves swapped so the
+    /// manifold still reads from A to B.
+    flip: bool,
+    /// The reference face's outward unit normal.
+    n: Vec2,
+    /// The reference edge's start and end (m).
+    r1: Vec2,
+    r2: Vec2,
+    /// Their vertex numbers on the reference polygon.
+    ref_vertices: [usize; 2],
+    /// The incident edge's start and end (m).
+    seg: [Vec2; 2],
+    /// Their vertex numbers on the incident polygon.
+    inc_vertices: [usize; 2],
+    /// The radii the reference and incident cores are grown by (m).
+    r_ref: Real,
+    r_inc: Real,
+}
+
+/// Where the reference and incident edges come closest: the fractions `s` and `t` along each,
+/// the reference edge's point `c_ref` and the way `d` from it to the incident edge's (m).
+struct Closest {
+    s: Real,
+    t: Real,
+    c_ref: Vec2,
+    d: Vec2,
+}
+
+impl Clip {
+    /// Choose the reference face between the two polygons' best faces and find the other
+    /// polygon's incident edge: the edge whose normal is most anti-parallel to the reference
+    /// normal.
+    fn new(a: Side, b: Side) -> Clip {
+        // Prefer A's face unless B's is clearly better, so the reference face does not flicker
+        // between near-equal candidates from one step to the next (the appendix's eq. 79 idea).
+        const RELATIVE_TOL: Real = 0.98;
+        const ABSOLUTE_TOL: Real = 0.0005;
+        let (sep_a, sep_b) = (a.face.separation, b.face.separation);
+        // (Written as sep_a + tol so that it favours A for gaps as well as overlaps: the
+        // appendix's 0.98 sep_a + tol only does for overlaps, and for a speculative gap it would
+        // prefer B's face even when A's separates more.)
+        let flip = sep_b > sep_a + (1.0 - RELATIVE_TOL) * sep_a.abs() + ABSOLUTE_TOL;
+        let (reference, incident) = if flip { (b, a) } else { (a, b) };
+        let (ref_poly, inc_poly) = (reference.polygon, incident.polygon);
+        let ref_edge = reference.face.edge;
+        let ref_end = next(ref_edge, ref_poly.count);
+        let n = ref_poly.normals[ref_edge];
+        let i1 = incident_edge(inc_poly, n);
+        let i2 = next(i1, inc_poly.count);
+        Clip {
+            flip,
+            n,
+            r1: ref_poly.vertices[ref_edge],
+            r2: ref_poly.vertices[ref_end],
+            ref_vertices: [ref_edge, ref_end],
+            seg: [inc_poly.vertices[i1], inc_poly.vertices[i2]],
+            inc_vertices: [i1, i2],
+            r_ref: reference.radius,
+            r_inc: incident.radius,
+        }
+    }
+
+    /// Where the reference and incident edges come closest.
+    fn closest(&self) -> Closest {
+        let (r1, r2, seg) = (self.r1, self.r2, self.seg);
+        let (s, t) = segment_closest(r1, r2, seg[0], seg[1]);
+        let c_ref = r1 + s * (r2 - r1);
+        let c_inc = seg[0] + t * (seg[1] - seg[0]);
+        Closest {
+            s,
+            t,
+            c_ref,
+            d: c_inc - c_ref,
+        }
+    }
+
+    /// Where the edges come closest, if that is at a vertex of each: the shapes then meet
+    /// corner to corner.
+    fn corner_to_corner(&self) -> Option<Closest> {
         // `x` is the end of its edge (0 or 1) and the other closest point lies beyond that end
         // (direction `away` from the vertex has a part along the edge pointing out). Parallel
         // faces side by side fail this: their gap is square to both edges.
@@ -302,61 +357,98 @@ fn clip_to_reference(
             let slack = 1.0e-3 * away.length() * edge.length();
             (x == 0.0 && along < -slack) || (x == 1.0 && along > slack)
         };
-        let (s, t, c_ref, d) = closest();
-        if past_end(s, r2 - r1, d) && past_end(t, seg[1] - seg[0], -d) {
-            return closest_points((s, t, c_ref, d));
-        }
+        let c = self.closest();
+        let corners =
+            past_end(c.s, self.r2 - self.r1, c.d) && past_end(c.t, self.seg[1] - self.seg[0], -c.d);
+        corners.then_some(c)
     }
 
-    // Side planes of the reference edge: its tangent t, bounded by its two end vertices. An
-    // incident edge that lies wholly past one of them (by less than the corner test's slack:
-    // a corner almost square to the reference face) still touches at its closest points.
-    // The edge runs counter-clockwise with the normal on its right: its direction is the
-    // normal turned a quarter left, already of unit length.
-    let tangent = Vec2::new(-n.y, n.x);
-    let side_clipped = clip_segment(seg, -tangent, -tangent.dot(r1))
-        .and_then(|seg| clip_segment(seg, tangent, tangent.dot(r2)));
-    let Some(seg) = side_clipped else {
-        return if cores_apart {
-            closest_points(closest())
-        } else {
-            Manifold::EMPTY
-        };
-    };
-
-    // Project onto the reference face (appendix eqs. 45-48), keeping points within the margin.
-    let mut manifold = Manifold::EMPTY;
-    let normal_in_a = if flip { -n } else { n };
-    manifold.normal = xf_a.q.rotate(normal_in_a);
-    // The incident edge runs against the reference edge: its start (slot 0) lies towards the
-    // reference edge's end vertex and its end (slot 1) towards the start vertex. A point is
-    // named by that pair of vertices, written (A's vertex, B's vertex) whichever polygon is the
-    // reference, so the id survives the reference face switching sides between steps.
-    let v_ref = [next(ref_edge, reference.count), ref_edge];
-    let v_inc = [i1, i2];
-    for (k, v) in seg.into_iter().enumerate() {
-        let core = n.dot(v - r1);
-        let separation = core - r_ref - r_inc;
-        if separation > margin {
-            continue;
+    /// One point on the line between the edges' closest points `c`, named by the vertex of
+    /// each edge nearest it; none if the surfaces are more than `margin` (m) apart or the
+    /// cores touch there (no direction).
+    fn closest_points(&self, c: Closest, xf_a: Transform, margin: Real) -> Manifold {
+        let dist = c.d.length();
+        let separation = dist - self.r_ref - self.r_inc;
+        if separation > margin || dist <= 0.0 {
+            return Manifold::EMPTY;
         }
-        // Halfway between the incident surface (v - r_inc n) and the reference surface
-        // (v's projection on the reference edge, then r_ref out along n).
-        let mid = v + (0.5 * (r_ref - r_inc - core)) * n;
-        let (va, vb) = if flip {
-            (v_inc[k], v_ref[k])
-        } else {
-            (v_ref[k], v_inc[k])
-        };
-        let id: FeatureId = (va as u16) << 8 | vb as u16;
-        manifold.points[manifold.count] = ManifoldPoint {
+        let n = c.d / dist;
+        let [ref_start, ref_end] = self.ref_vertices;
+        let v_ref = if c.s < 0.5 { ref_start } else { ref_end };
+        let [inc_start, inc_end] = self.inc_vertices;
+        let v_inc = if c.t < 0.5 { inc_start } else { inc_end };
+        // Halfway between the reference surface (c_ref + r_ref n) and the incident one.
+        let mid = c.c_ref + (self.r_ref + 0.5 * separation) * n;
+        let mut manifold = Manifold::EMPTY;
+        manifold.normal = xf_a.q.rotate(self.from_a_to_b(n));
+        manifold.points[0] = ManifoldPoint {
             point: xf_a.apply(mid),
             separation,
-            id,
+            id: self.id(v_ref, v_inc),
         };
-        manifold.count += 1;
+        manifold.count = 1;
+        manifold
     }
-    manifold
+
+    /// The incident edge clipped to the reference edge's side planes (its tangent, bounded by
+    /// its two end vertices), each end in its slot; None when it lies wholly past one.
+    fn side_planes(&self) -> Option<[Vec2; 2]> {
+        // The edge runs counter-clockwise with the normal on its right: its direction is the
+        // normal turned a quarter left, already of unit length.
+        let tangent = Vec2::new(-self.n.y, self.n.x);
+        clip_segment(self.seg, -tangent, -tangent.dot(self.r1))
+            .and_then(|seg| clip_segment(seg, tangent, tangent.dot(self.r2)))
+    }
+
+    /// The clipped incident edge `seg` projected onto the reference face (appendix eqs.
+    /// 45-48), keeping the points whose separation is at most `margin` (m).
+    fn project(&self, seg: [Vec2; 2], xf_a: Transform, margin: Real) -> Manifold {
+        let n = self.n;
+        let mut manifold = Manifold::EMPTY;
+        manifold.normal = xf_a.q.rotate(self.from_a_to_b(n));
+        // The incident edge runs against the reference edge: its start (slot 0) lies towards
+        // the reference edge's end vertex and its end (slot 1) towards the start vertex.
+        let [ref_start, ref_end] = self.ref_vertices;
+        let v_ref = [ref_end, ref_start];
+        for (k, v) in seg.into_iter().enumerate() {
+            let core = n.dot(v - self.r1);
+            let separation = core - self.r_ref - self.r_inc;
+            if separation > margin {
+                continue;
+            }
+            // Halfway between the incident surface (v - r_inc n) and the reference surface
+            // (v's projection on the reference edge, then r_ref out along n).
+            let mid = v + (0.5 * (self.r_ref - self.r_inc - core)) * n;
+            manifold.points[manifold.count] = ManifoldPoint {
+                point: xf_a.apply(mid),
+                separation,
+                id: self.id(v_ref[k], self.inc_vertices[k]),
+            };
+            manifold.count += 1;
+        }
+        manifold
+    }
+
+    /// The id of a point named by reference vertex `v_ref` and incident vertex `v_inc`,
+    /// written (A's vertex, B's vertex) whichever polygon is the reference, so the id survives
+    /// the reference face switching sides between steps.
+    fn id(&self, v_ref: usize, v_inc: usize) -> FeatureId {
+        let (va, vb) = if self.flip {
+            (v_inc, v_ref)
+        } else {
+            (v_ref, v_inc)
+        };
+        (va as FeatureId) << 8 | vb as FeatureId
+    }
+
+    /// A normal `n` out of the reference face, as the manifold's normal from A to B.
+    fn from_a_to_b(&self, n: Vec2) -> Vec2 {
+        if self.flip {
+            -n
+        } else {
+            n
+        }
+    }
 }
 
 #[cfg(test)]
@@ -401,7 +493,20 @@ mod tests {
             );
             let margin = 0.2 * next();
             let fast = collide_rects(ha, xa, hb, xb, margin);
-            let general = collide_polygons(&poly(ha), 0.0, xa, &poly(hb), 0.0, xb, margin);
+            let (pa, pb) = (poly(ha), poly(hb));
+            let general = collide_polygons(
+                Rounded {
+                    core: &pa,
+                    radius: 0.0,
+                    xf: xa,
+                },
+                Rounded {
+                    core: &pb,
+                    radius: 0.0,
+                    xf: xb,
+                },
+                margin,
+            );
             assert_eq!(fast.count, general.count, "{ha:?} {xa:?} {hb:?} {xb:?}");
             if fast.count > 0 {
                 compared += 1;

@@ -20,7 +20,7 @@
 //! "Replaced by the face normal" means the contact is rebuilt as a face contact: the other
 //! body's incident edge clipped to the segment's extent and measured along the face normal.
 
-use super::polygon::{collide_polygons, incident_edge};
+use super::polygon::{collide_polygons, incident_edge, Rounded};
 use super::{collide_polygon_circle, core, FeatureId, Manifold, ManifoldPoint};
 use crate::physics::convex::Polygon;
 use crate::physics::math::{Real, Rot, Transform, Vec2};
@@ -67,7 +67,19 @@ pub fn collide_segment(
         Shape::Circle { radius } => {
             collide_polygon_circle(&line, s.radius, xf_l, *radius, xf_b, margin)
         }
-        _ => collide_polygons(&line, s.radius, xf_l, &core_b, rb, xf_b, margin),
+        _ => {
+            let segment = Rounded {
+                core: &line,
+                radius: s.radius,
+                xf: xf_l,
+            };
+            let other = Rounded {
+                core: &core_b,
+                radius: rb,
+                xf: xf_b,
+            };
+            collide_polygons(segment, other, margin)
+        }
     };
     if m.count == 0 || (s.prev.is_none() && s.next.is_none() && !s.one_sided) {
         // Nothing found, or a lone two-sided segment: a capsule core like any other.

@@ -10,7 +10,7 @@ mod circle;
 mod polygon;
 mod segment;
 
-pub(crate) use capsule::collide_capsules;
+pub(crate) use capsule::{collide_capsules, Capsule};
 pub(crate) use circle::{collide_circles, collide_polygon_circle};
 pub(crate) use polygon::{collide_polygons, collide_rects, Rounded};
 pub(crate) use segment::collide_segment;
@@ -98,7 +98,19 @@ pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: R
                 half_length: hb,
                 radius: rb,
             },
-        ) => collide_capsules(*ha, *ra, xf_a, *hb, *rb, xf_b, margin),
+        ) => {
+            let capsule_a = Capsule {
+                half_length: *ha,
+                radius: *ra,
+                xf: xf_a,
+            };
+            let capsule_b = Capsule {
+                half_length: *hb,
+                radius: *rb,
+                xf: xf_b,
+            };
+            collide_capsules(capsule_a, capsule_b, margin)
+        }
         (Shape::Circle { radius: ra }, _) => {
             let (core_b, rb) = core(b);
             collide_polygon_circle(&core_b, rb, xf_b, *ra, xf_a, margin).swapped()

@@ -44,17 +44,7 @@ pub fn collide_segment(
     xf_b: Transform,
     margin: Real,
 ) -> Manifold {
-    // The segment's own frame: origin at its middle, x along a -> b, y its left normal.
-    let e = s.b - s.a;
-    let half = 0.5 * e.length();
-    let dir = e / (2.0 * half);
-    let xf_l = Transform {
-        p: xf_a.apply(0.5 * (s.a + s.b)),
-        q: Rot {
-            c: xf_a.q.c * dir.x - xf_a.q.s * dir.y,
-            s: xf_a.q.s * dir.x + xf_a.q.c * dir.y,
-        },
-    };
+    let (xf_l, half) = own_frame(s, xf_a);
     let line = Polygon::segment(half);
     let (core_b, rb) = core(other);
     // Which side of the line the other body's centre is on.
@@ -68,17 +58,17 @@ pub fn collide_segment(
             collide_polygon_circle(&line, s.radius, xf_l, *radius, xf_b, margin)
         }
         _ => {
-            let segment = Rounded {
+            let rounded_a = Rounded {
                 core: &line,
                 radius: s.radius,
                 xf: xf_l,
             };
-            let other = Rounded {
+            let rounded_b = Rounded {
                 core: &core_b,
                 radius: rb,
                 xf: xf_b,
             };
-            collide_polygons(segment, other, margin)
+            collide_polygons(rounded_a, rounded_b, margin)
         }
     };
     if m.count == 0 || (s.prev.is_none() && s.next.is_none() && !s.one_sided) {
@@ -86,10 +76,68 @@ pub fn collide_segment(
         return m;
     }
     let n = xf_l.q.inv_rotate(m.normal);
+    match verdict(s, n, side, xf_a, xf_l) {
+        Verdict::Keep => m,
+        Verdict::Empty => Manifold::EMPTY,
+        Verdict::Face => {
+            // The other core in the segment's frame.
+            let rel = Transform {
+                p: centre,
+                q: Rot {
+                    c: xf_l.q.c * xf_b.q.c + xf_l.q.s * xf_b.q.s,
+                    s: xf_l.q.c * xf_b.q.s - xf_l.q.s * xf_b.q.c,
+                },
+            };
+            let face = SegmentFace {
+                xf: xf_l,
+                half,
+                radius: s.radius,
+                side,
+            };
+            face_contact(&face, &core_b.transformed(rel), rb, margin)
+        }
+    }
+}
+
+/// The segment's own frame in the world (origin at its middle, x along a -> b, y its left
+/// normal) for a segment body at `xf_a`, and half the segment's length (m): in that frame
+/// the segment runs (-half, 0)..(half, 0).
+fn own_frame(s: &Segment, xf_a: Transform) -> (Transform, Real) {
+    let e = s.b - s.a;
+    let half = 0.5 * e.length();
+    let dir = e / (2.0 * half);
+    let xf_l = Transform {
+        p: xf_a.apply(0.5 * (s.a + s.b)),
+        q: Rot {
+            c: xf_a.q.c * dir.x - xf_a.q.s * dir.y,
+            s: xf_a.q.s * dir.x + xf_a.q.c * dir.y,
+        },
+    };
+    (xf_l, half)
+}
+
+/// What the neighbours make of a manifold.
+enum Verdict {
+    /// Keep it as found.
+    Keep,
+    /// Drop it: another piece reports this contact.
+    Empty,
+    /// Rebuild it along the face normal.
+    Face,
+}
+
+/// What segment `s`'s neighbours make of a manifold normal `n` (in the segment's own frame
+/// `xf_l`; `xf_a` is the segment body's transform) for a body on `side` (+1 left, -1 right),
+/// by the module's rules: a normal to the back (or square to the face) is rebuilt on the
+/// face; one leaning past an end with no neighbour there is kept; over a convex corner it is
+/// dropped at `a` (the previous piece reports it) and kept at `b` within the corner's normals;
+/// over a straight or concave joint it is rebuilt on the face.
+fn verdict(s: &Segment, n: Vec2, side: Real, xf_a: Transform, xf_l: Transform) -> Verdict {
+    let e = s.b - s.a;
     let face = Vec2::new(0.0, side);
     // Back in A's frame, for the neighbours.
     let edge_dir = |from: Vec2, to: Vec2| to - from;
-    let verdict = if n.y * side <= LEAN_TOL {
+    if n.y * side <= LEAN_TOL {
         Verdict::Face
     } else if n.x < -LEAN_TOL {
         match s.prev {
@@ -119,39 +167,7 @@ pub fn collide_segment(
         }
     } else {
         Verdict::Keep
-    };
-    match verdict {
-        Verdict::Keep => m,
-        Verdict::Empty => Manifold::EMPTY,
-        Verdict::Face => {
-            let rel = Transform {
-                p: centre,
-                q: Rot {
-                    c: xf_l.q.c * xf_b.q.c + xf_l.q.s * xf_b.q.s,
-                    s: xf_l.q.c * xf_b.q.s - xf_l.q.s * xf_b.q.c,
-                },
-            };
-            face_contact(
-                half,
-                s.radius,
-                side,
-                &core_b.transformed(rel),
-                rb,
-                xf_l,
-                margin,
-            )
-        }
     }
-}
-
-/// What the neighbours make of a manifold.
-enum Verdict {
-    /// Keep it as found.
-    Keep,
-    /// Drop it: another piece reports this contact.
-    Empty,
-    /// Rebuild it along the face normal.
-    Face,
 }
 
 /// Unit normal to the left of direction `d`.
@@ -160,19 +176,21 @@ fn left(d: Vec2) -> Vec2 {
     Vec2::new(-d.y, d.x)
 }
 
-/// A face contact along the normal (0, `side`) of the segment (-half, 0)..(half, 0) grown by
-/// `ra`, against `inc` (the other core, in the segment's frame) grown by `rb`: its edge most
-/// against the normal, clipped to the segment's extent. Ids as the clipper gives them when
-/// the segment's face is the reference.
-fn face_contact(
+/// The segment's face that a contact is rebuilt on: the line (-`half`, 0)..(`half`, 0) of the
+/// segment's own frame `xf`, grown by `radius` (m), facing (0, `side`).
+struct SegmentFace {
+    xf: Transform,
     half: Real,
-    ra: Real,
+    radius: Real,
     side: Real,
-    inc: &Polygon,
-    rb: Real,
-    xf_l: Transform,
-    margin: Real,
-) -> Manifold {
+}
+
+/// A face contact along the normal of `face` against `inc` (the other core, in the segment's
+/// frame) grown by `rb` (m): its edge most against the normal, clipped to the segment's
+/// extent, keeping points whose separation is at most `margin` (m). Ids as the clipper gives
+/// them when the segment's face is the reference.
+fn face_contact(face: &SegmentFace, inc: &Polygon, rb: Real, margin: Real) -> Manifold {
+    let (ra, side) = (face.radius, face.side);
     let n = Vec2::new(0.0, side);
     // The reference edge of `Polygon::segment`: edge 1 faces +y, edge 0 faces -y.
     let ref_edge: usize = if side > 0.0 { 1 } else { 0 };
@@ -182,29 +200,13 @@ fn face_contact(
         let best = incident_edge(inc, n);
         (best, (best + 1) % inc.count)
     };
-    let mut points = [inc.vertices[i1], inc.vertices[i2]];
-    // Side planes x >= -half and x <= half.
-    for (sign, limit) in [(-1.0, half), (1.0, half)] {
-        let d0 = sign * points[0].x - limit;
-        let d1 = sign * points[1].x - limit;
-        match (d0 <= 0.0, d1 <= 0.0) {
-            (true, true) => {}
-            (false, false) => return Manifold::EMPTY,
-            (in0, _) => {
-                let t = d0 / (d0 - d1);
-                let cut = points[0] + t * (points[1] - points[0]);
-                if in0 {
-                    points[1] = cut;
-                } else {
-                    points[0] = cut;
-                }
-            }
-        }
-    }
+    let Some(points) = clip_to_extent([inc.vertices[i1], inc.vertices[i2]], face.half) else {
+        return Manifold::EMPTY;
+    };
     let v_ref = [(ref_edge + 1) % 2, ref_edge];
     let v_inc = [i1, i2];
     let mut m = Manifold::EMPTY;
-    m.normal = xf_l.q.rotate(n);
+    m.normal = face.xf.q.rotate(n);
     let slots = if inc.count == 1 { 1 } else { 2 };
     for k in 0..slots {
         let v = points[k];
@@ -220,11 +222,34 @@ fn face_contact(
             (v_ref[k] as FeatureId) << 8 | v_inc[k] as FeatureId
         };
         m.points[m.count] = ManifoldPoint {
-            point: xf_l.apply(mid),
+            point: face.xf.apply(mid),
             separation,
             id,
         };
         m.count += 1;
     }
     m
+}
+
+/// The edge `points` (segment frame, m) clipped to the segment's side planes x >= -`half` and
+/// x <= `half`, each end staying in its slot; None when it lies wholly past one of them.
+fn clip_to_extent(mut points: [Vec2; 2], half: Real) -> Option<[Vec2; 2]> {
+    for (sign, limit) in [(-1.0, half), (1.0, half)] {
+        let d0 = sign * points[0].x - limit;
+        let d1 = sign * points[1].x - limit;
+        match (d0 <= 0.0, d1 <= 0.0) {
+            (true, true) => {}
+            (false, false) => return None,
+            (in0, _) => {
+                let t = d0 / (d0 - d1);
+                let cut = points[0] + t * (points[1] - points[0]);
+                if in0 {
+                    points[1] = cut;
+                } else {
+                    points[0] = cut;
+                }
+            }
+        }
+    }
+    Some(points)
 }

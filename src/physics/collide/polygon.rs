@@ -380,7 +380,7 @@ impl Clip {
         // Halfway between the reference surface (c_ref + r_ref n) and the incident one.
         let mid = c.c_ref + (self.r_ref + 0.5 * separation) * n;
         let mut manifold = Manifold::EMPTY;
-        manifold.normal = xf_a.q.rotate(self.from_a_to_b(n));
+        manifold.normal = xf_a.q.rotate(self.towards_b(n));
         manifold.points[0] = ManifoldPoint {
             point: xf_a.apply(mid),
             separation,
@@ -405,7 +405,7 @@ impl Clip {
     fn project(&self, seg: [Vec2; 2], xf_a: Transform, margin: Real) -> Manifold {
         let n = self.n;
         let mut manifold = Manifold::EMPTY;
-        manifold.normal = xf_a.q.rotate(self.from_a_to_b(n));
+        manifold.normal = xf_a.q.rotate(self.towards_b(n));
         // The incident edge runs against the reference edge: its start (slot 0) lies towards
         // the reference edge's end vertex and its end (slot 1) towards the start vertex.
         let [ref_start, ref_end] = self.ref_vertices;
@@ -441,8 +441,9 @@ impl Clip {
         (va as FeatureId) << 8 | vb as FeatureId
     }
 
-    /// A normal `n` out of the reference face, as the manifold's normal from A to B.
-    fn from_a_to_b(&self, n: Vec2) -> Vec2 {
+    /// A normal `n` out of the reference face, turned to point from A towards B as the
+    /// manifold's normal does.
+    fn towards_b(&self, n: Vec2) -> Vec2 {
         if self.flip {
             -n
         } else {

@@ -93,19 +93,18 @@ pub struct Settings {
     /// Soft step: give each island the work its load calls for ("leave out what a scene does
     /// not need"). An island is loaded when a contact in it has carried at least
     /// `stiff_load_ratio` times the weight of the lighter body it touches for two steps
-    /// running. A loaded island braced sideways (a pyramid, a pile: less than twice as tall
-    /// as wide, along gravity, with at least `stiff_load_ratio` bodies) keeps the base
-    /// substeps with a relax pass, a normal relax pass and creeping springs. Any other
-    /// loaded island (a
-    /// stack) is solved with 1.5
-    /// times the substeps and contact stiffness; from 2.25 times that load (a spring's
-    /// compression goes as load / omega^2), or where it joins bodies whose masses differ by
-    /// `stiff_load_ratio`, with 1.75 times the substeps; where it joins masses
-    /// `extreme_mass_ratio` apart, with four times the substeps and stiffness and eight times
-    /// the relax passes. Every other island keeps the base settings and pays nothing. Default
-    /// **on**: with it the defaults pass every case of the stiff suite (jittered 20- and
-    /// 50-box stacks, 100:1 and 1000:1 mass ratios both ways, the symmetric pyramid of base
-    /// 30), which fixed settings pass only at 2.2-2.5 times the cost of every step.
+    /// running, or joins bodies whose masses differ that much. A loaded island braced
+    /// sideways (a pyramid, a pile: less than twice as tall as wide, along gravity, with at
+    /// least `stiff_load_ratio` bodies) keeps the base substeps with a relax pass, a normal
+    /// relax pass and creeping springs. Any other loaded island (a stack) is solved with 1.5
+    /// times the substeps and contact stiffness, and with 1.75 times from 2.25 times that load
+    /// (a spring's compression goes as load / omega^2) or where masses differ by
+    /// `stiff_load_ratio`. An island joining masses `extreme_mass_ratio` apart gets four times
+    /// the substeps and stiffness and eight times the relax passes. Every other island keeps
+    /// the base settings and pays nothing. Default **on**: with it the defaults pass every
+    /// case of the stiff suite (jittered 20- and 50-box stacks, 100:1 and 1000:1 mass ratios
+    /// both ways, the symmetric pyramid of base 30), which fixed settings pass only at 2.2-2.5
+    /// times the cost of every step.
     pub adaptive_stiffness: bool,
     /// Soft step, adaptive stiffness: the load ratio (a contact's force over the lighter body's
     /// weight, or the pair's mass ratio) from which an island gets more work. Default 12: a

@@ -27,7 +27,8 @@ const EIGHT_LANES_FROM: usize = 64;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Width {
     /// One ([`Lanes1`]): the kernel as plain scalar code, packed as the lanes are (tests
-    /// compare it with the lanes, bit for bit).
+    /// compare it with the lanes, bit for bit; the overflow always runs at this width).
+    #[cfg_attr(not(test), allow(dead_code))]
     One,
     /// Four ([`Lanes4`]: SSE2 on x86-64).
     Four,
@@ -147,26 +148,25 @@ impl<L: Wide> Packed<L> {
     /// the normal relax also without friction).
     #[inline(always)]
     fn solve(&mut self, bodies: &mut [SolverBody], kind: PassKind, inv_h: Real, push_out: Real) {
-        let pass = |use_bias: bool| Pass {
+        // (No closure here: it would not take the AVX2 compilation of the caller.)
+        let mut pass = Pass {
             inv_h: L::splat(inv_h),
-            use_bias,
+            use_bias: false,
             push_out: L::splat(-push_out),
         };
         match kind {
             PassKind::Biased => {
-                let pass = pass(true);
+                pass.use_bias = true;
                 for bundle in self.bundles() {
                     bundle.solve(bodies, &pass, true);
                 }
             }
             PassKind::Relax => {
-                let pass = pass(false);
                 for bundle in self.bundles() {
                     bundle.solve(bodies, &pass, true);
                 }
             }
             PassKind::NormalRelax => {
-                let pass = pass(false);
                 for bundle in self.bundles() {
                     bundle.solve(bodies, &pass, false);
                 }

@@ -377,7 +377,13 @@ impl<L: Wide> Bundle<L> {
         let (mut a, mut b) = self.gather(bodies);
         let (n, t) = self.axes();
         let dp_n = (b.dpx - a.dpx) * n.0 + (b.dpy - a.dpy) * n.1;
-        let coeffs = [0, 1].map(|j| self.coefficients(&self.p[j], &a, &b, dp_n, pass));
+        // (Written out, here and below, rather than mapped by a closure: a closure does not
+        // take the AVX2 compilation of the kernel it is called from, and nothing but inlined
+        // functions may stand between the eight-lane kernels and their instructions.)
+        let coeffs = [
+            self.coefficients(&self.p[0], (&a, &b), dp_n, pass),
+            self.coefficients(&self.p[1], (&a, &b), dp_n, pass),
+        ];
         match self.kind {
             BundleKind::Block => self.solve_block(&mut a, &mut b, &coeffs),
             BundleKind::Points => {
@@ -418,8 +424,7 @@ impl<L: Wide> Bundle<L> {
     fn coefficients(
         &self,
         p: &PointLanes<L>,
-        a: &BodyLanes<L>,
-        b: &BodyLanes<L>,
+        (a, b): (&BodyLanes<L>, &BodyLanes<L>),
         dp_n: L,
         pass: &Pass<L>,
     ) -> (L, L, L) {
@@ -450,10 +455,10 @@ impl<L: Wide> Bundle<L> {
     #[inline(always)]
     fn solve_block(&mut self, a: &mut BodyLanes<L>, b: &mut BodyLanes<L>, coeffs: &[(L, L, L); 2]) {
         let (vn, kl) = self.block_velocities(a, b);
-        let r = [0, 1].map(|i| {
-            let (bias, _, impulse_scale) = coeffs[i];
-            vn[i] - kl[i] - (impulse_scale * (vn[i] - kl[i]) - bias)
-        });
+        let r = [
+            soft_rhs(vn[0], kl[0], coeffs[0]),
+            soft_rhs(vn[1], kl[1], coeffs[1]),
+        ];
         let [l0, l1] = [self.p[0].normal_impulse, self.p[1].normal_impulse];
         let (x0, x1, _) = block_lcp(self, r, [l0, l1]);
         self.apply_block(a, b, [x0 - l0, x1 - l1]);
@@ -505,16 +510,16 @@ impl<L: Wide> Bundle<L> {
         let (mut a, mut b) = self.gather(bodies);
         let (n, _) = self.axes();
         let e = bounce.restitution;
-        let bounces = [0, 1].map(|j| {
-            let p = &self.p[j];
-            let pushed = (p.total_normal_impulse + p.normal_impulse).cmpgt(L::ZERO);
-            (-threshold).cmpgt(bounce.relative_velocity[j]) & pushed & e.cmpgt(L::ZERO)
-        });
-        let aim = bounce.relative_velocity.map(|v| e * v);
+        let bounces = [
+            self.bounces(0, bounce, threshold),
+            self.bounces(1, bounce, threshold),
+        ];
+        let v0 = bounce.relative_velocity;
+        let aim = [e * v0[0], e * v0[1]];
         let mut by_block = None;
         if self.kind == BundleKind::Block {
             let (vn, kl) = self.block_velocities(&a, &b);
-            let r = [0, 1].map(|i| vn[i] - kl[i] + aim[i]);
+            let r = [vn[0] - kl[0] + aim[0], vn[1] - kl[1] + aim[1]];
             let l = [self.p[0].normal_impulse, self.p[1].normal_impulse];
             let (x0, x1, fits) = block_lcp(self, r, l);
             let both = bounces[0] & bounces[1] & fits;
@@ -540,6 +545,16 @@ impl<L: Wide> Bundle<L> {
         self.scatter(bodies, &a, &b);
     }
 
+    /// Which lanes' point `j` bounces: it approached faster than `threshold`, pushed in the
+    /// step, and its contact has restitution.
+    #[inline(always)]
+    fn bounces(&self, j: usize, bounce: &BounceLanes<L>, threshold: L) -> L::Mask {
+        let p = &self.p[j];
+        let pushed = (p.total_normal_impulse + p.normal_impulse).cmpgt(L::ZERO);
+        let fast = (-threshold).cmpgt(bounce.relative_velocity[j]);
+        fast & pushed & bounce.restitution.cmpgt(L::ZERO)
+    }
+
     /// Each lane's points' impulses at the end of the solve (lanes beyond `L::WIDTH` unused),
     /// read out field by field: each field's lanes once, not once per lane.
     #[inline(always)]
@@ -561,6 +576,14 @@ impl<L: Wide> Bundle<L> {
         }
         ends
     }
+}
+
+/// Row i's right-hand side of the soft block update for normal velocity `vn`, (K P)_i `kl`
+/// and the point's (bias, mass scale, impulse scale): the velocity with the accumulated
+/// impulse taken out, less the velocity the soft update aims at.
+#[inline(always)]
+fn soft_rhs<L: Wide>(vn: L, kl: L, (bias, _, impulse_scale): (L, L, L)) -> L {
+    vn - kl - (impulse_scale * (vn - kl) - bias)
 }
 
 /// The two-point contact LCP, lane by lane: find x >= 0 with w = K x + r >= 0 and x . w = 0

@@ -26,8 +26,21 @@ impl World {
     /// Islands and sleep: bodies joined by contacts form islands; an island whose every body
     /// has rested (|v| + |w| r below the threshold) for `time_to_sleep` falls asleep together.
     pub(super) fn update_sleep(&mut self, dt: Real) {
+        self.update_rest_times(dt);
+        self.unite_awake_islands();
+        self.put_rested_islands_to_sleep();
+        if self.islands.changed.is_empty() {
+            return;
+        }
+        self.broad_phase
+            .sweep
+            .set_passive(&self.islands.changed, true);
+        self.set_sleeping_contacts_aside();
+    }
+
+    /// Each awake body's time at rest: how long it has been slower than the threshold.
+    fn update_rest_times(&mut self, dt: Real) {
         let threshold = self.settings.sleep_threshold;
-        let n = self.bodies.slots.len();
         for slot in self.bodies.slots.iter_mut() {
             if let Some(b) = slot.body.as_mut().filter(|b| b.is_active()) {
                 let speed =
@@ -39,64 +52,57 @@ impl World {
                 };
             }
         }
-        // Islands of awake dynamic bodies (static bodies join nothing).
-        let active =
-            |slots: &[Slot], i: u32| slots[i as usize].body.as_ref().is_some_and(Body::is_active);
+    }
+
+    /// Islands of awake dynamic bodies (static bodies join nothing), by union-find.
+    fn unite_awake_islands(&mut self) {
         let slots = &self.bodies.slots;
-        self.islands.contact_bodies.clear();
-        self.islands
-            .contact_bodies
-            .extend(self.contacts.awake.iter().map(|c| [c.a, c.b]));
-        unite_islands(
-            &mut self.islands.parent,
-            n,
-            &self.islands.contact_bodies,
-            |i| active(slots, i),
-        );
-        // The island rests as long as its most restless body.
-        self.islands.rest.clear();
-        self.islands.rest.resize(n, Real::INFINITY);
-        for i in 0..n as u32 {
-            if let Some(b) = self.bodies.slots[i as usize]
-                .body
-                .as_ref()
-                .filter(|b| b.is_active())
-            {
-                let root = find(&mut self.islands.parent, i) as usize;
-                self.islands.rest[root] = self.islands.rest[root].min(b.sleep_time);
+        let pairs = &mut self.islands.contact_bodies;
+        pairs.clear();
+        pairs.extend(self.contacts.awake.iter().map(|c| [c.a, c.b]));
+        unite_islands(&mut self.islands.parent, slots.len(), pairs, |i| {
+            is_active(slots, i)
+        });
+    }
+
+    /// An island rests as long as its most restless body: the islands that have rested
+    /// `time_to_sleep` fall asleep, their bodies listed in `changed`.
+    fn put_rested_islands_to_sleep(&mut self) {
+        let n = self.bodies.slots.len();
+        let islands = &mut self.islands;
+        islands.rest.clear();
+        islands.rest.resize(n, Real::INFINITY);
+        for (i, slot) in self.bodies.slots.iter().enumerate() {
+            if let Some(b) = slot.body.as_ref().filter(|b| b.is_active()) {
+                let root = find(&mut islands.parent, i as u32) as usize;
+                islands.rest[root] = islands.rest[root].min(b.sleep_time);
             }
         }
-        self.islands.changed.clear();
-        for i in 0..n as u32 {
-            let root = find(&mut self.islands.parent, i);
-            if let Some(b) = self.bodies.slots[i as usize]
-                .body
-                .as_mut()
-                .filter(|b| b.is_active())
-            {
-                if self.islands.rest[root as usize] >= self.settings.time_to_sleep {
-                    b.awake = false;
-                    b.linear_velocity = Vec2::ZERO;
-                    b.angular_velocity = 0.0;
-                    b.sleep_island = root;
-                    self.islands.changed.push(i);
-                }
+        islands.changed.clear();
+        for (i, slot) in self.bodies.slots.iter_mut().enumerate() {
+            let root = find(&mut islands.parent, i as u32);
+            let Some(b) = slot.body.as_mut().filter(|b| b.is_active()) else {
+                continue;
+            };
+            if islands.rest[root as usize] >= self.settings.time_to_sleep {
+                b.awake = false;
+                b.linear_velocity = Vec2::ZERO;
+                b.angular_velocity = 0.0;
+                b.sleep_island = root;
+                islands.changed.push(i as u32);
             }
         }
-        if self.islands.changed.is_empty() {
-            return;
-        }
-        self.broad_phase
-            .sweep
-            .set_passive(&self.islands.changed, true);
-        // Contacts with no awake body left leave the graph and are kept aside, unsolved, for
-        // when the island wakes.
+    }
+
+    /// Contacts with no awake body left leave the graph and are kept aside, unsolved, for
+    /// when their island wakes.
+    fn set_sleeping_contacts_aside(&mut self) {
         let slots = &self.bodies.slots;
         let contacts = &mut self.contacts;
         let mut kept = 0;
         for k in 0..contacts.awake.len() {
             let mut c = contacts.awake[k];
-            if !active(slots, c.a) && !active(slots, c.b) {
+            if !is_active(slots, c.a) && !is_active(slots, c.b) {
                 contacts.graph.remove(c.colour, [c.a, c.b]);
                 c.colour = UNCOLOURED;
                 // Not kept with a kinematic body: it finds the sleeper again when it moves.
@@ -215,4 +221,9 @@ pub(super) fn find(parent: &mut [u32], mut i: u32) -> u32 {
         i = p;
     }
     i
+}
+
+/// Whether slot `i` holds an awake dynamic body.
+fn is_active(slots: &[Slot], i: u32) -> bool {
+    slots[i as usize].body.as_ref().is_some_and(Body::is_active)
 }

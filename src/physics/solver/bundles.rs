@@ -51,18 +51,23 @@ impl Width {
 /// that order, with the restitution lanes of the bundles that bounce.
 #[derive(Clone, Debug)]
 struct Packed<L: Wide> {
+    /// While packing: a list per (colour, kind).
     lists: Vec<Vec<Bundle<L>>>,
+    /// Once packed: the lists that hold a bundle, moved out of `lists` in solve order (a scene
+    /// uses a few of the 64, the ground's contacts in the top colours), so the stages walk
+    /// them as one sequence; and the slot each came from, to give it back.
+    packed: Vec<Vec<Bundle<L>>>,
+    slots: Vec<u16>,
     bounces: Vec<BounceLanes<L>>,
-    /// Lists in use: up to the last one with a bundle (a small scene uses a few).
-    used: usize,
 }
 
 impl<L: Wide> Default for Packed<L> {
     fn default() -> Self {
         Packed {
             lists: Vec::new(),
+            packed: Vec::new(),
+            slots: Vec::new(),
             bounces: Vec::new(),
-            used: 0,
         }
     }
 }
@@ -80,11 +85,11 @@ impl<L: Wide> Packed<L> {
     /// Empty, with `lists` lists.
     fn reset(&mut self, lists: usize) {
         self.lists.resize_with(lists, Vec::new);
-        for list in &mut self.lists {
+        for (mut list, slot) in self.packed.drain(..).zip(self.slots.drain(..)) {
             list.clear();
+            self.lists[slot as usize] = list;
         }
         self.bounces.clear();
-        self.used = 0;
     }
 
     /// Write contact `c` (index `i`) with its constraint `k` into the next lane of list
@@ -116,28 +121,25 @@ impl<L: Wide> Packed<L> {
         }
     }
 
-    /// Mark the lists in use, once packed.
+    /// Move the lists in use out, in solve order, once packed.
     fn close(&mut self) {
-        self.used = self
-            .lists
-            .iter()
-            .rposition(|list| !list.is_empty())
-            .map_or(0, |i| i + 1);
-    }
-
-    /// Every bundle in use, in solve order.
-    #[inline(always)]
-    fn bundles(&mut self) -> impl Iterator<Item = &mut Bundle<L>> {
-        self.lists[..self.used].iter_mut().flatten()
+        for (slot, list) in self.lists.iter_mut().enumerate() {
+            if !list.is_empty() {
+                self.packed.push(std::mem::take(list));
+                self.slots.push(slot as u16);
+            }
+        }
     }
 
     /// The warm start of a substep (or, with warm starting off, zeroed impulses).
     #[inline(always)]
     fn warm_start(&mut self, bodies: &mut [SolverBody], warm_starting: bool) {
-        for bundle in self.bundles() {
-            if warm_starting {
+        if warm_starting {
+            for bundle in self.packed.iter_mut().flatten() {
                 bundle.warm_start(bodies);
-            } else {
+            }
+        } else {
+            for bundle in self.packed.iter_mut().flatten() {
                 bundle.clear_impulses();
             }
         }
@@ -148,26 +150,35 @@ impl<L: Wide> Packed<L> {
     /// the normal relax also without friction).
     #[inline(always)]
     fn solve(&mut self, bodies: &mut [SolverBody], kind: PassKind, inv_h: Real, push_out: Real) {
-        // (No closure here: it would not take the AVX2 compilation of the caller.)
-        let mut pass = Pass {
-            inv_h: L::splat(inv_h),
-            use_bias: false,
-            push_out: L::splat(-push_out),
-        };
+        let (inv_h, push_out) = (L::splat(inv_h), L::splat(-push_out));
         match kind {
             PassKind::Biased => {
-                pass.use_bias = true;
-                for bundle in self.bundles() {
+                let pass = Pass {
+                    inv_h,
+                    use_bias: true,
+                    push_out,
+                };
+                for bundle in self.packed.iter_mut().flatten() {
                     bundle.solve(bodies, &pass, true);
                 }
             }
             PassKind::Relax => {
-                for bundle in self.bundles() {
+                let pass = Pass {
+                    inv_h,
+                    use_bias: false,
+                    push_out,
+                };
+                for bundle in self.packed.iter_mut().flatten() {
                     bundle.solve(bodies, &pass, true);
                 }
             }
             PassKind::NormalRelax => {
-                for bundle in self.bundles() {
+                let pass = Pass {
+                    inv_h,
+                    use_bias: false,
+                    push_out,
+                };
+                for bundle in self.packed.iter_mut().flatten() {
                     bundle.solve(bodies, &pass, false);
                 }
             }
@@ -178,7 +189,7 @@ impl<L: Wide> Packed<L> {
     #[inline(always)]
     fn apply_restitution(&mut self, bodies: &mut [SolverBody], threshold: Real) {
         let threshold = L::splat(threshold);
-        for bundle in self.lists[..self.used].iter_mut().flatten() {
+        for bundle in self.packed.iter_mut().flatten() {
             if bundle.bounce != NO_BOUNCE {
                 let bounce = &self.bounces[bundle.bounce as usize];
                 bundle.apply_restitution(bounce, bodies, threshold);
@@ -194,7 +205,7 @@ impl<L: Wide> Packed<L> {
         contacts: &mut [Contact],
         then: &mut impl FnMut(&mut Contact, &[PointImpulses; 2]),
     ) {
-        let mut bundles = self.lists[..self.used].iter().flatten().peekable();
+        let mut bundles = self.packed.iter().flatten().peekable();
         while let Some(bundle) = bundles.next() {
             if let Some(next) = bundles.peek() {
                 for &ci in next.contact.as_ref() {
@@ -267,6 +278,7 @@ impl ContactBundles {
     }
 
     /// The warm start of a substep, or with `warm_starting` off zeroed impulses.
+    #[inline]
     pub fn warm_start(&mut self, bodies: &mut [SolverBody], warm_starting: bool) {
         self.overflow.warm_start(bodies, warm_starting);
         match self.built {
@@ -278,6 +290,7 @@ impl ContactBundles {
 
     /// One solve pass of `kind`; `inv_h` is 1 / substep (1/s), `push_out` the push-out cap
     /// (m/s).
+    #[inline]
     pub fn solve(
         &mut self,
         bodies: &mut [SolverBody],
@@ -294,6 +307,7 @@ impl ContactBundles {
     }
 
     /// Restitution above `threshold` (m/s), where any contact bounces.
+    #[inline]
     pub fn apply_restitution(&mut self, bodies: &mut [SolverBody], threshold: Real) {
         if !self.bouncy {
             return;
@@ -323,7 +337,7 @@ impl ContactBundles {
     /// Contacts in the overflow at the last build.
     #[cfg(test)]
     pub fn overflow_count(&self) -> usize {
-        self.overflow.lists.iter().map(Vec::len).sum()
+        self.overflow.packed.iter().map(Vec::len).sum()
     }
 }
 

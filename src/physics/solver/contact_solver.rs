@@ -507,13 +507,17 @@ impl<L: Wide> Bundle<L> {
         bodies: &mut [SolverBody],
         threshold: L,
     ) {
-        let (mut a, mut b) = self.gather(bodies);
-        let (n, _) = self.axes();
-        let e = bounce.restitution;
         let bounces = [
             self.bounces(0, bounce, threshold),
             self.bounces(1, bounce, threshold),
         ];
+        if !L::any(bounces[0] | bounces[1]) {
+            // Nothing hit hard enough: a resting bundle costs a compare.
+            return;
+        }
+        let (mut a, mut b) = self.gather(bodies);
+        let (n, _) = self.axes();
+        let e = bounce.restitution;
         let v0 = bounce.relative_velocity;
         let aim = [e * v0[0], e * v0[1]];
         let mut by_block = None;

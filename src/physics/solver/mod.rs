@@ -176,6 +176,7 @@ impl Selected<'_> {
 }
 
 /// Semi-implicit Euler, velocity half: v += h a, w += h alpha (appendix eqs. 1-2).
+#[inline(always)]
 pub(crate) fn integrate_velocities(
     bodies: &mut [SolverBody],
     moving: Moving,
@@ -195,6 +196,7 @@ pub(crate) fn integrate_velocities(
 /// speeds are capped first (speed, and rotation per substep); the `kinematic` bodies move by
 /// the velocity they were given, so that contacts see them where they are at every substep
 /// (Box2D moves them so too).
+#[inline(always)]
 pub(crate) fn integrate_positions(
     bodies: &mut [SolverBody],
     (moving, kinematic): (Moving, &[u32]),

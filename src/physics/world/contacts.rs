@@ -221,6 +221,7 @@ impl PairInput<'_> {
     /// The pair `key`'s contact this step: last step's with its manifold recycled, or the pair
     /// collided afresh (waking sleepers it is about to touch), or none. Returns what adaptive
     /// stiffness reads of the contact written.
+    #[inline(always)]
     fn update(
         &self,
         key: u64,
@@ -272,6 +273,7 @@ impl PairInput<'_> {
 
     /// A recycled contact's new geometry: the same points, moved (everything else in it is
     /// worked out again by the solver's prepare stage).
+    #[inline(always)]
     fn set_geometry(&self, contact: &mut Contact, manifold: &Manifold, (a, b): (&Body, &Body)) {
         let mixing = (
             self.settings.friction_mixing,

@@ -648,10 +648,15 @@ mod tests {
     fn a_settling_pile_resumes_bit_identically_for_1000_frames() {
         use crate::physics::{vec2, Real};
         let mut w = World::default();
-        for (w_, h, x, y) in [(12.0, 1.0, 0.0, -0.5), (1.0, 12.0, -6.5, 5.0), (1.0, 12.0, 6.5, 5.0)] {
-            w.add_body(&BodyDef::fixed(Shape::rect(w_, h), vec2(x, y))).unwrap();
+        for (w_, h, x, y) in [
+            (12.0, 1.0, 0.0, -0.5),
+            (1.0, 12.0, -6.5, 5.0),
+            (1.0, 12.0, 6.5, 5.0),
+        ] {
+            w.add_body(&BodyDef::fixed(Shape::rect(w_, h), vec2(x, y)))
+                .unwrap();
         }
-        let drop = |w: &mut World, i: usize, lift: Real| {
+        let spawn = |w: &mut World, i: usize, lift: Real| {
             let shape = match i % 3 {
                 0 => Shape::rect(0.6, 0.4),
                 1 => Shape::circle(0.3),
@@ -659,13 +664,14 @@ mod tests {
             };
             let (col, row) = ((i % 12) as Real, (i / 12) as Real);
             let at = vec2(-5.0 + 0.9 * col + 0.1 * row, 1.0 + lift + 0.8 * row);
-            w.add_body(&BodyDef::dynamic(shape, at).with_angle(0.3 * i as Real)).unwrap()
+            w.add_body(&BodyDef::dynamic(shape, at).with_angle(0.3 * i as Real))
+                .unwrap()
         };
-        let first: Vec<_> = (0..60).map(|i| drop(&mut w, i, 0.0)).collect();
+        let first: Vec<_> = (0..60).map(|i| spawn(&mut w, i, 0.0)).collect();
         for frame in 0..150 {
             if frame == 60 {
                 for i in 60..120 {
-                    drop(&mut w, i, 6.0);
+                    spawn(&mut w, i, 6.0);
                 }
             }
             w.step(1.0 / 60.0).unwrap();
@@ -673,16 +679,26 @@ mod tests {
         let state = w.export_state();
         let mut copy = World::import_state(&state).unwrap();
         assert_eq!(copy.export_state(), state);
-        let colours: std::collections::BTreeSet<u8> = w.contacts.awake.iter().map(|c| c.colour).collect();
-        assert!(colours.len() > 4, "the graph is in use: colours {colours:?}");
+        let colours: std::collections::BTreeSet<u8> =
+            w.contacts.awake.iter().map(|c| c.colour).collect();
+        assert!(
+            colours.len() > 4,
+            "the graph is in use: colours {colours:?}"
+        );
         let (mut begun, mut ended) = (0, 0);
         for frame in 0..1000 {
-            let keys = |w: &World| w.contacts.awake.iter().map(|c| c.key).collect::<std::collections::BTreeSet<_>>();
+            let keys = |w: &World| {
+                w.contacts
+                    .awake
+                    .iter()
+                    .map(|c| c.key)
+                    .collect::<std::collections::BTreeSet<_>>()
+            };
             let before = keys(&w);
             for x in [&mut w, &mut copy] {
                 match frame {
                     100 => drop(x.remove_body(first[30]).unwrap()),
-                    400 => drop(drop(x, 7, 8.0)),
+                    400 => drop(spawn(x, 7, 8.0)),
                     _ => {}
                 }
                 x.step(1.0 / 60.0).unwrap();
@@ -690,19 +706,31 @@ mod tests {
             let after = keys(&w);
             begun += after.difference(&before).count();
             ended += before.difference(&after).count();
-            assert_eq!(w.state_hash(), copy.state_hash(), "frame {frame} after resuming");
+            assert_eq!(
+                w.state_hash(),
+                copy.state_hash(),
+                "frame {frame} after resuming"
+            );
         }
-        assert!(begun > 20 && ended > 20, "{begun} contacts began, {ended} ended");
+        assert!(
+            begun > 20 && ended > 20,
+            "{begun} contacts began, {ended} ended"
+        );
     }
 
     /// A solver history of another version, or a colour its bodies cannot take, is refused.
     #[test]
     fn a_foreign_solver_history_is_refused() {
-        use crate::physics::vec2;
+        use crate::physics::{vec2, Real};
         let mut w = World::default();
-        w.add_body(&BodyDef::fixed(Shape::rect(10.0, 1.0), vec2(0.0, -0.5))).unwrap();
+        w.add_body(&BodyDef::fixed(Shape::rect(10.0, 1.0), vec2(0.0, -0.5)))
+            .unwrap();
         for i in 0..3 {
-            w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5 + i as f32 as _))).unwrap();
+            w.add_body(&BodyDef::dynamic(
+                Shape::rect(1.0, 1.0),
+                vec2(0.0, 0.5 + i as Real),
+            ))
+            .unwrap();
         }
         w.step(1.0 / 60.0).unwrap();
         let good = w.export_state();
@@ -713,9 +741,19 @@ mod tests {
         assert!(e.to_string().contains("solver history version"), "{e}");
         // two contacts on the middle box in one colour
         let mut s = good.clone();
-        let shared = s.solver.contacts.iter().position(|c| c.a == 2 || c.b == 2).unwrap();
+        let shared = s
+            .solver
+            .contacts
+            .iter()
+            .position(|c| c.a == 2 || c.b == 2)
+            .unwrap();
         let colour = s.solver.contacts[shared].colour;
-        for c in s.solver.contacts.iter_mut().filter(|c| c.a == 2 || c.b == 2) {
+        for c in s
+            .solver
+            .contacts
+            .iter_mut()
+            .filter(|c| c.a == 2 || c.b == 2)
+        {
             c.colour = colour;
         }
         let e = World::import_state(&s).err().unwrap();

@@ -8,7 +8,8 @@
 #   ROUNDS=7 CORE=0 STEPS=300 benchmarks/ab.sh HEAD~3 pyramid_20 many_boxes
 #
 # Both builds use the bench profile (fat LTO), as vs-peers does. The old revision is checked
-# out in target/ab/old-src (a git worktree) and built into target/ab/old.
+# out in target/ab/old-src (a git worktree) and built into target/ab/old, with this tree's
+# examples/profile_step.rs (measurement, not engine), so both print alike.
 set -eu
 cd "$(dirname "$0")/.."
 old_rev=${1:?usage: benchmarks/ab.sh OLD_REV [SCENE...]}
@@ -22,10 +23,11 @@ build="cargo build --profile bench --no-default-features --features measure --ex
 root=$(pwd)
 mkdir -p target/ab
 if [ -d target/ab/old-src ]; then
-    git -C target/ab/old-src checkout -q --detach "$old_rev"
+    git -C target/ab/old-src checkout -q -f --detach "$old_rev"
 else
     git worktree add -q --detach target/ab/old-src "$old_rev"
 fi
+cp examples/profile_step.rs target/ab/old-src/examples/profile_step.rs
 (cd target/ab/old-src && CARGO_TARGET_DIR="$root/target/ab/old" $build >&2)
 $build >&2
 old=target/ab/old/release/examples/profile_step

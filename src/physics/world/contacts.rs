@@ -484,7 +484,8 @@ fn travel(b: &Body, g: Vec2, dt: Real) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::{vec2, Shape};
+    use crate::physics::math::vec2;
+    use crate::physics::shape::Shape;
 
     /// A 1 m box resting on a fixed floor (top at y = 0), sleep off, after `steps` steps.
     fn box_on_floor(recycling: bool, steps: usize) -> World {

@@ -553,7 +553,10 @@ impl World {
 
 #[cfg(test)]
 mod tests {
-    use super::super::super::{BodyDef, Shape, Vec2, World};
+    use super::super::super::body::BodyDef;
+    use super::super::super::math::Vec2;
+    use super::super::super::shape::Shape;
+    use super::super::World;
 
     fn bits(w: &World) -> Vec<u64> {
         w.state_bits().collect()
@@ -646,7 +649,7 @@ mod tests {
     /// graph's colours set the solve order).
     #[test]
     fn a_settling_pile_resumes_bit_identically_for_1000_frames() {
-        use crate::physics::{vec2, Real};
+        use crate::physics::math::{vec2, Real};
         let mut w = World::default();
         for (w_, h, x, y) in [
             (12.0, 1.0, 0.0, -0.5),
@@ -721,7 +724,7 @@ mod tests {
     /// A solver history of another version, or a colour its bodies cannot take, is refused.
     #[test]
     fn a_foreign_solver_history_is_refused() {
-        use crate::physics::{vec2, Real};
+        use crate::physics::math::{vec2, Real};
         let mut w = World::default();
         w.add_body(&BodyDef::fixed(Shape::rect(10.0, 1.0), vec2(0.0, -0.5)))
             .unwrap();

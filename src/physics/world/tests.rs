@@ -2,10 +2,11 @@
 
 use super::tiers::Tier;
 use super::*;
+use crate::physics::math::vec2;
 use crate::physics::math::PI;
+use crate::physics::shape::Shape;
 use crate::physics::solver::bundles::Width;
 use crate::physics::solver::graph::OVERFLOW;
-use crate::physics::{vec2, Shape};
 
 /// A World on the defaults with sleep off (g = 10 m/s^2 down) and a fixed floor `width` m wide
 /// whose top is at y = 0.

@@ -173,7 +173,7 @@ pub fn run(
     let result = if args.plain {
         plain::run(&rx, args, endpoint, out)
     } else {
-        terminal::show(rt, session, keys, &tx, &rx, endpoint, args)
+        terminal::show(rt, session, keys, (&tx, &rx), endpoint, args)
     };
     drop(subs);
     result

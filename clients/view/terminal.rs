@@ -132,8 +132,7 @@ pub(super) fn show(
     rt: &tokio::runtime::Handle,
     session: &Session,
     keys: &Keys,
-    tx: &SyncSender<Msg>,
-    rx: &Receiver<Msg>,
+    (tx, rx): (&SyncSender<Msg>, &Receiver<Msg>),
     endpoint: &str,
     args: &super::ViewArgs,
 ) -> Result<(), ClientError> {

@@ -117,10 +117,10 @@ pub fn all() -> Vec<ClosedFormCase> {
     ]
 }
 
+/// The measurement of a case: its words (name, unit, what the error means), the world it ran
+/// in, whether it diverged, the error and the numbers behind it.
 fn finish(
-    case: &'static str,
-    unit: &'static str,
-    error_meaning: &'static str,
+    (case, unit, error_meaning): (&'static str, &'static str, &'static str),
     world: &World,
     diverged: bool,
     error: f64,
@@ -165,9 +165,7 @@ fn uniformly_accelerated(
     ];
     details.extend(more);
     finish(
-        case,
-        "m",
-        error_meaning,
+        (case, "m", error_meaning),
         world,
         diverged,
         (x - expected).abs(),
@@ -215,9 +213,7 @@ pub fn free_fall(settings: &Settings, dt: Real) -> Measurement {
     let continuous = y0 as f64 - 0.5 * g * t * t;
     let discrete = continuous - 0.5 * g * t * h;
     finish(
-        "free_fall",
-        "m",
-        "|y - (y0 - g t^2/2)| at t = 1 s",
+        ("free_fall", "m", "|y - (y0 - g t^2/2)| at t = 1 s"),
         &w,
         diverged,
         (y - continuous).abs(),
@@ -260,9 +256,7 @@ pub fn slide_to_stop(settings: &Settings, dt: Real) -> Measurement {
     });
     let d = pos(&w, id).x as f64;
     finish(
-        "slide_to_stop",
-        "m",
-        "|stopping distance - v0^2/(2 mu g)|",
+        ("slide_to_stop", "m", "|stopping distance - v0^2/(2 mu g)|"),
         &w,
         diverged,
         (d - d_expected).abs(),
@@ -308,9 +302,11 @@ pub fn slope_stick(settings: &Settings, dt: Real) -> Measurement {
     let (w, id, diverged) = box_on_slope(settings, dt, theta, mu, 2.0);
     let p = pos(&w, id);
     finish(
-        "slope_stick",
-        "m",
-        "drift along the slope after 2 s (expected 0)",
+        (
+            "slope_stick",
+            "m",
+            "drift along the slope after 2 s (expected 0)",
+        ),
         &w,
         diverged,
         (p.x as f64).abs(),
@@ -389,9 +385,7 @@ pub fn bounce(settings: &Settings, dt: Real) -> Measurement {
     });
     let ratio = apex / h0 as f64;
     let mut m = finish(
-        "bounce",
-        "1",
-        "|rebound height / drop height - e^2|",
+        ("bounce", "1", "|rebound height / drop height - e^2|"),
         &w,
         diverged,
         (ratio - e_mixed * e_mixed).abs(),
@@ -447,9 +441,7 @@ pub fn head_on(settings: &Settings, dt: Real) -> Measurement {
     let expected_v1 = (p0 - m2 * e_mixed * (v1 - v2)) / (m1 + m2);
     let expected_v2 = (p0 + m1 * e_mixed * (v1 - v2)) / (m1 + m2);
     finish(
-        "head_on",
-        "m/s",
-        "|(v2' - v1') - e (v1 - v2)|",
+        ("head_on", "m/s", "|(v2' - v1') - e (v1 - v2)|"),
         &w,
         diverged,
         law.abs(),
@@ -490,9 +482,7 @@ pub fn spin(settings: &Settings, dt: Real) -> Measurement {
     let omega = b.angular_velocity() as f64;
     let expected = tau as f64 * t / inertia;
     finish(
-        "spin",
-        "rad/s",
-        "|omega - tau t / I| at t = 1 s",
+        ("spin", "rad/s", "|omega - tau t / I| at t = 1 s"),
         &w,
         diverged,
         (omega - expected).abs(),
@@ -520,9 +510,11 @@ pub fn resting_stack(settings: &Settings, dt: Real) -> Measurement {
     });
     let p = pos(&w, top);
     finish(
-        "resting_stack",
-        "m",
-        "|top box position - where it was placed| after 10 s",
+        (
+            "resting_stack",
+            "m",
+            "|top box position - where it was placed| after 10 s",
+        ),
         &w,
         diverged,
         (p - p0).length() as f64,

@@ -133,6 +133,12 @@ impl ConstraintGraph {
         self.masks.clear();
     }
 
+    /// Body slot `i`'s mask (tests check it against the contacts).
+    #[cfg(test)]
+    pub fn mask(&self, i: u32) -> u32 {
+        self.masks.get(i as usize).copied().unwrap_or(0)
+    }
+
     /// Use only the first `colours` colours (0: every new constraint overflows).
     #[cfg(test)]
     pub fn limit_colours(&mut self, colours: usize) {

@@ -416,3 +416,79 @@ fn a_speculative_point_that_never_touches_does_not_bounce() {
         "rebound speed {v} m/s"
     );
 }
+
+/// The constraint graph stays exact while contacts begin, end, sleep and wake, bodies are
+/// removed and added: after every step each dynamic body's mask is exactly the colours of the
+/// awake contacts on it, no two awake contacts of one colour share a dynamic body, every awake
+/// contact has a colour and every sleeping one none. (A colour not given back would leak: the
+/// body's colours would run out and its contacts go to the overflow for good.)
+#[test]
+fn the_constraint_graph_matches_the_contacts_at_every_step() {
+    use crate::physics::solver::graph::{COLOURS, UNCOLOURED};
+    let mut w = World::new(Settings::default(), vec2(0.0, -10.0)).unwrap();
+    w.add_body(&BodyDef::fixed(Shape::rect(20.0, 1.0), vec2(0.0, -0.5)))
+        .unwrap();
+    let mut ids = Vec::new();
+    for i in 0..60 {
+        let (col, row) = ((i % 10) as Real, (i / 10) as Real);
+        let shape = if i % 2 == 0 {
+            Shape::rect(0.8, 0.5)
+        } else {
+            Shape::circle(0.3)
+        };
+        let at = vec2(-4.5 + col + 0.1 * row, 0.5 + 0.9 * row);
+        ids.push(w.add_body(&BodyDef::dynamic(shape, at)).unwrap());
+    }
+    let (mut slept, mut coloured) = (false, 0);
+    for step in 0..600 {
+        match step {
+            200 => drop(w.remove_bodies(&ids[10..14]).unwrap()),
+            300 => w.apply_impulse(ids[40], vec2(0.0, 3.0)).unwrap(),
+            420 => w.set_gravity(vec2(2.0, -10.0)).unwrap(),
+            _ => {}
+        }
+        if step % 50 == 25 {
+            let at = vec2(-3.0 + 0.1 * (step / 50) as Real, 8.0);
+            w.add_body(&BodyDef::dynamic(Shape::rect(0.6, 0.6), at))
+                .unwrap();
+        }
+        w.step(1.0 / 60.0).unwrap();
+        slept |= !w.contacts.sleeping.is_empty();
+        let mut masks = vec![0u32; w.bodies.slots.len()];
+        for c in &w.contacts.awake {
+            assert_ne!(
+                c.colour, UNCOLOURED,
+                "step {step}: an awake contact has no colour"
+            );
+            if (c.colour as usize) < COLOURS {
+                coloured += 1;
+                for i in [c.a, c.b] {
+                    let dynamic = w.bodies.slots[i as usize]
+                        .body
+                        .as_ref()
+                        .is_some_and(|b| b.inv_mass > 0.0);
+                    if dynamic {
+                        let bit = 1u32 << c.colour;
+                        assert_eq!(
+                            masks[i as usize] & bit,
+                            0,
+                            "step {step}: colour {} twice on body {i}",
+                            c.colour
+                        );
+                        masks[i as usize] |= bit;
+                    }
+                }
+            }
+        }
+        for (i, &mask) in masks.iter().enumerate() {
+            assert_eq!(
+                w.contacts.graph.mask(i as u32),
+                mask,
+                "step {step}: body {i}'s mask"
+            );
+        }
+        assert!(w.contacts.sleeping.iter().all(|c| c.colour == UNCOLOURED));
+    }
+    assert!(slept, "some island fell asleep (and woke)");
+    assert!(coloured > 1000, "contacts were coloured: {coloured}");
+}

@@ -249,13 +249,12 @@ impl World {
         }
         let stiff = self.settings.stiff_load_ratio;
         let mut top = Tier::Base;
-        for i in 0..n {
-            if parent[i] as usize == i {
-                let braced =
-                    tiers.island_bodies[i] as Real >= stiff && !tiers.island_extent[i].slender();
-                tiers.body_tier[i] = island_tier(tiers.body_tier[i], braced);
-                top = top.max(tiers.body_tier[i]);
-            }
+        let roots = parent.iter().enumerate().filter(|&(i, &p)| p as usize == i);
+        for (i, _) in roots {
+            let braced =
+                tiers.island_bodies[i] as Real >= stiff && !tiers.island_extent[i].slender();
+            tiers.body_tier[i] = island_tier(tiers.body_tier[i], braced);
+            top = top.max(tiers.body_tier[i]);
         }
         for i in 0..n as u32 {
             let root = find(parent, i) as usize;

@@ -9,8 +9,6 @@ mod precision {
     pub type Real = f32;
     /// A 2D vector of [`Real`]: positions in metres, velocities in m/s, forces in newtons.
     pub type Vec2 = glam::Vec2;
-    /// Four [`Real`]s side by side: the solver's lanes (SIMD where the target has it).
-    pub type Lanes = glam::Vec4;
     /// pi in [`Real`].
     pub const PI: Real = std::f32::consts::PI;
 }
@@ -21,13 +19,11 @@ mod precision {
     pub type Real = f64;
     /// A 2D vector of [`Real`]: positions in metres, velocities in m/s, forces in newtons.
     pub type Vec2 = glam::DVec2;
-    /// Four [`Real`]s side by side: the solver's lanes.
-    pub type Lanes = glam::DVec4;
     /// pi in [`Real`].
     pub const PI: Real = std::f64::consts::PI;
 }
 
-pub use precision::{Lanes, Real, Vec2, PI};
+pub use precision::{Real, Vec2, PI};
 
 /// Shorthand for building a [`Vec2`].
 #[inline]

@@ -105,7 +105,7 @@ pub(crate) fn solve_block_lcp(m: &BlockMass, b: [Real; 2]) -> Option<[Real; 2]> 
         return Some([x0, x1]);
     }
     // Case 2: only point 0 pushes; point 1 separates (w1 >= 0). Times the reciprocal, not
-    // divided: the point's normal mass, as the wide solver has it.
+    // divided: the point's normal mass, as the contact kernel has it.
     let x0 = -b[0] * (1.0 / k[0][0]);
     if x0 >= 0.0 && k[1][0] * x0 + b[1] >= 0.0 {
         return Some([x0, 0.0]);

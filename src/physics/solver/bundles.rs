@@ -113,11 +113,11 @@ impl<L: Wide> Packed<L> {
         let bundle = list.last_mut().expect("a bundle is open");
         bundle.set_contact(lane, (i as u32, c), k, bodies);
         if c.restitution != 0.0 {
-            if bundle.bounce == NO_BOUNCE {
-                bundle.bounce = self.bounces.len() as u32;
+            if bundle.bounce_index == NO_BOUNCE {
+                bundle.bounce_index = self.bounces.len() as u32;
                 self.bounces.push(BounceLanes::NONE);
             }
-            self.bounces[bundle.bounce as usize].set(lane, c, k);
+            self.bounces[bundle.bounce_index as usize].set(lane, c, k);
         }
     }
 
@@ -190,8 +190,8 @@ impl<L: Wide> Packed<L> {
     fn apply_restitution(&mut self, bodies: &mut [SolverBody], threshold: Real) {
         let threshold = L::splat(threshold);
         for bundle in self.packed.iter_mut().flatten() {
-            if bundle.bounce != NO_BOUNCE {
-                let bounce = &self.bounces[bundle.bounce as usize];
+            if bundle.bounce_index != NO_BOUNCE {
+                let bounce = &self.bounces[bundle.bounce_index as usize];
                 bundle.apply_restitution(bounce, bodies, threshold);
             }
         }
@@ -227,7 +227,7 @@ impl<L: Wide> Packed<L> {
 /// The packed contacts of one solve, kept by the World so a steady step does not allocate.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct ContactBundles {
-    one: Packed<Lanes1>,
+    single: Packed<Lanes1>,
     four: Packed<Lanes4>,
     eight: Packed<Lanes8>,
     /// The overflow, one contact a bundle, in two lists (block, points).
@@ -271,7 +271,7 @@ impl ContactBundles {
         self.built = Some(width);
         self.overflow.reset(2);
         self.bouncy = match width {
-            Width::One => pack(&mut self.one, &mut self.overflow, input),
+            Width::One => pack(&mut self.single, &mut self.overflow, input),
             Width::Four => pack(&mut self.four, &mut self.overflow, input),
             Width::Eight => pack(&mut self.eight, &mut self.overflow, input),
         };
@@ -283,7 +283,7 @@ impl ContactBundles {
         self.overflow.warm_start(bodies, warm_starting);
         match self.built {
             Some(Width::Eight) => eight::warm_start(&mut self.eight, bodies, warm_starting),
-            Some(Width::One) => self.one.warm_start(bodies, warm_starting),
+            Some(Width::One) => self.single.warm_start(bodies, warm_starting),
             _ => self.four.warm_start(bodies, warm_starting),
         }
     }
@@ -301,7 +301,7 @@ impl ContactBundles {
         self.overflow.solve(bodies, kind, inv_h, push_out);
         match self.built {
             Some(Width::Eight) => eight::solve(&mut self.eight, bodies, kind, inv_h, push_out),
-            Some(Width::One) => self.one.solve(bodies, kind, inv_h, push_out),
+            Some(Width::One) => self.single.solve(bodies, kind, inv_h, push_out),
             _ => self.four.solve(bodies, kind, inv_h, push_out),
         }
     }
@@ -315,7 +315,7 @@ impl ContactBundles {
         self.overflow.apply_restitution(bodies, threshold);
         match self.built {
             Some(Width::Eight) => eight::apply_restitution(&mut self.eight, bodies, threshold),
-            Some(Width::One) => self.one.apply_restitution(bodies, threshold),
+            Some(Width::One) => self.single.apply_restitution(bodies, threshold),
             _ => self.four.apply_restitution(bodies, threshold),
         }
     }
@@ -329,7 +329,7 @@ impl ContactBundles {
         self.overflow.store(contacts, &mut then);
         match self.built {
             Some(Width::Eight) => self.eight.store(contacts, &mut then),
-            Some(Width::One) => self.one.store(contacts, &mut then),
+            Some(Width::One) => self.single.store(contacts, &mut then),
             _ => self.four.store(contacts, &mut then),
         }
     }

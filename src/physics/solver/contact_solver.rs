@@ -68,7 +68,7 @@ impl<L: Wide> PointLanes<L> {
 pub(crate) struct Bundle<L: Wide> {
     pub kind: BundleKind,
     /// Where the bundle's restitution lanes are ([`BounceLanes`]), or [`NO_BOUNCE`].
-    pub bounce: u32,
+    pub bounce_index: u32,
     /// Contact index per lane; `u32::MAX` for an empty lane.
     pub contact: L::Index,
     /// Solver-body indices of A and B per lane (the fixed dummy body for empty lanes).
@@ -237,7 +237,7 @@ impl<L: Wide> Bundle<L> {
         };
         Bundle {
             kind,
-            bounce: NO_BOUNCE,
+            bounce_index: NO_BOUNCE,
             contact: L::index_splat(u32::MAX),
             a: L::index_splat(dummy),
             b: L::index_splat(dummy),

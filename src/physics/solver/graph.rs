@@ -20,7 +20,7 @@
 //! by one and first (lowest priority) by the same kernel at width one; it stays there until
 //! it ends.
 //!
-//! Joints take colours from the same graph; a tier of adaptive stiffness solves the subset of
+//! Joints will take colours from the same graph; a tier of adaptive stiffness solves the subset of
 //! the colours' contacts that are its own (islands of different tiers share no dynamic body,
 //! so any subset of a valid colouring is one).
 
@@ -99,8 +99,9 @@ impl ConstraintGraph {
         }
     }
 
-    /// Whether a constraint of `colour` between `a` and `b` (those marked `dynamic` being
-    /// nodes) can be put back as it was: its colour free on both (checkpoints are checked so).
+    /// Put back a constraint of `colour` between `a` and `b` (those marked `dynamic` being
+    /// nodes), as a checkpoint has it: false, changing nothing, when the colour is taken on
+    /// either body or out of range.
     pub fn restore(&mut self, colour: u8, [a, b]: [u32; 2], dynamic: [bool; 2]) -> bool {
         if colour == OVERFLOW {
             return true;

@@ -34,7 +34,7 @@ pub(crate) enum PassKind {
 /// The per-body data the solver's inner loop reads and writes.
 ///
 /// Laid out as written: the first eight words (velocity, spin, motion this step, inverse
-/// mass) are what the wide solver's kernels load for a body, together ([`SolverBody::state`]).
+/// mass) are what the contact kernel loads for a body, together ([`SolverBody::state`]).
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 pub(crate) struct SolverBody {
@@ -71,7 +71,7 @@ const _: () = {
 };
 
 impl AsMut<[Real; 8]> for SolverBody {
-    /// [`SolverBody::state`], to write (the wide solver stores velocities through it).
+    /// [`SolverBody::state`], to write (the contact kernel stores velocities through it).
     #[inline(always)]
     fn as_mut(&mut self) -> &mut [Real; 8] {
         // SAFETY: as in `state`, through an exclusive reference.
@@ -191,15 +191,25 @@ pub(crate) fn integrate_velocities(
     });
 }
 
+/// A kinematic body the solver moves: its index among the solver bodies and the velocity it
+/// was given (m/s, rad/s), kept apart from its solver body so that nothing a solve pass writes
+/// there can change how it moves.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Kinematic {
+    pub index: u32,
+    pub v: Vec2,
+    pub w: Real,
+}
+
 /// Semi-implicit Euler, position half: x += h v, theta += h w (appendix eqs. 65-68),
 /// recording the motion as deltas from the start of the step. The `moving` dynamic bodies'
 /// speeds are capped first (speed, and rotation per substep); the `kinematic` bodies move by
-/// the velocity they were given, so that contacts see them where they are at every substep
-/// (Box2D moves them so too).
+/// the velocity they were given, turned exactly by their angle, so that contacts see them where
+/// they are at every substep (Box2D moves them so too).
 #[inline(always)]
 pub(crate) fn integrate_positions(
     bodies: &mut [SolverBody],
-    (moving, kinematic): (Moving, &[u32]),
+    (moving, kinematic): (Moving, &[Kinematic]),
     h: Real,
     limits: Limits,
 ) {
@@ -213,16 +223,21 @@ pub(crate) fn integrate_positions(
         }
         b.advance(h);
     });
-    for &i in kinematic {
-        bodies[i as usize].advance(h);
+    for k in kinematic {
+        let b = &mut bodies[k.index as usize];
+        (b.v, b.w) = (k.v, k.w);
+        b.dp += h * k.v;
+        b.dtheta += h * k.w;
+        b.dq = Rot::from_angle(b.dtheta);
     }
 }
 
-/// Kinematic bodies start a solve where the step starts: each solve (one per stiffness tier)
-/// moves them through the whole step again.
-pub(crate) fn restart_motion(bodies: &mut [SolverBody], kinematic: &[u32]) {
-    for &i in kinematic {
-        let b = &mut bodies[i as usize];
+/// Kinematic bodies start a solve where the step starts, at the velocity they were given:
+/// each solve (one per stiffness tier) moves them through the whole step again.
+pub(crate) fn restart_motion(bodies: &mut [SolverBody], kinematic: &[Kinematic]) {
+    for k in kinematic {
+        let b = &mut bodies[k.index as usize];
+        (b.v, b.w) = (k.v, k.w);
         b.dp = Vec2::ZERO;
         b.dtheta = 0.0;
         b.dq = Rot::IDENTITY;

@@ -25,8 +25,8 @@ use super::constraint::{Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
 use super::softness::Softness;
 use super::{
-    integrate_positions, integrate_velocities, relative_velocity, restart_motion, Limits, Moving,
-    PassKind, Selected, SolverBody,
+    integrate_positions, integrate_velocities, relative_velocity, restart_motion, Kinematic,
+    Limits, Moving, PassKind, Selected, SolverBody,
 };
 use crate::physics::contact::Contact;
 use crate::physics::math::{Real, PI};
@@ -56,7 +56,7 @@ pub(crate) struct StepContext<'a> {
     /// The dynamic bodies this solve moves (every body its contacts join is among them).
     pub moving: Moving<'a>,
     /// The kinematic bodies: moved by their own velocity, substep by substep.
-    pub kinematic: &'a [u32],
+    pub kinematic: &'a [Kinematic],
     /// Every contact; the solve works on the `selected` ones.
     pub contacts: &'a mut [Contact],
     pub selected: Selected<'a>,
@@ -238,7 +238,7 @@ fn prepare_contact(
 fn finish(c: &mut Contact, ends: &[PointImpulses; 2], substeps: Real, inv_dt: Real) {
     let mut force = 0.0;
     for (p, end) in c.points[..c.count].iter_mut().zip(ends) {
-        let max_f = c.friction * end.normal;
+        let max_f = (c.friction * end.normal).max(0.0);
         p.normal_impulse = end.normal * substeps;
         p.tangent_impulse = end.tangent.clamp(-max_f, max_f) * substeps;
         p.total_normal_impulse = end.total_normal;

@@ -14,6 +14,7 @@ use super::tiers::TierInput;
 use super::*;
 use crate::physics::collide::{Manifold, ManifoldPoint};
 use crate::physics::math::Transform;
+use crate::physics::solver::graph::UNCOLOURED;
 
 impl World {
     /// Find this step's contacts, then wake what they must wake.
@@ -88,11 +89,11 @@ impl World {
 
 /// Where the merge stands: in place (this step's contacts are `awake[..written]`, last
 /// step's the rest) or copying (this step's are pushed to a fresh `awake`, last step's are
-/// `previous[old..]`).
+/// `previous[read..]`).
 struct Merge {
     in_place: bool,
     written: usize,
-    old: usize,
+    read: usize,
 }
 
 impl Merge {
@@ -102,7 +103,7 @@ impl Merge {
         let mut merge = Merge {
             in_place: true,
             written: 0,
-            old: 0,
+            read: 0,
         };
         #[cfg(test)]
         if contacts.copy_for_tests {
@@ -121,7 +122,7 @@ impl Merge {
         contacts
             .awake
             .extend_from_slice(&contacts.previous[..self.written]);
-        (self.in_place, self.old) = (false, self.written);
+        (self.in_place, self.read) = (false, self.written);
     }
 
     /// Move to `key` among last step's contacts, ending those passed over; whether last step
@@ -141,13 +142,13 @@ impl Merge {
                 .get(self.written)
                 .is_some_and(|c| c.key == key);
         }
-        while let Some(gone) = contacts.previous.get(self.old).filter(|c| c.key < key) {
+        while let Some(gone) = contacts.previous.get(self.read).filter(|c| c.key < key) {
             contacts.graph.remove(gone.colour, [gone.a, gone.b]);
-            self.old += 1;
+            self.read += 1;
         }
         contacts
             .previous
-            .get(self.old)
+            .get(self.read)
             .is_some_and(|c| c.key == key)
     }
 
@@ -157,7 +158,7 @@ impl Merge {
         if self.in_place {
             &contacts.awake[self.written]
         } else {
-            &contacts.previous[self.old]
+            &contacts.previous[self.read]
         }
     }
 
@@ -167,14 +168,19 @@ impl Merge {
             self.written += 1;
             &mut contacts.awake[self.written - 1]
         } else {
-            contacts.awake.push(contacts.previous[self.old]);
-            self.old += 1;
+            contacts.awake.push(contacts.previous[self.read]);
+            self.read += 1;
             contacts.awake.last_mut().expect("just pushed")
         }
     }
 
-    /// Write `contact` as this step's for its key; `continued` when it replaces last step's.
-    fn write(&mut self, contacts: &mut Contacts, contact: Contact, continued: bool) {
+    /// Write `contact` as this step's for its key: it continues last step's, or it begins
+    /// (`begins`: which of its two bodies are nodes of the graph) and takes a colour.
+    fn write(&mut self, contacts: &mut Contacts, mut contact: Contact, begins: Option<[bool; 2]>) {
+        let continued = begins.is_none();
+        if let Some(dynamic) = begins {
+            contact.colour = contacts.graph.add([contact.a, contact.b], dynamic);
+        }
         if self.in_place && !continued && self.written < contacts.awake.len() {
             // A new contact before last step's others: from here, copying.
             self.copy_from_here(contacts);
@@ -189,7 +195,7 @@ impl Merge {
             self.written += 1;
         } else {
             contacts.awake.push(contact);
-            self.old += usize::from(continued);
+            self.read += usize::from(continued);
         }
     }
 
@@ -198,7 +204,7 @@ impl Merge {
         let gone = if self.in_place {
             &contacts.awake[self.written..]
         } else {
-            &contacts.previous[self.old..]
+            &contacts.previous[self.read..]
         };
         for c in gone {
             contacts.graph.remove(c.colour, [c.a, c.b]);
@@ -250,10 +256,10 @@ impl PairInput<'_> {
         let manifold = self.collide(a, b, [ia, ib], wake_queue)?;
         // (A copy: the graph beside it changes.)
         let previous = continued.then(|| *merge.last(contacts));
-        let graph = &mut contacts.graph;
-        let contact = self.fresh_contact(key, &manifold, (a, b), previous.as_ref(), graph);
+        let contact = self.fresh_contact(key, &manifold, (a, b), previous.as_ref());
         let input = TierInput::of(&contact, slop);
-        merge.write(contacts, contact, continued);
+        let begins = (!continued).then_some([a.inv_mass > 0.0, b.inv_mass > 0.0]);
+        merge.write(contacts, contact, begins);
         Some(input)
     }
 
@@ -333,21 +339,17 @@ impl PairInput<'_> {
 
     /// A contact from a fresh `manifold` between `a` and `b`: it continues last step's
     /// contact `previous` where there was one (its colour, load and age, and the impulses of
-    /// the points with the same feature ids), or begins, taking a colour from `graph`.
+    /// the points with the same feature ids), or begins (uncoloured, until the merge writes it).
     fn fresh_contact(
         &self,
         key: u64,
         manifold: &Manifold,
         (a, b): (&Body, &Body),
         previous: Option<&Contact>,
-        graph: &mut ConstraintGraph,
     ) -> Contact {
         let (ia, ib) = pair_of(key);
         let (xf_a, xf_b) = (a.transform(), b.transform());
-        let colour = match previous {
-            Some(c) => c.colour,
-            None => graph.add([ia, ib], [a.inv_mass > 0.0, b.inv_mass > 0.0]),
-        };
+        let colour = previous.map_or(UNCOLOURED, |c| c.colour);
         let mut contact = Contact {
             key,
             a: ia,

@@ -18,7 +18,7 @@ use super::solver::bundles::ContactBundles;
 use super::solver::constraint::ContactConstraint;
 use super::solver::graph::ConstraintGraph;
 use super::solver::sequential::SplitImpulse;
-use super::solver::{clamp_speed, SolverBody};
+use super::solver::{clamp_speed, Kinematic, SolverBody};
 
 /// Export and import of the full state (checkpoints); a child module so it reads private fields.
 pub mod snapshot;
@@ -101,8 +101,8 @@ struct BroadPhase {
 struct SolverScratch {
     /// A solver body per slot (fixed for all but awake dynamic ones), and one fixed body more.
     bodies: Vec<SolverBody>,
-    /// The slots of the kinematic bodies that move.
-    kinematic: Vec<u32>,
+    /// The kinematic bodies that move.
+    kinematic: Vec<Kinematic>,
     /// Sequential solver: the constraint per contact, indexed like `Contacts::awake`.
     constraints: Vec<ContactConstraint>,
     /// Sequential solver: the position correction.
@@ -247,7 +247,8 @@ impl World {
             }
         }
         let is_gone = |i: u32| gone[i as usize];
-        // Whatever rested on these bodies must notice they are gone.
+        // Whatever rested on these bodies must notice they are gone: woken, once their
+        // contacts have left (and given their colours back, for the woken contacts to take).
         for c in self.contacts.awake.iter().chain(&self.contacts.sleeping) {
             if is_gone(c.a) && !is_gone(c.b) {
                 self.islands.wake_queue.push(c.b);
@@ -255,7 +256,6 @@ impl World {
                 self.islands.wake_queue.push(c.a);
             }
         }
-        self.wake_queued();
         let touches_gone = |c: &Contact| is_gone(c.a) || is_gone(c.b);
         self.contacts.sleeping.retain(|c| !touches_gone(c));
         let graph = &mut self.contacts.graph;
@@ -266,6 +266,7 @@ impl World {
             }
             !gone
         });
+        self.wake_queued();
         clear(&mut gone);
         self.bodies.removing = gone;
         let mut removed = Vec::with_capacity(ids.len());

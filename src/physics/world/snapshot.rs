@@ -7,8 +7,9 @@
 //! gravity, in the open; and the solver's history, which nothing can recompute, as one record
 //! with a version of its own ([`SolverHistory`]): the persistent contacts (awake and sleeping)
 //! with their warm-start impulses, their colours in the constraint graph, the loads and spring
-//! frequencies adaptive stiffness holds, and what contact recycling reuses. A change to a
-//! solver heuristic changes that record's version, not the shape of the rest. The broad phase
+//! frequencies adaptive stiffness holds, and what contact recycling reuses. A change to what a
+//! solver heuristic keeps changes that record and its version (and, postcard being
+//! positional, the checkpoint file's version with it); the rest keeps its shape. The broad phase
 //! and the graph's per-body masks are rebuilt (the broad phase's output is sorted, so its
 //! internal order does not change what a step computes); per-step scratch and the contacts'
 //! per-step constraints are not stored.
@@ -246,6 +247,14 @@ impl ContactRecord {
         ];
         finite_all("contact", &numbers)?;
         finite_all("contact recycling", &s.recycle)?;
+        materials(&format!("contact {:#x}", s.key), s.friction, s.restitution)?;
+        let length = (s.normal[0] * s.normal[0] + s.normal[1] * s.normal[1]).sqrt();
+        if (length - 1.0).abs() > 1e-3 {
+            return Err(StateError(format!(
+                "contact {:#x}: normal of length {length}, not a unit vector",
+                s.key
+            )));
+        }
         let mut points = [ContactPoint::default(); 2];
         for (out, p) in points.iter_mut().zip(&s.points) {
             *out = p.point()?;
@@ -304,6 +313,30 @@ impl PointRecord {
     }
 }
 
+/// Mass, inverse mass, inertia and inverse inertia as a body can have them: both inverses
+/// finite and not negative; a dynamic body (inverse mass > 0) has finite positive mass and
+/// inertia and a positive inverse inertia; a static or kinematic one (inverse mass 0) has an
+/// inverse inertia of 0 too.
+fn masses_usable([m, inv_m, i, inv_i]: [Real; 4]) -> bool {
+    let inverses = inv_m.is_finite() && inv_i.is_finite() && inv_m >= 0.0 && inv_i >= 0.0;
+    let dynamic = m.is_finite() && m > 0.0 && i.is_finite() && i > 0.0 && inv_i > 0.0;
+    inverses && if inv_m > 0.0 { dynamic } else { inv_i == 0.0 }
+}
+
+/// Friction within [0, `MAX_FRICTION`] and restitution within [0, 1], as a body definition
+/// must have them (mixed contact values stay within them too).
+fn materials(what: &str, friction: Real, restitution: Real) -> Result<(), StateError> {
+    let max = crate::physics::body::MAX_FRICTION;
+    if (0.0..=max).contains(&friction) && (0.0..=1.0).contains(&restitution) {
+        Ok(())
+    } else {
+        Err(StateError(format!(
+            "{what}: friction {friction} or restitution {restitution} out of range \
+             (friction within [0, {max}], restitution within [0, 1])"
+        )))
+    }
+}
+
 fn finite_all(what: &str, values: &[Real]) -> Result<(), StateError> {
     if values.iter().all(|v| v.is_finite()) {
         Ok(())
@@ -352,8 +385,8 @@ impl BodyState {
             all.extend_from_slice(&pair);
         }
         finite_all(&format!("body {index}"), &all)?;
-        // Static bodies have infinite mass and inertia (and zero inverses).
-        if b.mass.iter().any(|&m| m.is_nan() || m < 0.0) || b.sleep_island as usize >= slots {
+        materials(&format!("body {index}"), b.friction, b.restitution)?;
+        if !masses_usable(b.mass) || b.sleep_island as usize >= slots {
             return Err(StateError(format!(
                 "body {index}: mass or island out of range"
             )));
@@ -536,15 +569,26 @@ impl World {
         if !self.contacts.awake.windows(2).all(|w| w[0].key < w[1].key) {
             return Err(StateError("contacts are not sorted by key".into()));
         }
+        let awake_body = |i: u32| slots[i as usize].body.as_ref().is_some_and(Body::is_active);
+        let mut keys: Vec<u64> = self.contacts.awake.iter().map(|c| c.key).collect();
         for record in &history.sleeping {
             let c = record.contact(slots)?;
-            if c.colour != UNCOLOURED {
-                return Err(StateError(format!(
-                    "sleeping contact {:#x} has colour {}",
-                    c.key, c.colour
-                )));
+            let refused = if c.colour != UNCOLOURED {
+                Some("has a colour")
+            } else if awake_body(c.a) || awake_body(c.b) {
+                Some("joins an awake body")
+            } else {
+                None
+            };
+            if let Some(why) = refused {
+                return Err(StateError(format!("sleeping contact {:#x} {why}", c.key)));
             }
+            keys.push(c.key);
             self.contacts.sleeping.push(c);
+        }
+        keys.sort_unstable();
+        if let Some(w) = keys.windows(2).find(|w| w[0] == w[1]) {
+            return Err(StateError(format!("contact {:#x} is listed twice", w[0])));
         }
         self.contacts.graph = graph;
         Ok(())
@@ -557,6 +601,7 @@ mod tests {
     use super::super::super::math::Vec2;
     use super::super::super::shape::Shape;
     use super::super::World;
+    use super::WorldState;
 
     fn bits(w: &World) -> Vec<u64> {
         w.state_bits().collect()
@@ -761,6 +806,60 @@ mod tests {
         }
         let e = World::import_state(&s).err().unwrap();
         assert!(e.to_string().contains("colour"), "{e}");
+        assert!(World::import_state(&good).is_ok());
+    }
+
+    /// What a damaged or hand-made checkpoint could hold that would make the step panic or
+    /// go NaN is refused, naming it: a negative friction (the friction cone's clamp panics when
+    /// its bounds cross), a restitution above 1, an infinite inverse mass, a contact normal
+    /// that is not a unit vector, a sleeping contact on an awake body, a contact listed twice.
+    #[test]
+    fn states_the_step_cannot_run_are_refused() {
+        use super::super::super::math::Real;
+        use super::UNCOLOURED;
+        use crate::physics::math::vec2;
+        let mut w = World::default();
+        w.add_body(&BodyDef::fixed(Shape::rect(10.0, 1.0), vec2(0.0, -0.5)))
+            .unwrap();
+        w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)))
+            .unwrap();
+        w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(3.0, 0.5)))
+            .unwrap();
+        w.step(1.0 / 60.0).unwrap();
+        let good = w.export_state();
+        assert!(!good.solver.contacts.is_empty());
+        let refused = |s: &WorldState, what: &str| {
+            let e = World::import_state(s).err().expect("refused");
+            assert!(e.to_string().contains(what), "{e}");
+        };
+        let mut s = good.clone();
+        s.slots[1].body.as_mut().unwrap().friction = -0.5;
+        refused(&s, "friction -0.5");
+        let mut s = good.clone();
+        s.slots[1].body.as_mut().unwrap().restitution = 1.5;
+        refused(&s, "restitution 1.5");
+        let mut s = good.clone();
+        s.slots[1].body.as_mut().unwrap().mass[1] = Real::INFINITY;
+        refused(&s, "mass");
+        let mut s = good.clone();
+        s.solver.contacts[0].friction = -1.0;
+        refused(&s, "friction -1");
+        let mut s = good.clone();
+        s.solver.contacts[0].normal = [0.0, 2.0];
+        refused(&s, "unit vector");
+        let mut s = good.clone();
+        let mut asleep = s.solver.contacts[0].clone();
+        asleep.colour = UNCOLOURED;
+        s.solver.sleeping.push(asleep.clone());
+        refused(&s, "joins an awake body");
+        let mut s = good.clone();
+        for slot in &mut s.slots {
+            if let Some(b) = slot.body.as_mut() {
+                b.awake = false;
+            }
+        }
+        s.solver.sleeping.push(asleep);
+        refused(&s, "listed twice");
         assert!(World::import_state(&good).is_ok());
     }
 }

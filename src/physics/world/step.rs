@@ -75,50 +75,37 @@ impl World {
             .iter()
             .filter(|b| b.inv_mass > 0.0)
             .count();
+        // The tier lists are taken out while a tier is solved (they are its parts) and put
+        // back, so their storage is kept from step to step.
+        let (mut bodies, contacts) = (
+            std::mem::take(&mut self.tiers.tier_bodies),
+            std::mem::take(&mut self.tiers.tier_contacts),
+        );
         for tier in Tier::ALL.into_iter().filter(|&t| t <= top) {
-            let tiers = &mut self.tiers;
-            let (bodies, body_tier) = (&self.solver.bodies, &tiers.body_tier);
-            tiers.tier_bodies.clear();
-            tiers.tier_bodies.extend(
-                (0..body_tier.len() as u32).filter(|&i| {
-                    body_tier[i as usize] == tier && bodies[i as usize].inv_mass > 0.0
-                }),
-            );
-            if tiers.tier_bodies.is_empty() {
+            let body_tier = &self.tiers.body_tier;
+            let solver_bodies = &self.solver.bodies;
+            bodies.clear();
+            bodies.extend((0..body_tier.len() as u32).filter(|&i| {
+                body_tier[i as usize] == tier && solver_bodies[i as usize].inv_mass > 0.0
+            }));
+            if bodies.is_empty() {
                 continue;
             }
             // Every moving body in this tier (a pyramid, a pile): the plain loop.
-            let moving = if tiers.tier_bodies.len() == dynamic {
+            let moving = if bodies.len() == dynamic {
                 Moving::All
             } else {
-                Moving::Only(&tiers.tier_bodies)
+                Moving::Only(&bodies)
             };
             let selected = match &ranges {
-                Some(ranges) => Selected::Only(&tiers.tier_contacts[ranges[tier as usize].clone()]),
-                None if tiers.contact_tier.first() == Some(&tier) => Selected::All,
+                Some(ranges) => Selected::Only(&contacts[ranges[tier as usize].clone()]),
+                None if self.tiers.contact_tier.first() == Some(&tier) => Selected::All,
                 // Bodies touching nothing: only integrated.
                 None => Selected::Only(&[]),
             };
-            let parts = (moving, selected);
-            // (`parts` borrows the tier scratch; the solve reads the rest of the World.)
-            let World {
-                settings,
-                contacts,
-                solver,
-                ..
-            } = self;
-            let mut ctx = StepContext {
-                bodies: &mut solver.bodies,
-                moving: parts.0,
-                kinematic: &solver.kinematic,
-                contacts: &mut contacts.awake,
-                selected: parts.1,
-                bundles: &mut solver.bundles,
-                settings,
-                dt,
-            };
-            soft_step::solve(&mut ctx, &tier.effort(settings));
+            self.solve_tier(tier, (moving, selected), dt);
         }
+        (self.tiers.tier_bodies, self.tiers.tier_contacts) = (bodies, contacts);
     }
 
     /// One soft-step solve of `tier`'s work on the `moving` bodies and `selected` contacts.
@@ -140,16 +127,16 @@ impl World {
     /// pyramid, a pile: each solve takes them all); otherwise each tier's range of
     /// `tier_contacts`, which lists the contacts' indices by tier in key order (one counting
     /// sort: a pile with one box off on its own paid a pass over every contact per tier).
-    fn group_by_tier(&mut self) -> Option<[std::ops::Range<usize>; 5]> {
+    fn group_by_tier(&mut self) -> Option<[std::ops::Range<usize>; Tier::ALL.len()]> {
         let tiers = &mut self.tiers;
-        let mut counts = [0usize; 5];
+        let mut counts = [0usize; Tier::ALL.len()];
         for &t in &tiers.contact_tier {
             counts[t as usize] += 1;
         }
         if counts.iter().filter(|&&n| n > 0).count() <= 1 {
             return None;
         }
-        let mut ranges: [std::ops::Range<usize>; 5] = Default::default();
+        let mut ranges: [std::ops::Range<usize>; Tier::ALL.len()] = Default::default();
         let mut start = 0;
         for (range, &n) in ranges.iter_mut().zip(&counts) {
             *range = start..start + n;
@@ -197,7 +184,11 @@ impl World {
                 },
                 Some(b) if b.kinematic => {
                     if b.is_moving_kinematic() {
-                        solver.kinematic.push(i as u32);
+                        solver.kinematic.push(Kinematic {
+                            index: i as u32,
+                            v: b.linear_velocity,
+                            w: b.angular_velocity,
+                        });
                     }
                     SolverBody {
                         v: b.linear_velocity,

@@ -1,4 +1,4 @@
-//! The wide and scalar solves agree when contacts overflow the colouring.
+//! The solver's widths, overflow, tiers and constraint graph, from inside the World.
 
 use super::tiers::Tier;
 use super::*;
@@ -22,7 +22,7 @@ fn awake_world_on_floor(width: Real) -> World {
 }
 
 /// A 12 m plank on the ground with 40 small boxes resting on it: the plank has more
-/// contacts than the wide solver has colours, so some of them overflow to the scalar code.
+/// contacts than the graph has colours for one body, so some of them overflow.
 fn crowded_plank() -> World {
     let mut w = awake_world_on_floor(40.0);
     w.add_body(&BodyDef::dynamic(Shape::rect(12.0, 0.5), vec2(0.0, 0.25)))

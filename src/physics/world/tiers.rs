@@ -139,15 +139,17 @@ pub(super) struct TierScratch {
     /// What each contact asks, in contact order, filled as the contacts are found (read again
     /// by `assign_tiers` when the counts differ).
     pub inputs: Vec<TierInput>,
-    /// Each contact's tier, then each slot's.
+    /// Each contact's tier.
     pub contact_tier: Vec<Tier>,
+    /// Each slot's tier.
     pub body_tier: Vec<Tier>,
-    /// Each island's extent and number of moving bodies, at its root.
+    /// Each island's extent, at its root.
     pub island_extent: Vec<Extent>,
+    /// Each island's number of moving bodies, at its root.
     pub island_bodies: Vec<u32>,
-    /// The contacts' indices grouped by tier, while tiers are solved apart, and the bodies of
-    /// the tier being solved.
+    /// The contacts' indices grouped by tier, while tiers are solved apart.
     pub tier_contacts: Vec<u32>,
+    /// The bodies of the tier being solved.
     pub tier_bodies: Vec<u32>,
 }
 

@@ -829,7 +829,7 @@ mod tests {
         let good = w.export_state();
         assert!(!good.solver.contacts.is_empty());
         let refused = |s: &WorldState, what: &str| {
-            let e = World::import_state(s).err().expect("refused");
+            let e = World::import_state(s).expect_err("refused");
             assert!(e.to_string().contains(what), "{e}");
         };
         let mut s = good.clone();

@@ -367,10 +367,10 @@ where
         let c = &mut contacts[i];
         let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
         let k = prepare(c, a, b);
-        let kind = if c.count == 2 && k.block.is_some() {
-            BundleKind::Block
-        } else {
+        let kind = if c.count == 2 && k.block.is_none() {
             BundleKind::Points
+        } else {
+            BundleKind::Block
         };
         let s = kind_slot(kind);
         bouncy |= c.restitution != 0.0;

@@ -24,9 +24,11 @@ use crate::physics::math::Real;
 /// Which normal solve a bundle's contacts take.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum BundleKind {
-    /// Two points with a well-conditioned block: both normal impulses at once (2x2 LCP).
+    /// Two points with a well-conditioned block, both normal impulses at once (2x2 LCP), or
+    /// one point, as a block whose second point never pushes: the same solve, so that
+    /// one-point and two-point contacts of a colour share bundles.
     Block,
-    /// One point, or two solved one after the other.
+    /// Two points too nearly coincident for the block: solved one after the other.
     Points,
 }
 
@@ -98,6 +100,11 @@ pub(crate) struct Bundle<L: Wide> {
     inv_i_b: L,
     p: [PointLanes<L>; 2],
 }
+
+/// The separation (m) given to the absent second point of a one-point contact solved in a
+/// block bundle: so far apart that the block LCP never lets it push (its row's right-hand side
+/// stays positive), and finite, so nothing times zero mass makes a NaN.
+const NEVER_TOUCHES: Real = 1.0e18;
 
 /// A bundle none of whose contacts bounces.
 pub(crate) const NO_BOUNCE: u32 = u32::MAX;
@@ -304,6 +311,13 @@ impl<L: Wide> Bundle<L> {
             ] {
                 field.set_lane(lane, x);
             }
+        } else if c.count == 1 && self.kind == BundleKind::Block {
+            // A one-point contact in a block bundle: its point alone, K = 1 / normal mass, and
+            // a second point that never pushes (far apart, no mass, decoupled).
+            let m = k.points[0].normal_mass;
+            self.k00.set_lane(lane, 1.0 / m);
+            self.i00.set_lane(lane, m);
+            self.p[1].adjusted_separation.set_lane(lane, NEVER_TOUCHES);
         }
         for ((v, p), kp) in self.p.iter_mut().zip(&c.points[..c.count]).zip(&k.points) {
             let arms = kp.arms;

@@ -244,9 +244,8 @@ impl Wide for Lanes4 {
     }
 }
 
-/// Whether this machine runs the eight-lane kernels compiled for AVX2. Not in `f64` builds:
-/// there glam's four lanes are scalar code whose `max` is Rust's, not SSE's, so the two widths
-/// could differ in the sign of a zero.
+/// Whether this machine runs the eight-lane kernels compiled for AVX2: on x86-64 with AVX2, in
+/// `f32` builds (the AVX `Lanes8` holds eight `f32`; an `f64` build runs four lanes).
 pub(crate) fn eight_lanes_available() -> bool {
     #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
     {

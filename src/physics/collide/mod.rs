@@ -117,16 +117,8 @@ pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: R
         }
         _ => {
             let ((core_a, ra), (core_b, rb)) = (core(a), core(b));
-            let rounded_a = Rounded {
-                core: &core_a,
-                radius: ra,
-                xf: xf_a,
-            };
-            let rounded_b = Rounded {
-                core: &core_b,
-                radius: rb,
-                xf: xf_b,
-            };
+            let rounded_a = Rounded::new(&core_a, ra, xf_a);
+            let rounded_b = Rounded::new(&core_b, rb, xf_b);
             collide_polygons(rounded_a, rounded_b, margin)
         }
     }

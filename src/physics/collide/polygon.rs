@@ -29,6 +29,13 @@ pub(crate) struct Rounded<'a> {
     pub xf: Transform,
 }
 
+impl<'a> Rounded<'a> {
+    /// `core` grown by `radius` (m), placed at `xf`.
+    pub fn new(core: &'a Polygon, radius: Real, xf: Transform) -> Rounded<'a> {
+        Rounded { core, radius, xf }
+    }
+}
+
 /// A polygon's best candidate for the separating axis: the edge along which the other
 /// polygon is farthest out, and that separation of the cores (m).
 #[derive(Clone, Copy)]
@@ -496,16 +503,8 @@ mod tests {
             let fast = collide_rects(ha, xa, hb, xb, margin);
             let (pa, pb) = (poly(ha), poly(hb));
             let general = collide_polygons(
-                Rounded {
-                    core: &pa,
-                    radius: 0.0,
-                    xf: xa,
-                },
-                Rounded {
-                    core: &pb,
-                    radius: 0.0,
-                    xf: xb,
-                },
+                Rounded::new(&pa, 0.0, xa),
+                Rounded::new(&pb, 0.0, xb),
                 margin,
             );
             assert_eq!(fast.count, general.count, "{ha:?} {xa:?} {hb:?} {xb:?}");

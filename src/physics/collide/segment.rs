@@ -58,16 +58,8 @@ pub fn collide_segment(
             collide_polygon_circle(&line, s.radius, xf_l, *radius, xf_b, margin)
         }
         _ => {
-            let rounded_a = Rounded {
-                core: &line,
-                radius: s.radius,
-                xf: xf_l,
-            };
-            let rounded_b = Rounded {
-                core: &core_b,
-                radius: rb,
-                xf: xf_b,
-            };
+            let rounded_a = Rounded::new(&line, s.radius, xf_l);
+            let rounded_b = Rounded::new(&core_b, rb, xf_b);
             collide_polygons(rounded_a, rounded_b, margin)
         }
     };

@@ -152,36 +152,17 @@ impl<L: Wide> Packed<L> {
     fn solve(&mut self, bodies: &mut [SolverBody], kind: PassKind, inv_h: Real, push_out: Real) {
         let (inv_h, push_out) = (L::splat(inv_h), L::splat(-push_out));
         match kind {
-            PassKind::Biased => {
-                let pass = Pass {
-                    inv_h,
-                    use_bias: true,
-                    push_out,
-                };
-                for bundle in self.packed.iter_mut().flatten() {
-                    bundle.solve(bodies, &pass, true);
-                }
-            }
-            PassKind::Relax => {
-                let pass = Pass {
-                    inv_h,
-                    use_bias: false,
-                    push_out,
-                };
-                for bundle in self.packed.iter_mut().flatten() {
-                    bundle.solve(bodies, &pass, true);
-                }
-            }
-            PassKind::NormalRelax => {
-                let pass = Pass {
-                    inv_h,
-                    use_bias: false,
-                    push_out,
-                };
-                for bundle in self.packed.iter_mut().flatten() {
-                    bundle.solve(bodies, &pass, false);
-                }
-            }
+            PassKind::Biased => self.pass(bodies, &Pass::new(inv_h, true, push_out), true),
+            PassKind::Relax => self.pass(bodies, &Pass::new(inv_h, false, push_out), true),
+            PassKind::NormalRelax => self.pass(bodies, &Pass::new(inv_h, false, push_out), false),
+        }
+    }
+
+    /// One pass over every bundle, with `friction` or without.
+    #[inline(always)]
+    fn pass(&mut self, bodies: &mut [SolverBody], pass: &Pass<L>, friction: bool) {
+        for bundle in self.packed.iter_mut().flatten() {
+            bundle.solve(bodies, pass, friction);
         }
     }
 

@@ -157,6 +157,19 @@ pub(crate) struct Pass<L> {
     pub push_out: L,
 }
 
+impl<L> Pass<L> {
+    /// A pass at 1 / substep `inv_h` (1/s), with the soft bias or without, capped at
+    /// `push_out` (a negative velocity, m/s).
+    #[inline(always)]
+    pub fn new(inv_h: L, use_bias: bool, push_out: L) -> Pass<L> {
+        Pass {
+            inv_h,
+            use_bias,
+            push_out,
+        }
+    }
+}
+
 /// The body state a kernel reads for a bundle's lanes.
 struct BodyLanes<L> {
     vx: L,

@@ -155,3 +155,13 @@ fn sequential_solver_never_gains_energy_at_100_and_1000_to_1() {
         );
     }
 }
+
+#[test]
+fn a_box_rides_a_kinematic_platform_within_the_slop() {
+    check(extreme::kinematic_carrier);
+}
+
+#[test]
+fn a_fast_rolling_disc_stays_level_and_keeps_its_speed() {
+    check(extreme::rolling_disc);
+}

@@ -57,6 +57,10 @@ pub(crate) struct Contact {
     pub restitution: Real,
     /// True when A or B is static (the soft step makes those contacts stiffer).
     pub touches_static: bool,
+    /// How far A's and B's surfaces are grown out from their cores (m; `Shape::rounding`):
+    /// the soft step follows a rounded surface's point as the core turns, not as the
+    /// material turns (a rolling disc's contact stays at its bottom).
+    pub rounding: [Real; 2],
     /// The points; the first `count` are live.
     pub points: [ContactPoint; 2],
     /// Number of live points.

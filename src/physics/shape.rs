@@ -177,6 +177,17 @@ impl Shape {
         }
     }
 
+    /// How far the shape's surface is grown out from its core (m): the radius of a disc, a
+    /// capsule or a thick segment, 0 for a sharp polygon. A contact point on such a surface
+    /// stays where the core is nearest the other body, however the body turns.
+    pub fn rounding(&self) -> Real {
+        match *self {
+            Shape::Rect { .. } | Shape::Polygon(_) => 0.0,
+            Shape::Circle { radius } | Shape::Capsule { radius, .. } => radius,
+            Shape::Segment(ref s) => s.radius,
+        }
+    }
+
     /// The radius of the smallest circle about the centre of mass that holds the shape (m).
     pub fn bounding_radius(&self) -> Real {
         match *self {

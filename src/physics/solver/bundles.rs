@@ -11,7 +11,9 @@
 //! the colours in ascending order.
 
 use super::constraint::ContactConstraint;
-use super::contact_solver::{BounceLanes, Bundle, BundleKind, Pass, PointImpulses, NO_BOUNCE};
+use super::contact_solver::{
+    BounceLanes, Bundle, BundleKind, Pass, PointImpulses, RoundLanes, NO_BOUNCE, NO_ROUNDING,
+};
 use super::graph::{COLOURS, OVERFLOW};
 use super::lanes::{eight_lanes_available, prefetch, Lanes1, Lanes4, Lanes8, Wide};
 use super::{PassKind, Selected, SolverBody};
@@ -59,6 +61,8 @@ struct Packed<L: Wide> {
     packed: Vec<Vec<Bundle<L>>>,
     slots: Vec<u16>,
     bounces: Vec<BounceLanes<L>>,
+    /// The rounding lanes of the bundles with a rounded side.
+    rounds: Vec<RoundLanes<L>>,
 }
 
 impl<L: Wide> Default for Packed<L> {
@@ -68,6 +72,7 @@ impl<L: Wide> Default for Packed<L> {
             packed: Vec::new(),
             slots: Vec::new(),
             bounces: Vec::new(),
+            rounds: Vec::new(),
         }
     }
 }
@@ -90,6 +95,7 @@ impl<L: Wide> Packed<L> {
             self.lists[slot as usize] = list;
         }
         self.bounces.clear();
+        self.rounds.clear();
     }
 
     /// Write contact `c` (index `i`) with its constraint `k` into the next lane of list
@@ -118,6 +124,13 @@ impl<L: Wide> Packed<L> {
                 self.bounces.push(BounceLanes::NONE);
             }
             self.bounces[bundle.bounce_index as usize].set(lane, c, k);
+        }
+        if c.rounding != [0.0; 2] {
+            if bundle.round_index == NO_ROUNDING {
+                bundle.round_index = self.rounds.len() as u32;
+                self.rounds.push(RoundLanes::NONE);
+            }
+            self.rounds[bundle.round_index as usize].set(lane, c);
         }
     }
 
@@ -161,8 +174,11 @@ impl<L: Wide> Packed<L> {
     /// One pass over every bundle, with `friction` or without.
     #[inline(always)]
     fn pass(&mut self, bodies: &mut [SolverBody], pass: &Pass<L>, friction: bool) {
+        let rounds = &self.rounds;
         for bundle in self.packed.iter_mut().flatten() {
-            bundle.solve(bodies, pass, friction);
+            // (None for a bundle without rounding: its index is out of range.)
+            let round = rounds.get(bundle.round_index as usize);
+            bundle.solve(bodies, (pass, round), friction);
         }
     }
 

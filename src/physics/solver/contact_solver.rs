@@ -71,6 +71,8 @@ pub(crate) struct Bundle<L: Wide> {
     pub kind: BundleKind,
     /// Where the bundle's restitution lanes are ([`BounceLanes`]), or [`NO_BOUNCE`].
     pub bounce_index: u32,
+    /// Where the bundle's rounding lanes are ([`RoundLanes`]), or [`NO_ROUNDING`].
+    pub round_index: u32,
     /// Contact index per lane; `u32::MAX` for an empty lane.
     pub contact: L::Index,
     /// Solver-body indices of A and B per lane (the fixed dummy body for empty lanes).
@@ -134,6 +136,32 @@ impl<L: Wide> BounceLanes<L> {
         for (v, kp) in self.relative_velocity.iter_mut().zip(&k.points[..c.count]) {
             v.set_lane(lane, kp.relative_velocity);
         }
+    }
+}
+
+/// A bundle none of whose contacts has a rounded side.
+pub(crate) const NO_ROUNDING: u32 = u32::MAX;
+
+/// How far each side's surface is grown out from its core (m; `Contact::rounding`), per lane,
+/// kept apart from the bundle like [`BounceLanes`]: only bundles with a rounded side have them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RoundLanes<L> {
+    a: L,
+    b: L,
+}
+
+impl<L: Wide> RoundLanes<L> {
+    /// No lane rounded.
+    pub const NONE: RoundLanes<L> = RoundLanes {
+        a: L::ZERO,
+        b: L::ZERO,
+    };
+
+    /// Lane `lane` has contact `c`'s rounding.
+    #[inline(always)]
+    pub fn set(&mut self, lane: usize, c: &Contact) {
+        self.a.set_lane(lane, c.rounding[0]);
+        self.b.set_lane(lane, c.rounding[1]);
     }
 }
 
@@ -258,6 +286,7 @@ impl<L: Wide> Bundle<L> {
         Bundle {
             kind,
             bounce_index: NO_BOUNCE,
+            round_index: NO_ROUNDING,
             contact: L::index_splat(u32::MAX),
             a: L::index_splat(dummy),
             b: L::index_splat(dummy),
@@ -398,9 +427,15 @@ impl<L: Wide> Bundle<L> {
     }
 
     /// One solve pass: the normal impulses (soft where `pass.use_bias`, rigid otherwise),
-    /// then friction unless `friction` is false (a normal relax pass).
+    /// then friction unless `friction` is false (a normal relax pass). `round`: the bundle's
+    /// rounding lanes, if it has any.
     #[inline(always)]
-    pub fn solve(&mut self, bodies: &mut [SolverBody], pass: &Pass<L>, friction: bool) {
+    pub fn solve(
+        &mut self,
+        bodies: &mut [SolverBody],
+        (pass, round): (&Pass<L>, Option<&RoundLanes<L>>),
+        friction: bool,
+    ) {
         let (mut a, mut b) = self.gather(bodies);
         let (n, t) = self.axes();
         let dp_n = (b.dpx - a.dpx) * n.0 + (b.dpy - a.dpy) * n.1;
@@ -408,8 +443,8 @@ impl<L: Wide> Bundle<L> {
         // take the AVX2 compilation of the kernel it is called from, and nothing but inlined
         // functions may stand between the eight-lane kernels and their instructions.)
         let coeffs = [
-            self.coefficients(&self.p[0], (&a, &b), dp_n, pass),
-            self.coefficients(&self.p[1], (&a, &b), dp_n, pass),
+            self.coefficients(&self.p[0], (&a, &b), dp_n, (pass, round)),
+            self.coefficients(&self.p[1], (&a, &b), dp_n, (pass, round)),
         ];
         match self.kind {
             BundleKind::Block => self.solve_block(&mut a, &mut b, &coeffs),
@@ -446,18 +481,29 @@ impl<L: Wide> Bundle<L> {
     /// push-out speed, in the biased pass, and nothing in a relax pass. The separation is
     /// worked out from how far the bodies moved this step: s = s0 + (dpB - dpA) . n +
     /// (qB rB - rB) . n - (qA rA - rA) . n, where for a rotation q = (c, s),
-    /// (q r) . n = c (r . n) + s (r x n). `dp_n` is (dpB - dpA) . n.
+    /// (q r) . n = c (r . n) + s (r x n). `dp_n` is (dpB - dpA) . n. On a rounded side
+    /// (`round`) the point is its core's nearest point grown out along the normal, so only the
+    /// core's point turns with the body: for B, rB + rad n turns and -rad n does not (a disc's
+    /// contact stays at its bottom as it rolls, where the turned material point would rise).
     #[inline(always)]
     fn coefficients(
         &self,
         p: &PointLanes<L>,
         (a, b): (&BodyLanes<L>, &BodyLanes<L>),
         dp_n: L,
-        pass: &Pass<L>,
+        (pass, round): (&Pass<L>, Option<&RoundLanes<L>>),
     ) -> (L, L, L) {
-        let s = dp_n + (b.qc * p.b_dot_n + b.qs * p.b_cross_n)
-            - (a.qc * p.a_dot_n + a.qs * p.a_cross_n)
-            + p.adjusted_separation;
+        let (turned_a, turned_b) = match round {
+            None => (
+                a.qc * p.a_dot_n + a.qs * p.a_cross_n,
+                b.qc * p.b_dot_n + b.qs * p.b_cross_n,
+            ),
+            Some(r) => (
+                a.qc * (p.a_dot_n - r.a) + a.qs * p.a_cross_n + r.a,
+                b.qc * (p.b_dot_n + r.b) + b.qs * p.b_cross_n - r.b,
+            ),
+        };
+        let s = dp_n + turned_b - turned_a + p.adjusted_separation;
         let speculative = s.cmpgt(L::ZERO);
         let (soft_bias, soft_ms, soft_is) = if pass.use_bias {
             (

@@ -358,6 +358,7 @@ impl PairInput<'_> {
             friction: 0.0,
             restitution: 0.0,
             touches_static: a.inv_mass == 0.0 || b.inv_mass == 0.0,
+            rounding: [a.shape.rounding(), b.shape.rounding()],
             points: [ContactPoint::default(); 2],
             count: manifold.count,
             hertz: previous.map_or(0.0, |c| c.hertz),

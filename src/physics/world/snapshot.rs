@@ -267,6 +267,13 @@ impl ContactRecord {
             friction: s.friction,
             restitution: s.restitution,
             touches_static: s.touches_static,
+            // The shapes' own: worked out again, not stored.
+            rounding: [s.a, s.b].map(|i| {
+                slots[i as usize]
+                    .body
+                    .as_ref()
+                    .map_or(0.0, |b| b.shape.rounding())
+            }),
             points,
             count: s.points.len(),
             hertz: s.hertz,

@@ -165,3 +165,8 @@ fn a_box_rides_a_kinematic_platform_within_the_slop() {
 fn a_fast_rolling_disc_stays_level_and_keeps_its_speed() {
     check(extreme::rolling_disc);
 }
+
+#[test]
+fn a_dropped_disc_rebounds_at_the_mixed_restitution_times_its_impact_speed() {
+    check(extreme::restitution_drop);
+}

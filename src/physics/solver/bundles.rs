@@ -12,7 +12,7 @@
 
 use super::constraint::ContactConstraint;
 use super::contact_solver::{
-    BounceLanes, Bundle, BundleKind, Pass, PointImpulses, RoundLanes, NO_BOUNCE, NO_ROUNDING,
+    BounceLanes, Bundle, BundleKind, Pass, PointImpulses, RoundLanes, Sides, NO_BOUNCE, NO_ROUNDING,
 };
 use super::graph::{COLOURS, OVERFLOW};
 use super::lanes::{eight_lanes_available, prefetch, Lanes1, Lanes4, Lanes8, Wide};
@@ -123,7 +123,7 @@ impl<L: Wide> Packed<L> {
                 bundle.bounce_index = self.bounces.len() as u32;
                 self.bounces.push(BounceLanes::NONE);
             }
-            self.bounces[bundle.bounce_index as usize].set(lane, c, k);
+            self.bounces[bundle.bounce_index as usize].set(lane, c);
         }
         if c.rounding != [0.0; 2] {
             if bundle.round_index == NO_ROUNDING {
@@ -171,14 +171,18 @@ impl<L: Wide> Packed<L> {
         }
     }
 
-    /// One pass over every bundle, with `friction` or without.
+    /// One pass over every bundle, with `friction` or without. The biased pass updates the
+    /// bouncing bundles' approach speeds.
     #[inline(always)]
     fn pass(&mut self, bodies: &mut [SolverBody], pass: &Pass<L>, friction: bool) {
-        let rounds = &self.rounds;
+        let (rounds, bounces) = (&self.rounds, &mut self.bounces);
         for bundle in self.packed.iter_mut().flatten() {
-            // (None for a bundle without rounding: its index is out of range.)
-            let round = rounds.get(bundle.round_index as usize);
-            bundle.solve(bodies, (pass, round), friction);
+            // (None for a bundle without them: its index is out of range.)
+            let sides = Sides {
+                round: rounds.get(bundle.round_index as usize),
+                bounce: bounces.get_mut(bundle.bounce_index as usize),
+            };
+            bundle.solve(bodies, pass, sides, friction);
         }
     }
 
@@ -211,7 +215,7 @@ impl<L: Wide> Packed<L> {
                     }
                 }
             }
-            let ends = bundle.impulses();
+            let ends = bundle.impulses(self.bounces.get(bundle.bounce_index as usize));
             for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
                 if let Some(c) = contacts.get_mut(ci as usize) {
                     then(c, end);

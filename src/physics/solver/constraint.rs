@@ -51,9 +51,6 @@ pub(crate) struct PointConstraint {
     /// Soft step: separation minus the anchors' contribution (m), so the current separation
     /// is (dpB - dpA + qB rB - qA rA) . n + adjusted_separation.
     pub adjusted_separation: Real,
-    /// Normal relative velocity before the solve (m/s): the approach speed restitution
-    /// reverses.
-    pub relative_velocity: Real,
     /// Sequential solver: target normal velocity (m/s) from position bias or restitution.
     pub bias: Real,
 }

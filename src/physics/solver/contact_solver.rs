@@ -117,26 +117,42 @@ pub(crate) const NO_BOUNCE: u32 = u32::MAX;
 pub(crate) struct BounceLanes<L> {
     /// Coefficient of restitution per lane (0 for a lane that does not bounce).
     restitution: L,
-    /// Each point's normal velocity before the solve (m/s): the approach speed to reverse.
-    relative_velocity: [L; 2],
+    /// Each point's approach speed: the most negative normal velocity any pass met it at
+    /// before pushing (m/s), from the approach it carried over from last step (0 if none).
+    /// That is the speed it hit at: a body landing within a step is faster when its contact
+    /// first pushes than when the step began (the step's gravity), and slower once pushed.
+    approach: [L; 2],
+    /// Whether a biased pass pushed the point (1) or not (0): its surfaces met this step. A
+    /// relax pass's push on a point still apart only keeps the next substep from passing
+    /// the surface; the point bounces when it meets it, next step, at the approach it keeps.
+    touched: [L; 2],
 }
 
 impl<L: Wide> BounceLanes<L> {
     /// No lane bounces.
     pub const NONE: BounceLanes<L> = BounceLanes {
         restitution: L::ZERO,
-        relative_velocity: [L::ZERO; 2],
+        approach: [L::ZERO; 2],
+        touched: [L::ZERO; 2],
     };
 
-    /// Lane `lane` bounces with contact `c`'s restitution from the approach speeds its
-    /// constraint `k` recorded.
+    /// Lane `lane` bounces with contact `c`'s restitution, from the approach its points
+    /// carried over from last step.
     #[inline(always)]
-    pub fn set(&mut self, lane: usize, c: &Contact, k: &ContactConstraint) {
+    pub fn set(&mut self, lane: usize, c: &Contact) {
         self.restitution.set_lane(lane, c.restitution);
-        for (v, kp) in self.relative_velocity.iter_mut().zip(&k.points[..c.count]) {
-            v.set_lane(lane, kp.relative_velocity);
+        for (v, p) in self.approach.iter_mut().zip(&c.points[..c.count]) {
+            v.set_lane(lane, p.approach_velocity);
         }
     }
+}
+
+/// The side lanes a bundle may have, for one solve pass: its rounding ([`RoundLanes`]), and
+/// its restitution lanes ([`BounceLanes`]), whose approach speeds (and, in the biased pass,
+/// touches) the pass updates.
+pub(crate) struct Sides<'a, L> {
+    pub round: Option<&'a RoundLanes<L>>,
+    pub bounce: Option<&'a mut BounceLanes<L>>,
 }
 
 /// A bundle none of whose contacts has a rounded side.
@@ -174,6 +190,9 @@ pub(crate) struct PointImpulses {
     pub tangent: Real,
     /// Everything the normal constraint applied this step (N s).
     pub total_normal: Real,
+    /// The approach speed a point that has not met its surface yet carries to the next step
+    /// (m/s, <= 0; see [`BounceLanes`]), 0 otherwise.
+    pub approach: Real,
 }
 
 /// What a solve pass does: 1 / substep (1/s), whether it applies the soft bias, and the
@@ -427,13 +446,31 @@ impl<L: Wide> Bundle<L> {
     }
 
     /// One solve pass: the normal impulses (soft where `pass.use_bias`, rigid otherwise),
-    /// then friction unless `friction` is false (a normal relax pass). `round`: the bundle's
-    /// rounding lanes, if it has any.
+    /// then friction unless `friction` is false (a normal relax pass), with the bundle's side
+    /// lanes (`sides`).
     #[inline(always)]
     pub fn solve(
         &mut self,
         bodies: &mut [SolverBody],
-        (pass, round): (&Pass<L>, Option<&RoundLanes<L>>),
+        pass: &Pass<L>,
+        sides: Sides<L>,
+        friction: bool,
+    ) {
+        // One copy of the kernel for sharp bundles and one for rounded ones, so that neither
+        // asks per point which it is.
+        match sides.round {
+            None => self.solve_turning(bodies, (pass, Sharp), sides.bounce, friction),
+            Some(r) => self.solve_turning(bodies, (pass, r), sides.bounce, friction),
+        }
+    }
+
+    /// [`Bundle::solve`] for points that turn as `round` says.
+    #[inline(always)]
+    fn solve_turning<T: Turning<L>>(
+        &mut self,
+        bodies: &mut [SolverBody],
+        (pass, round): (&Pass<L>, T),
+        bounce: Option<&mut BounceLanes<L>>,
         friction: bool,
     ) {
         let (mut a, mut b) = self.gather(bodies);
@@ -446,6 +483,16 @@ impl<L: Wide> Bundle<L> {
             self.coefficients(&self.p[0], (&a, &b), dp_n, (pass, round)),
             self.coefficients(&self.p[1], (&a, &b), dp_n, (pass, round)),
         ];
+        // Where the bundle bounces, each point's normal velocity before this pass pushes it,
+        // and whether its surfaces meet (a biased pass that pushes closes the gap within its
+        // substep; a relax pass's push on a point still apart only guards the next substep).
+        let before = match bounce {
+            Some(_) => Some([
+                self.before_push(&self.p[0], (&a, &b), dp_n, round),
+                self.before_push(&self.p[1], (&a, &b), dp_n, round),
+            ]),
+            None => None,
+        };
         match self.kind {
             BundleKind::Block => self.solve_block(&mut a, &mut b, &coeffs),
             BundleKind::Points => {
@@ -458,6 +505,15 @@ impl<L: Wide> Bundle<L> {
                     p.normal_impulse = total;
                     BodyLanes::apply(&mut a, &mut b, n, normal_arms(p), applied);
                 }
+            }
+        }
+        if let (Some(bounce), Some(before)) = (bounce, before) {
+            for (j, (v, met)) in before.into_iter().enumerate() {
+                let pushes = self.p[j].normal_impulse.cmpgt(L::ZERO);
+                let approach = bounce.approach[j];
+                bounce.approach[j] = L::select(pushes, v.min(approach), approach);
+                let touches = if pass.use_bias { pushes } else { pushes & met };
+                bounce.touched[j] = L::select(touches, L::ONE, bounce.touched[j]);
             }
         }
         // Skipped when no lane has friction.
@@ -474,6 +530,20 @@ impl<L: Wide> Bundle<L> {
         self.scatter(bodies, &a, &b);
     }
 
+    /// Point `p`'s normal velocity (m/s) and whether its surfaces meet (separation <= 0),
+    /// before a pass pushes it.
+    #[inline(always)]
+    fn before_push<T: Turning<L>>(
+        &self,
+        p: &PointLanes<L>,
+        (a, b): (&BodyLanes<L>, &BodyLanes<L>),
+        dp_n: L,
+        round: T,
+    ) -> (L, L::Mask) {
+        let vn = BodyLanes::relative(a, b, self.axes().0, normal_arms(p));
+        (vn, L::ZERO.cmpge(separation(p, (a, b), dp_n, round)))
+    }
+
     /// A point's (bias, mass scale, impulse scale) for this pass (Catto's soft step):
     /// impulse = -m_eff (mass_scale vn + bias) - impulse_scale P. Where the surfaces are apart
     /// (a speculative point) the bias lets them close the gap in one substep, no more; where
@@ -486,24 +556,14 @@ impl<L: Wide> Bundle<L> {
     /// core's point turns with the body: for B, rB + rad n turns and -rad n does not (a disc's
     /// contact stays at its bottom as it rolls, where the turned material point would rise).
     #[inline(always)]
-    fn coefficients(
+    fn coefficients<T: Turning<L>>(
         &self,
         p: &PointLanes<L>,
         (a, b): (&BodyLanes<L>, &BodyLanes<L>),
         dp_n: L,
-        (pass, round): (&Pass<L>, Option<&RoundLanes<L>>),
+        (pass, round): (&Pass<L>, T),
     ) -> (L, L, L) {
-        let (turned_a, turned_b) = match round {
-            None => (
-                a.qc * p.a_dot_n + a.qs * p.a_cross_n,
-                b.qc * p.b_dot_n + b.qs * p.b_cross_n,
-            ),
-            Some(r) => (
-                a.qc * (p.a_dot_n - r.a) + a.qs * p.a_cross_n + r.a,
-                b.qc * (p.b_dot_n + r.b) + b.qs * p.b_cross_n - r.b,
-            ),
-        };
-        let s = dp_n + turned_b - turned_a + p.adjusted_separation;
+        let s = separation(p, (a, b), dp_n, round);
         let speculative = s.cmpgt(L::ZERO);
         let (soft_bias, soft_ms, soft_is) = if pass.use_bias {
             (
@@ -591,7 +651,7 @@ impl<L: Wide> Bundle<L> {
         let (mut a, mut b) = self.gather(bodies);
         let (n, _) = self.axes();
         let e = bounce.restitution;
-        let v0 = bounce.relative_velocity;
+        let v0 = bounce.approach;
         let aim = [e * v0[0], e * v0[1]];
         let mut by_block = None;
         if self.kind == BundleKind::Block {
@@ -622,20 +682,19 @@ impl<L: Wide> Bundle<L> {
         self.scatter(bodies, &a, &b);
     }
 
-    /// Which lanes' point `j` bounces: it approached faster than `threshold`, pushed in the
-    /// step, and its contact has restitution.
+    /// Which lanes' point `j` bounces: its surfaces met this step (a biased pass pushed it),
+    /// it approached faster than `threshold`, and its contact has restitution.
     #[inline(always)]
     fn bounces(&self, j: usize, bounce: &BounceLanes<L>, threshold: L) -> L::Mask {
-        let p = &self.p[j];
-        let pushed = (p.total_normal_impulse + p.normal_impulse).cmpgt(L::ZERO);
-        let fast = (-threshold).cmpgt(bounce.relative_velocity[j]);
-        fast & pushed & bounce.restitution.cmpgt(L::ZERO)
+        let touched = bounce.touched[j].cmpgt(L::ZERO);
+        let fast = (-threshold).cmpgt(bounce.approach[j]);
+        fast & touched & bounce.restitution.cmpgt(L::ZERO)
     }
 
     /// Each lane's points' impulses at the end of the solve (lanes beyond `L::WIDTH` unused),
     /// read out field by field: each field's lanes once, not once per lane.
     #[inline(always)]
-    pub fn impulses(&self) -> [[PointImpulses; 2]; 8] {
+    pub fn impulses(&self, bounce: Option<&BounceLanes<L>>) -> [[PointImpulses; 2]; 8] {
         let mut ends = [[PointImpulses::default(); 2]; 8];
         for (j, p) in self.p.iter().enumerate() {
             let (normal, tangent, total) = (
@@ -643,15 +702,68 @@ impl<L: Wide> Bundle<L> {
                 p.tangent_impulse.to_lanes(),
                 p.total_normal_impulse.to_lanes(),
             );
+            let carried = match bounce {
+                Some(b) => L::select(b.touched[j].cmpgt(L::ZERO), L::ZERO, b.approach[j]),
+                None => L::ZERO,
+            }
+            .to_lanes();
             for (lane, end) in ends.iter_mut().take(L::WIDTH).enumerate() {
                 end[j] = PointImpulses {
                     normal: normal.as_ref()[lane],
                     tangent: tangent.as_ref()[lane],
                     total_normal: total.as_ref()[lane] + normal.as_ref()[lane],
+                    approach: carried.as_ref()[lane],
                 };
             }
         }
         ends
+    }
+}
+
+/// Point `p`'s separation now (m; see `Bundle::coefficients`): its separation when the step
+/// was prepared, moved by how far the bodies `a` and `b` moved and turned (`dp_n`: their
+/// relative motion along the normal), a rounded side (`round`) turning only its core's point.
+#[inline(always)]
+fn separation<L: Wide, T: Turning<L>>(
+    p: &PointLanes<L>,
+    (a, b): (&BodyLanes<L>, &BodyLanes<L>),
+    dp_n: L,
+    turning: T,
+) -> L {
+    let (turned_a, turned_b) = turning.turned(p, (a, b));
+    dp_n + turned_b - turned_a + p.adjusted_separation
+}
+
+/// How a bundle's points move as their bodies turn: (qA rA) . n and (qB rB) . n, for
+/// rotations q = (c, s) with (q r) . n = c (r . n) + s (r x n).
+trait Turning<L: Wide>: Copy {
+    fn turned(self, p: &PointLanes<L>, bodies: (&BodyLanes<L>, &BodyLanes<L>)) -> (L, L);
+}
+
+/// Sharp corners: a point turns with its body.
+#[derive(Clone, Copy)]
+struct Sharp;
+
+impl<L: Wide> Turning<L> for Sharp {
+    #[inline(always)]
+    fn turned(self, p: &PointLanes<L>, (a, b): (&BodyLanes<L>, &BodyLanes<L>)) -> (L, L) {
+        (
+            a.qc * p.a_dot_n + a.qs * p.a_cross_n,
+            b.qc * p.b_dot_n + b.qs * p.b_cross_n,
+        )
+    }
+}
+
+/// Rounded sides: a point turns with its core's nearest point, the rounding along the normal
+/// staying put (on A the surface is rad out along +n from the core, on B along -n).
+impl<L: Wide> Turning<L> for &RoundLanes<L> {
+    #[inline(always)]
+    fn turned(self, p: &PointLanes<L>, (a, b): (&BodyLanes<L>, &BodyLanes<L>)) -> (L, L) {
+        let r = self;
+        (
+            a.qc * (p.a_dot_n - r.a) + a.qs * p.a_cross_n + r.a,
+            b.qc * (p.b_dot_n + r.b) + b.qs * p.b_cross_n - r.b,
+        )
     }
 }
 

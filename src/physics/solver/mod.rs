@@ -298,19 +298,6 @@ pub(crate) fn apply_impulse(a: &mut SolverBody, b: &mut SolverBody, ra: Vec2, rb
     b.w += b.inv_inertia * cross(rb, p);
 }
 
-/// Relative velocity of B over A at a point along a direction d, from the point's arms
-/// rd_a = rA x d and rd_b = rB x d: (vB - vA) . d + wB rd_b - wA rd_a.
-#[inline]
-pub(crate) fn relative_velocity(
-    a: &SolverBody,
-    b: &SolverBody,
-    d: Vec2,
-    rd_a: Real,
-    rd_b: Real,
-) -> Real {
-    (b.v - a.v).dot(d) + b.w * rd_b - a.w * rd_a
-}
-
 /// Mutable references to two distinct bodies of the solver array.
 #[inline]
 pub(crate) fn pair_mut(

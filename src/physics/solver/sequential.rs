@@ -137,7 +137,6 @@ fn prepare(
             let (ra, rb) = (p.anchor_a, p.anchor_b);
             let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
             let vn = dv.dot(n);
-            k.relative_velocity = vn;
             // Speculative point: the bodies may close the gap this step, no more. Overlaps are
             // pushed apart by the split impulse (`SplitImpulse`), not through the velocities.
             let mut bias = if p.separation > 0.0 {

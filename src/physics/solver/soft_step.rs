@@ -25,8 +25,8 @@ use super::constraint::{Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
 use super::softness::Softness;
 use super::{
-    integrate_positions, integrate_velocities, relative_velocity, restart_motion, Kinematic,
-    Limits, Moving, PassKind, Selected, SolverBody,
+    integrate_positions, integrate_velocities, restart_motion, Kinematic, Limits, Moving, PassKind,
+    Selected, SolverBody,
 };
 use crate::physics::contact::Contact;
 use crate::physics::math::{Real, PI};
@@ -213,7 +213,6 @@ fn prepare_contact(
         kp.arms = arms;
         kp.set_masses(a, b, p, n, t);
         kp.adjusted_separation = p.separation - (arms.b_dot_n - arms.a_dot_n);
-        kp.relative_velocity = relative_velocity(a, b, n, arms.a_cross_n, arms.b_cross_n);
         p.total_normal_impulse = 0.0;
         if !stiffness.warm_starting {
             p.normal_impulse = 0.0;
@@ -242,6 +241,7 @@ fn finish(c: &mut Contact, ends: &[PointImpulses; 2], substeps: Real, inv_dt: Re
         p.normal_impulse = end.normal * substeps;
         p.tangent_impulse = end.tangent.clamp(-max_f, max_f) * substeps;
         p.total_normal_impulse = end.total_normal;
+        p.approach_velocity = end.approach;
         force += end.total_normal;
     }
     // The force the contact carried, held so that a load that comes and goes does not

@@ -170,3 +170,8 @@ fn a_fast_rolling_disc_stays_level_and_keeps_its_speed() {
 fn a_dropped_disc_rebounds_at_the_mixed_restitution_times_its_impact_speed() {
     check(extreme::restitution_drop);
 }
+
+#[test]
+fn a_kinematic_wall_pushes_64_boxes_within_the_slop() {
+    check(extreme::kinematic_pusher);
+}

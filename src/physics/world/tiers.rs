@@ -147,6 +147,10 @@ pub(super) struct TierScratch {
     pub island_extent: Vec<Extent>,
     /// Each island's number of moving bodies, at its root.
     pub island_bodies: Vec<u32>,
+    /// Each contact's: whether a moving kinematic body drives its load.
+    pub driven: Vec<bool>,
+    /// Each island's, at its root: whether any of its contacts is driven.
+    pub island_driven: Vec<bool>,
     /// The contacts' indices grouped by tier, while tiers are solved apart.
     pub tier_contacts: Vec<u32>,
     /// The bodies of the tier being solved.
@@ -189,6 +193,7 @@ impl World {
                 .extend(awake.iter().map(|c| TierInput::of(c, slop)));
         }
         self.tiers.contact_tier.clear();
+        self.tiers.driven.clear();
         self.islands.contact_bodies.clear();
         let mut top = Tier::Base;
         for input in &self.tiers.inputs {
@@ -220,6 +225,13 @@ impl World {
                 Tier::Base
             };
             top = top.max(need);
+            // A moving kinematic body (inverse mass 0, but a velocity) pushes or carries.
+            let moving = |i: u32| {
+                let s = &self.solver.bodies[i as usize];
+                s.inv_mass == 0.0 && (s.v != Vec2::ZERO || s.w != 0.0)
+            };
+            let driven = need >= Tier::Stack && (moving(a) || moving(b));
+            self.tiers.driven.push(driven);
             self.tiers.contact_tier.push(need);
             self.islands.contact_bodies.push(input.bodies);
         }
@@ -245,16 +257,23 @@ impl World {
         let pairs = &self.islands.contact_bodies;
         tiers.body_tier.clear();
         tiers.body_tier.resize(n, Tier::Base);
-        for (&need, &[a, b]) in tiers.contact_tier.iter().zip(pairs) {
+        tiers.island_driven.clear();
+        tiers.island_driven.resize(n, false);
+        let needs = tiers.contact_tier.iter().zip(&tiers.driven);
+        for ((&need, &driven), &[a, b]) in needs.zip(pairs) {
             let root = find(parent, if moving(a) { a } else { b }) as usize;
             tiers.body_tier[root] = tiers.body_tier[root].max(need);
+            tiers.island_driven[root] |= driven;
         }
         let stiff = self.settings.stiff_load_ratio;
         let mut top = Tier::Base;
         let roots = parent.iter().enumerate().filter(|&(i, &p)| p as usize == i);
         for (i, _) in roots {
-            let braced =
-                tiers.island_bodies[i] as Real >= stiff && !tiers.island_extent[i].slender();
+            // A loaded island driven by a kinematic body carries the driver's load along a
+            // line of contacts, however wide it lies: not braced.
+            let braced = tiers.island_bodies[i] as Real >= stiff
+                && !tiers.island_extent[i].slender()
+                && !tiers.island_driven[i];
             tiers.body_tier[i] = island_tier(tiers.body_tier[i], braced);
             top = top.max(tiers.body_tier[i]);
         }

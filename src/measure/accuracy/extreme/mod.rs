@@ -17,7 +17,7 @@ mod terrain;
 
 pub use contacts::{box_pile, bullet, deep_overlap, mass_ratio_100, mass_ratio_1000, mixed_pile};
 pub use limits::{gravity_flip, huge_dt, large_bodies, non_finite_refused, tiny_bodies};
-pub use motion::{kinematic_carrier, restitution_drop, rolling_disc};
+pub use motion::{kinematic_carrier, kinematic_pusher, restitution_drop, rolling_disc};
 pub use stacks::{
     far_from_origin, pyramid_100, pyramid_134, pyramid_20, pyramid_30, pyramid_sleeps,
     real_spacing, stack_20, stack_50,
@@ -64,7 +64,7 @@ const fn report_case(name: &'static str, title: &'static str, run: Runner) -> Ex
 /// Every case, in report order (the report-only cases last). One row a case, kept as a
 /// table.
 #[rustfmt::skip]
-const CASES: [ExtremeCase; 24] = [
+const CASES: [ExtremeCase; 25] = [
     case("stack_20", "Stack of 20, 30 s", stack_20),
     case("stack_50", "Stack of 50, 10 s", stack_50),
     case("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
@@ -85,6 +85,7 @@ const CASES: [ExtremeCase; 24] = [
     case("non_finite_refused", "NaN / inf refused", non_finite_refused),
     case("box_pile", "Pile of 2,000 boxes comes to rest (six nudges)", box_pile),
     case("kinematic_carrier", "A box carried by a moving platform", kinematic_carrier),
+    case("kinematic_pusher", "A moving wall pushes 64 boxes", kinematic_pusher),
     case("rolling_disc", "A disc rolling at up to 20 m/s", rolling_disc),
     case("restitution_drop", "Discs dropped 2 m rebound at e x impact", restitution_drop),
     report_case("pyramid_134", "Pyramid base 134 (9,045 boxes) stands", pyramid_134),

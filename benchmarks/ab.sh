@@ -14,6 +14,8 @@ set -eu
 cd "$(dirname "$0")/.."
 old_rev=${1:?usage: benchmarks/ab.sh OLD_REV [SCENE...]}
 shift
+# Resolved here: inside the worktree, a name like HEAD would mean the worktree's own.
+old_sha=$(git rev-parse --verify "$old_rev^{commit}")
 scenes=${*:-large_pyramid pyramid_20 falling_bricks many_boxes resting_pyramid mixed_shapes}
 rounds=${ROUNDS:-5}
 core=${CORE:-1}
@@ -23,9 +25,9 @@ build="cargo build --profile bench --no-default-features --features measure --ex
 root=$(pwd)
 mkdir -p target/ab
 if [ -d target/ab/old-src ]; then
-    git -C target/ab/old-src checkout -q -f --detach "$old_rev"
+    git -C target/ab/old-src checkout -q -f --detach "$old_sha"
 else
-    git worktree add -q --detach target/ab/old-src "$old_rev"
+    git worktree add -q --detach target/ab/old-src "$old_sha"
 fi
 cp examples/profile_step.rs target/ab/old-src/examples/profile_step.rs
 (cd target/ab/old-src && CARGO_TARGET_DIR="$root/target/ab/old" $build >&2)
@@ -35,7 +37,7 @@ old=target/ab/old/release/examples/profile_step
 new=target/bench/examples/profile_step
 [ -x "$new" ] || new=target/release/examples/profile_step
 
-echo "old: $old_rev ($(git rev-parse --short "$old_rev")), new: working tree at $(git rev-parse --short HEAD)$(git diff --quiet || echo ' + changes')"
+echo "old: $old_rev ($(git rev-parse --short "$old_sha")), new: working tree at $(git rev-parse --short HEAD)$(git diff --quiet || echo ' + changes')"
 echo "core $core, $rounds rounds, $steps timed steps a run; $(uptime | sed 's/.*load/load/')"
 for scene in $scenes; do
     olds=""

@@ -1,5 +1,6 @@
-//! Applying commands at a tick boundary: gravity, tilt, spawn, remove and reset, each all or
-//! nothing, each answered by the event to publish (or a rejection naming why).
+//! Applying commands at a tick boundary: gravity, tilt, spawn, remove, reset and a kinematic
+//! body's velocity, each all or nothing, each answered by the event to publish (or a
+//! rejection naming why).
 
 use super::Simulation;
 use crate::physics::PhysicsError;
@@ -155,6 +156,25 @@ impl Simulation {
             return Err(format!(
                 "id: body {r} is not kinematic (only kinematic bodies take a velocity; make it \
                  kinematic = true in the scene)"
+            ));
+        }
+        // The World refuses these too, but names its default cap; this names the cap the
+        // World runs with (a scene's `settings.max_linear_speed`) and the rim speed's radius.
+        let max = self.world.settings().max_linear_speed;
+        let speed = vec2(v).length();
+        if speed > max {
+            return Err(format!(
+                "velocity (speed) = {speed} m/s is out of range: must not exceed the World's \
+                 settings.max_linear_speed = {max} m/s"
+            ));
+        }
+        let radius = body.shape().bounding_radius();
+        let rim = (w as crate::physics::Real).abs() * radius;
+        if rim > max {
+            return Err(format!(
+                "angular_velocity = {w} rad/s is out of range: its rim speed |w| r = {rim} m/s \
+                 (r = {radius} m, the body's bounding radius) must not exceed the World's \
+                 settings.max_linear_speed = {max} m/s"
             ));
         }
         let id = body.id();

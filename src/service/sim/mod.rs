@@ -4,7 +4,8 @@
 //!
 //! - [`SceneSource`] (`source.rs`): where the scene comes from;
 //! - `bodies.rs`: each live body's name, colour and wire shape;
-//! - `apply.rs`: applying commands (gravity, tilt, spawn, remove, reset), all or nothing;
+//! - `apply.rs`: applying commands (gravity, tilt, spawn, remove, reset, velocity), all or
+//!   nothing;
 //! - `poses.rs`: the `…/poses` message of each frame, keyframes and deltas;
 //! - [`SimState`] and [`StartError`] (`state.rs`): what a checkpoint stores, and why a
 //!   simulation cannot start.

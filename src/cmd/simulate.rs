@@ -39,7 +39,7 @@ pub struct SimulateArgs {
     #[arg(long, value_enum)]
     pub solver: Option<SolverArg>,
     /// Commands at given simulated times (TOML `[[at]]` tables: gravity, tilt, spawn,
-    /// remove; docs/scenes.md), validated and applied as the daemon applies commands.
+    /// remove, velocity; docs/scenes.md), validated and applied as the daemon applies commands.
     #[arg(long, value_name = "FILE", conflicts_with = "journal")]
     pub timeline: Option<PathBuf>,
     /// Replay a journal written by `tiltbox serve --record LOG`: its config, scene (unless

@@ -103,8 +103,10 @@ fn drive(
             if let Some(ev) = sim.apply(incoming.clone()) {
                 if let EventKind::Rejected { reason, .. } = ev.kind {
                     return Err(anyhow!(Rejected(format!(
-                        "timeline {}: at[{i}] refused when applied before frame {frame}: {reason}",
-                        path.display()
+                        "timeline {}: at[{i}].{} refused when applied before frame {frame}: \
+                         {reason}",
+                        path.display(),
+                        incoming.key
                     ))));
                 }
             }

@@ -13,7 +13,8 @@ use super::command::Incoming;
 use super::config::Limits;
 use super::wire::parse_command;
 use crate::protocol::{
-    encode, BodyRef, CommandKey, Remove, SetGravity, ShapeSpec, Spawn, SpawnBody, Tilt, Vector,
+    encode, BodyRef, CommandKey, Remove, SetGravity, SetVelocity, ShapeSpec, Spawn, SpawnBody,
+    Tilt, Vector,
 };
 use crate::scene::Colour;
 use serde::Deserialize;
@@ -58,6 +59,19 @@ struct Entry {
     spawn: Option<Vec<Body>>,
     /// Ids to remove, as `simulate` prints them (`"12v0"`).
     remove: Option<Vec<String>>,
+    /// A kinematic body's new velocity, as the wire's `SetVelocity`.
+    velocity: Option<Velocity>,
+}
+
+/// `velocity = { id, velocity, angular_velocity }`: the fields of the wire's `SetVelocity`,
+/// the id written as `simulate` prints it. Both velocities are required: the command sets
+/// both, so leaving one out would silently zero it.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Velocity {
+    id: String,
+    velocity: [f32; 2],
+    angular_velocity: f32,
 }
 
 /// A body to spawn; omitted fields take [`SpawnBody::at`]'s values.
@@ -129,36 +143,16 @@ impl Timeline {
                     e.time
                 ));
             }
-            let (key, field, payload) = match (e.gravity, e.tilt, e.spawn, e.remove) {
-                (Some([x, y]), None, None, None) => {
+            let (key, field, payload) = match (e.gravity, e.tilt, e.spawn, e.remove, e.velocity) {
+                (Some([x, y]), None, None, None, None) => {
                     (CommandKey::Gravity, "gravity", encode(&SetGravity { x, y }))
                 }
-                (None, Some(t), None, None) => (CommandKey::Tilt, "tilt", encode(&t)),
-                (None, None, Some(bodies), None) => {
-                    let mut wire = Vec::with_capacity(bodies.len());
-                    for (j, b) in bodies.into_iter().enumerate() {
-                        let colour = match &b.colour {
-                            None => Colour::default(),
-                            Some(c) => c
-                                .parse()
-                                .map_err(|e| format!("{here}.spawn[{j}].colour = {c:?}: {e}"))?,
-                        };
-                        let at = SpawnBody::at(b.shape, Vector::new(b.position[0], b.position[1]));
-                        wire.push(SpawnBody {
-                            name: b.name,
-                            angle: b.angle,
-                            velocity: Vector::new(b.velocity[0], b.velocity[1]),
-                            angular_velocity: b.angular_velocity,
-                            density: b.density.unwrap_or(at.density),
-                            friction: b.friction.unwrap_or(at.friction),
-                            restitution: b.restitution.unwrap_or(at.restitution),
-                            colour,
-                            ..at
-                        });
-                    }
+                (None, Some(t), None, None, None) => (CommandKey::Tilt, "tilt", encode(&t)),
+                (None, None, Some(bodies), None, None) => {
+                    let wire = spawn_bodies(&here, bodies)?;
                     (CommandKey::Spawn, "spawn", encode(&Spawn { bodies: wire }))
                 }
-                (None, None, None, Some(ids)) => {
+                (None, None, None, Some(ids), None) => {
                     let mut refs = Vec::with_capacity(ids.len());
                     for (j, s) in ids.iter().enumerate() {
                         refs.push(body_ref(s).ok_or_else(|| {
@@ -170,9 +164,26 @@ impl Timeline {
                     }
                     (CommandKey::Remove, "remove", encode(&Remove { ids: refs }))
                 }
+                (None, None, None, None, Some(v)) => {
+                    // Whether the body is there and kinematic, and the World's speed cap, are
+                    // the simulation's to check when applied (the dry run, before printing).
+                    let id = body_ref(&v.id).ok_or_else(|| {
+                        format!(
+                            "{here}.velocity.id = {:?}: not a body id (write it as simulate \
+                             prints it, e.g. \"1v0\")",
+                            v.id
+                        )
+                    })?;
+                    let message = SetVelocity {
+                        id,
+                        velocity: Vector::new(v.velocity[0], v.velocity[1]),
+                        angular_velocity: v.angular_velocity,
+                    };
+                    (CommandKey::Velocity, "velocity", encode(&message))
+                }
                 _ => {
                     return Err(format!(
-                        "{here}: give exactly one of gravity, tilt, spawn, remove"
+                        "{here}: give exactly one of gravity, tilt, spawn, remove, velocity"
                     ))
                 }
             };
@@ -192,4 +203,31 @@ impl Timeline {
         entries.sort_by_key(|&(frame, i, _)| (frame, i));
         Ok(Timeline { entries })
     }
+}
+
+/// The wire's bodies for an entry's `spawn` list; omitted fields take [`SpawnBody::at`]'s
+/// values. `here` names the entry (`at[2]`).
+fn spawn_bodies(here: &str, bodies: Vec<Body>) -> Result<Vec<SpawnBody>, String> {
+    let mut wire = Vec::with_capacity(bodies.len());
+    for (j, b) in bodies.into_iter().enumerate() {
+        let colour = match &b.colour {
+            None => Colour::default(),
+            Some(c) => c
+                .parse()
+                .map_err(|e| format!("{here}.spawn[{j}].colour = {c:?}: {e}"))?,
+        };
+        let at = SpawnBody::at(b.shape, Vector::new(b.position[0], b.position[1]));
+        wire.push(SpawnBody {
+            name: b.name,
+            angle: b.angle,
+            velocity: Vector::new(b.velocity[0], b.velocity[1]),
+            angular_velocity: b.angular_velocity,
+            density: b.density.unwrap_or(at.density),
+            friction: b.friction.unwrap_or(at.friction),
+            restitution: b.restitution.unwrap_or(at.restitution),
+            colour,
+            ..at
+        });
+    }
+    Ok(wire)
 }

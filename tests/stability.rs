@@ -72,6 +72,13 @@ fn deep_overlap_separates_under_the_push_out_cap() {
     check(extreme::deep_overlap);
 }
 
+/// Issue 31: boxes placed 25 % inside one another (Box2D's overlap recovery sample) separate
+/// without rising faster than the push-out cap or above where they rest.
+#[test]
+fn boxes_placed_inside_one_another_recover_under_the_push_out_cap() {
+    check(extreme::overlap_recovery);
+}
+
 #[test]
 fn pile_of_mixed_shapes_comes_to_rest() {
     check(extreme::mixed_pile);

@@ -118,7 +118,9 @@ pub struct Settings {
     pub max_contact_hertz_ratio: Real,
     /// Soft step: contact damping ratio (dimensionless). Default 10.
     pub contact_damping_ratio: Real,
-    /// Soft step: the fastest overlap recovery (m/s). Default 3 (Box2D's contact push-out).
+    /// Soft step: the fastest overlap recovery (m/s), per contact. Default 3 (Box2D's contact
+    /// push-out). A contact's spring pushes no faster; overlap beyond its reach is pushed out
+    /// in position, no faster either, and never becomes velocity.
     pub max_push_out_speed: Real,
     /// Soft step: contacts are created this far before the surfaces touch (m), plus how far
     /// the bodies can move in one step. Default 4 x linear slop = 0.02.

@@ -96,6 +96,9 @@ pub(crate) struct ContactConstraint {
     /// Soft step: how far the spring has crept under its load this step (m), added to each
     /// point's separation in the biased pass (see `soft_step::creep`).
     pub creep: Real,
+    /// Soft step: the deepest overlap the spring acts on (m); deeper, a point is held rigidly
+    /// and pushed out in position (`recover.rs`).
+    pub reach: Real,
     /// Two-point contacts: the normal block and its inverse (None: solve the points one at a
     /// time).
     pub block: Option<BlockMass>,
@@ -107,6 +110,7 @@ impl Default for ContactConstraint {
             points: [PointConstraint::default(); 2],
             softness: Softness::RIGID,
             creep: 0.0,
+            reach: 0.0,
             block: None,
         }
     }

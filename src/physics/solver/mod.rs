@@ -15,6 +15,7 @@ pub(crate) mod constraint;
 pub(crate) mod contact_solver;
 pub(crate) mod graph;
 pub(crate) mod lanes;
+pub(crate) mod recover;
 pub(crate) mod sequential;
 pub(crate) mod soft_step;
 pub(crate) mod softness;
@@ -245,6 +246,18 @@ pub(crate) fn restart_motion(bodies: &mut [SolverBody], kinematic: &[Kinematic])
 }
 
 impl SolverBody {
+    /// Move by `dp` (m) and turn by `dtheta` (rad), besides the velocity.
+    #[inline]
+    pub(crate) fn displace(&mut self, dp: Vec2, dtheta: Real) {
+        self.dp += dp;
+        self.dtheta += dtheta;
+        let turn = Rot::from_angle(dtheta);
+        self.dq = Rot {
+            c: turn.c * self.dq.c - turn.s * self.dq.s,
+            s: turn.s * self.dq.c + turn.c * self.dq.s,
+        };
+    }
+
     /// Move by the velocity for `h` seconds: dp += h v, dtheta += h w, and the rotation by
     /// the first-order update q += h w q_perp, renormalised (cheap; the exact angle is kept in
     /// dtheta).

@@ -108,13 +108,7 @@ impl SplitImpulse {
             if b.inv_mass == 0.0 {
                 continue;
             }
-            b.dp += dt * v;
-            b.dtheta += dt * w;
-            let turn = crate::physics::math::Rot::from_angle(dt * w);
-            b.dq = crate::physics::math::Rot {
-                c: turn.c * b.dq.c - turn.s * b.dq.s,
-                s: turn.s * b.dq.c + turn.c * b.dq.s,
-            };
+            b.displace(dt * v, dt * w);
         }
     }
 }

@@ -8,6 +8,8 @@
 //!     solve                             soft contacts, with bias
 //!     integrate positions               x += h v (kinematic bodies too)
 //!     relax                             solve again, without bias
+//! recover                               push out, in position, the overlap the springs
+//!                                       do not reach (once per step)
 //! restitution                           once per step
 //! store impulses                        once per step
 //! ```
@@ -23,6 +25,7 @@ use super::block::BlockMass;
 use super::bundles::{ContactBundles, PackInput};
 use super::constraint::{Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
+use super::recover::{Recovery, LOAD_REACH, SPRING_REACH};
 use super::softness::Softness;
 use super::{
     integrate_positions, integrate_velocities, restart_motion, Kinematic, Limits, Moving, PassKind,
@@ -62,6 +65,8 @@ pub(crate) struct StepContext<'a> {
     pub selected: Selected<'a>,
     /// Where the selected contacts are packed for the lanes.
     pub bundles: &'a mut ContactBundles,
+    /// The points overlapping deeper than the spring reaches (`recover.rs`).
+    pub recovery: &'a mut Recovery,
     pub settings: &'a Settings,
     /// The step (s).
     pub dt: Real,
@@ -106,6 +111,7 @@ impl Plan {
             slop: settings.linear_slop.max(Real::EPSILON),
             h,
             creep: effort.creep,
+            min_reach: SPRING_REACH * settings.linear_slop,
             per_substep: 1.0 / substeps as Real,
             warm_starting: settings.warm_starting,
         };
@@ -138,20 +144,27 @@ pub(crate) fn solve(ctx: &mut StepContext, effort: &Effort) {
         integrate_positions(ctx.bodies, movers, plan.h, plan.limits);
         relax(ctx, &plan);
     }
+    recover(ctx);
     apply_restitution(ctx);
     store_impulses(ctx, &plan);
 }
 
 /// Prepare: each selected contact's constraint for this step (effective masses, adjusted
 /// separations, approach speeds, spring, block), packed into its bundle's lane.
+/// The contacts overlapping deeper than their springs reach are noted for the recover stage.
 fn prepare_contacts(ctx: &mut StepContext, plan: &Plan) {
     let stiffness = &plan.stiffness;
+    let recovery = &mut *ctx.recovery;
+    recovery.begin_solve();
+    let limits = (1.0 / ctx.dt, ctx.settings.max_push_out_speed);
     ctx.bundles.build(PackInput {
         bodies: ctx.bodies,
         contacts: ctx.contacts,
         selected: ctx.selected,
         prepare: |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
-            prepare_contact(a, b, c, stiffness)
+            let k = prepare_contact(a, b, c, stiffness);
+            recovery.note(c, (a, b), k.reach, limits);
+            k
         },
     });
 }
@@ -166,6 +179,11 @@ fn warm_start(ctx: &mut StepContext) {
 fn solve_contacts(ctx: &mut StepContext, plan: &Plan, kind: PassKind) {
     let push_out = ctx.settings.max_push_out_speed;
     ctx.bundles.solve(ctx.bodies, kind, plan.inv_h, push_out);
+}
+
+/// Recover: the overlap beyond the springs' reach pushed out in position (`recover.rs`).
+fn recover(ctx: &mut StepContext) {
+    ctx.recovery.push_out(ctx.bodies, ctx.dt);
 }
 
 /// Relax: the relax passes, then the normal relax passes.
@@ -225,6 +243,7 @@ fn prepare_contact(
     } else {
         0.0
     };
+    k.reach = spring_reach(c, k.softness, &k.points).max(stiffness.min_reach);
     k.block = BlockMass::of_contact(a, b, c);
     k
 }
@@ -274,6 +293,8 @@ struct Stiffness {
     h: Real,
     /// How much of last step's compression the springs creep by (see [`creep`]; 0: none).
     creep: Real,
+    /// The least overlap a spring acts on (m): [`SPRING_REACH`] slops.
+    min_reach: Real,
     /// 1 / substeps: per step to per substep.
     per_substep: Real,
     /// Whether contacts start from last step's impulses.
@@ -356,6 +377,23 @@ fn creep(c: &Contact, sf: Softness, inv_mass: Real) -> Real {
     } else {
         0.0
     }
+}
+
+/// The overlap (m) contact `c`'s spring may need for the load it carried last step:
+/// [`LOAD_REACH`] times the compression at which each point would carry its share, P / (m
+/// ms br) with P its impulse (see [`creep`]) and m its mass along the normal, turning included
+/// (the corner of a tilted box deep in a pile rests 34 mm into the box under it). `sf` is the
+/// contact's spring this step, `points` its constraints.
+fn spring_reach(c: &Contact, sf: Softness, points: &[PointConstraint; 2]) -> Real {
+    let stiffness = sf.mass_scale * sf.bias_rate;
+    let mut reach: Real = 0.0;
+    for (p, k) in c.points[..c.count].iter().zip(points) {
+        if stiffness > 0.0 && k.normal_mass > 0.0 {
+            let compression = sf.impulse_scale * p.normal_impulse / (k.normal_mass * stiffness);
+            reach = reach.max(LOAD_REACH * compression);
+        }
+    }
+    reach
 }
 
 /// Creep acts on contacts that have lasted this many steps: contacts that creep while bodies

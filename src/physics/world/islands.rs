@@ -52,6 +52,12 @@ impl World {
                 };
             }
         }
+        // Pushed out of a deep overlap this step: moving, however slow its velocity.
+        for i in self.solver.recovery.pushed_bodies() {
+            if let Some(b) = self.bodies.slots[i as usize].body.as_mut() {
+                b.sleep_time = 0.0;
+            }
+        }
     }
 
     /// Islands of awake dynamic bodies (static bodies join nothing), by union-find.

@@ -17,6 +17,7 @@ use super::settings::{Settings, SolverKind};
 use super::solver::bundles::ContactBundles;
 use super::solver::constraint::ContactConstraint;
 use super::solver::graph::ConstraintGraph;
+use super::solver::recover::Recovery;
 use super::solver::sequential::SplitImpulse;
 use super::solver::{clamp_speed, Kinematic, SolverBody};
 
@@ -109,6 +110,8 @@ struct SolverScratch {
     split_impulse: SplitImpulse,
     /// Soft step: the contacts packed for the lanes.
     bundles: ContactBundles,
+    /// Soft step: the overlap beyond the springs' reach.
+    recovery: Recovery,
 }
 
 impl Default for World {

@@ -23,6 +23,7 @@ impl World {
             // woken: nothing moves, nothing to find or solve.)
             self.find_contacts(dt);
             self.load_solver_bodies();
+            self.solver.recovery.clear();
             match self.settings.solver {
                 SolverKind::Sequential => self.solve_sequential(dt),
                 SolverKind::SoftStep => self.solve_soft_step(dt),
@@ -117,6 +118,7 @@ impl World {
             contacts: &mut self.contacts.awake,
             selected,
             bundles: &mut self.solver.bundles,
+            recovery: &mut self.solver.recovery,
             settings: &self.settings,
             dt,
         };

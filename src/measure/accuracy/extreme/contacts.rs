@@ -180,6 +180,125 @@ pub fn deep_overlap(settings: &Settings) -> Verdict {
     )
 }
 
+/// What one overlapped set-up measured: the fastest any body rose at any frame (m/s), the
+/// fastest it moved at all (m/s), the highest a box centre rose above where it rests (m), and
+/// the deepest overlap left at the end (m).
+struct Recovery {
+    rise: f64,
+    speed: f64,
+    above_rest: f64,
+    overlap_left: f64,
+    ok: bool,
+}
+
+/// Boxes of 1 m placed 25 % inside one another on the ground, as Box2D's "overlap recovery"
+/// sample places them (1 m apart less a quarter): a pyramid of base `base`, or a column of
+/// `base` boxes when `column`. Run 5 s, sleeping off. A recovered pyramid's row r rests at
+/// r + 0.5 m.
+fn recover_boxes(settings: &Settings, base: usize, column: bool) -> Recovery {
+    let mut w = new_world(settings, gravity());
+    cases::ground(&mut w, 0.0, 100.0, 1.0).unwrap();
+    let spacing = 0.75;
+    let mut boxes = Vec::new();
+    for row in 0..base {
+        let count = if column { 1 } else { base - row };
+        for i in 0..count {
+            let x = (i as Real - 0.5 * (count - 1) as Real) * spacing;
+            let at = vec2(x, 0.5 + row as Real * spacing);
+            let id = w
+                .add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), at))
+                .unwrap();
+            boxes.push((id, row as f64 + 0.5));
+        }
+    }
+    let (mut rise, mut speed, mut above_rest): (f64, f64, f64) = (0.0, 0.0, 0.0);
+    let ok = run_60hz(&mut w, 5.0, Breakdown::BlownUp(100.0), |w, _| {
+        speed = speed.max(max_speed(w));
+        for &(id, rest) in &boxes {
+            let b = w.body(id).expect("a box");
+            rise = rise.max(b.linear_velocity().y as f64);
+            above_rest = above_rest.max(b.position().y as f64 - rest);
+        }
+    });
+    Recovery {
+        rise,
+        speed,
+        above_rest,
+        overlap_left: max_penetration(&w),
+        ok,
+    }
+}
+
+/// A disc of radius 0.25 m whose centre starts 1 cm above the ground's surface (24 cm in),
+/// sleeping on, 3 s: how far its bottom ends from the surface (m), and whether it ended awake
+/// or resting on top.
+fn recover_disc(settings: &Settings) -> (f64, bool) {
+    let mut w = new_world(
+        &Settings {
+            enable_sleep: true,
+            ..settings.clone()
+        },
+        gravity(),
+    );
+    cases::ground(&mut w, 0.0, 10.0, 1.0).unwrap();
+    let disc = w
+        .add_body(&BodyDef::dynamic(Shape::circle(0.25), vec2(0.0, 0.01)))
+        .unwrap();
+    let ok = run_60hz(&mut w, 3.0, Breakdown::BlownUp(100.0), |_, _| {});
+    ((pos(&w, disc).y as f64 - 0.25).abs(), ok)
+}
+
+/// Box2D's "overlap recovery" sample at base 10 (55 boxes of 1 m placed 25 % inside one
+/// another), a column of 15 boxes placed alike, and a disc placed 24 cm into the ground. The
+/// push-out cap (`Settings::max_push_out_speed`, documented as the fastest overlap
+/// recovery) bounds how fast any body rises, and so how far above its rest it may fly; after
+/// 5 s the overlap left is within two slops, and the disc rests on the ground within two
+/// slops.
+/// Pushed apart through their velocities, as Box2D does, the rows' pushes added up and the
+/// pyramid's top box left at 11.3 m/s and rose 4.8 m; the overlap beyond the springs' reach is
+/// now pushed out in position (`solver/recover.rs`).
+pub fn overlap_recovery(settings: &Settings) -> Verdict {
+    let slop = settings.linear_slop as f64;
+    let cap = settings.max_push_out_speed as f64;
+    // The highest a body leaving its rest at the cap would fly.
+    let flight = cap * cap / (2.0 * G as f64);
+    let pyramid = recover_boxes(settings, 10, false);
+    let column = recover_boxes(settings, 15, true);
+    let (disc_off, disc_ok) = recover_disc(settings);
+    let mut passed = disc_ok && disc_off <= 2.0 * slop;
+    for r in [&pyramid, &column] {
+        passed &= r.ok && r.rise <= cap && r.above_rest <= flight && r.overlap_left <= 2.0 * slop;
+    }
+    let num = crate::measure::accuracy::fmt_num;
+    verdict(
+        "overlap_recovery",
+        format!(
+            "boxes of 1 m placed 25 % inside one another (a base-10 pyramid, a column of 15) and a disc \
+             placed 24 cm into the ground: no body rises faster than the push-out cap ({cap} m/s) nor \
+             above where it rests by more than a body leaving it at the cap would fly ({} m), and after \
+             5 s (the disc: 3 s, sleeping on) the overlap left is at most 2 x slop = {} m",
+            num(flight),
+            num(2.0 * slop)
+        ),
+        passed,
+        vec![
+            ("pyramid: fastest rise (m/s)", pyramid.rise),
+            ("pyramid: fastest speed (m/s)", pyramid.speed),
+            ("pyramid: highest above rest (m)", pyramid.above_rest),
+            ("pyramid: overlap after 5 s (m)", pyramid.overlap_left),
+            ("column: fastest rise (m/s)", column.rise),
+            ("column: highest above rest (m)", column.above_rest),
+            ("column: overlap after 5 s (m)", column.overlap_left),
+            ("disc: off the ground after 3 s (m)", disc_off),
+        ],
+        if settings.solver == SolverKind::Sequential {
+            "the sequential solver has no push-out cap: its split impulse pushes 0.2/dt x depth"
+        } else {
+            ""
+        },
+    )
+}
+
 /// A 0.1 m bullet at 200 m/s against a static 0.1 m x 4 m wall, 30 steps at 60 Hz, once per
 /// shape kind: box, disc, capsule (spinning end over end) and triangle.
 pub fn bullet(settings: &Settings) -> Verdict {

@@ -1,0 +1,175 @@
+//! Recover: overlap deeper than the contact spring reaches, pushed out in position only.
+//!
+//! The soft bias pushes a point apart on at most [`SPRING_REACH`] slops of its overlap (see
+//! `PushOut`); bodies placed inside one another, or driven in by a fast impact, overlap far
+//! deeper. Pushing them apart through their velocities, as Box2D does, leaves the push behind
+//! as speed wherever the relax pass does not converge: in a pyramid of boxes placed 25 %
+//! overlapped the pushes of the rows add up, and its top box left at 11 m/s and rose 4.8 m.
+//! So what lies deeper is removed as the sequential solver's split impulse removes all
+//! overlap (Catto, Box2D v2.x): pseudo velocities, solved over the deep points only, move the
+//! bodies at the end of the step and are then thrown away. Each point's pseudo velocity is
+//! capped at the push-out speed, so the overlap beyond the reach shrinks by at most
+//! `max_push_out_speed` times the step per contact, and nothing of it is kinetic energy.
+
+use super::SolverBody;
+use crate::physics::contact::Contact;
+use crate::physics::math::{cross, cross_sv, Real, Vec2};
+
+/// The deepest overlap the contact spring acts on, in linear slops: 4, Box2D's speculative
+/// distance. At rest a pile's most loaded contact overlaps less (a base-100 pyramid, 12.8 mm of
+/// the 20 mm), so the spring holds every resting load by itself.
+pub(crate) const SPRING_REACH: Real = 4.0;
+
+/// How far past the compression its last load explains a spring acts on an overlap, as a
+/// multiple of that compression (`soft_step::spring_reach`): twice, so that a load that
+/// grows by half again is still held by the spring.
+pub(crate) const LOAD_REACH: Real = 2.0;
+
+/// Gauss-Seidel sweeps over the deep points.
+const SWEEPS: usize = 16;
+
+/// A contact overlapping deeper than the spring's reach, as prepared for this step: one
+/// point, where it is pushed.
+#[derive(Clone, Copy, Debug)]
+struct DeepPoint {
+    /// Solver body indices of A and B.
+    bodies: [u32; 2],
+    /// Unit normal, A to B.
+    normal: Vec2,
+    /// Anchors from A's and B's centres (m).
+    arms: [Vec2; 2],
+    /// Effective mass along the normal (kg).
+    mass: Real,
+    /// The pseudo normal velocity (m/s) that pushes the overlap beyond the reach out in one
+    /// step, capped at the push-out speed.
+    target: Real,
+    /// Accumulated pseudo impulse (N s), >= 0.
+    impulse: Real,
+}
+
+/// The recover stage's points and pseudo velocities, kept in the World so that a steady step
+/// does not allocate.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Recovery {
+    /// This step's deep contacts, solve after solve (one per stiffness tier).
+    points: Vec<DeepPoint>,
+    /// Where the current solve's points start.
+    solve_from: usize,
+    /// Pseudo velocity (m/s, rad/s) per solver body; zero between steps.
+    velocity: Vec<(Vec2, Real)>,
+}
+
+impl Recovery {
+    /// Start a step: no deep contact yet.
+    pub fn clear(&mut self) {
+        self.points.clear();
+        self.solve_from = 0;
+    }
+
+    /// Start a solve: the contacts noted from now on are its own.
+    pub fn begin_solve(&mut self) {
+        self.solve_from = self.points.len();
+    }
+
+    /// The solver bodies this step pushed out (A, B; static ones too). They are not at rest,
+    /// whatever their velocity says: the push moves them without one.
+    pub fn pushed_bodies(&self) -> impl Iterator<Item = u32> + '_ {
+        self.points.iter().flat_map(|p| p.bodies)
+    }
+
+    /// Note contact `c` between bodies `a` and `b` if it overlaps deeper than `reach` (m);
+    /// `inv_dt` is 1 / step (1/s), `speed` the push-out cap (m/s). A contact with both
+    /// points that deep is pushed at their middle, by their mean depth: pushed point by point,
+    /// the order of the two put a turn into every box of a column placed overlapped, and the
+    /// column fell.
+    #[inline]
+    pub fn note(
+        &mut self,
+        c: &Contact,
+        (a, b): (&SolverBody, &SolverBody),
+        reach: Real,
+        (inv_dt, speed): (Real, Real),
+    ) {
+        let (mut count, mut beyond) = (0.0, 0.0);
+        let mut arms = [Vec2::ZERO; 2];
+        for p in &c.points[..c.count] {
+            let depth = -(p.separation + reach);
+            if depth > 0.0 {
+                count += 1.0;
+                beyond += depth + 0.5 * reach;
+                arms[0] += p.anchor_a;
+                arms[1] += p.anchor_b;
+            }
+        }
+        if count == 0.0 {
+            return;
+        }
+        let (n, arms) = (c.normal, arms.map(|r| r / count));
+        let (rn_a, rn_b) = (cross(arms[0], n), cross(arms[1], n));
+        let k = a.inv_mass + b.inv_mass + a.inv_inertia * rn_a * rn_a + b.inv_inertia * rn_b * rn_b;
+        if k <= 0.0 {
+            return;
+        }
+        self.points.push(DeepPoint {
+            bodies: [c.a, c.b],
+            normal: n,
+            arms,
+            mass: 1.0 / k,
+            target: (beyond / count * inv_dt).min(speed),
+            impulse: 0.0,
+        });
+    }
+
+    /// Solve the pseudo velocities over the deep points and move their bodies by them for
+    /// `dt` seconds (s).
+    pub fn push_out(&mut self, bodies: &mut [SolverBody], dt: Real) {
+        let points = &mut self.points[self.solve_from..];
+        if points.is_empty() {
+            return;
+        }
+        if self.velocity.len() < bodies.len() {
+            self.velocity.resize(bodies.len(), (Vec2::ZERO, 0.0));
+        }
+        // Forward and back in turn: a chain of deep points (a column placed overlapped) takes
+        // a sweep each way to pass a push along, where one way takes a sweep per link.
+        for sweep in 0..SWEEPS {
+            if sweep % 2 == 0 {
+                for p in points.iter_mut() {
+                    sweep_point(p, bodies, &mut self.velocity);
+                }
+            } else {
+                for p in points.iter_mut().rev() {
+                    sweep_point(p, bodies, &mut self.velocity);
+                }
+            }
+        }
+        // Each body moves once, and its pseudo velocity is zeroed for the next step.
+        for p in points.iter() {
+            for i in p.bodies {
+                let (v, w) = std::mem::take(&mut self.velocity[i as usize]);
+                let b = &mut bodies[i as usize];
+                if b.inv_mass > 0.0 {
+                    b.displace(dt * v, dt * w);
+                }
+            }
+        }
+    }
+}
+
+/// One Gauss-Seidel update of point `p`'s pseudo impulse toward its target, clamped >= 0.
+#[inline]
+fn sweep_point(p: &mut DeepPoint, bodies: &[SolverBody], velocity: &mut [(Vec2, Real)]) {
+    let [ia, ib] = p.bodies.map(|i| i as usize);
+    let ([ra, rb], n) = (p.arms, p.normal);
+    let (va, wa) = velocity[ia];
+    let (vb, wb) = velocity[ib];
+    let vn = (vb + cross_sv(wb, rb) - va - cross_sv(wa, ra)).dot(n);
+    let old = p.impulse;
+    p.impulse = (old + p.mass * (p.target - vn)).max(0.0);
+    let pn = (p.impulse - old) * n;
+    let (a, b) = (&bodies[ia], &bodies[ib]);
+    velocity[ia].0 -= a.inv_mass * pn;
+    velocity[ia].1 -= a.inv_inertia * cross(ra, pn);
+    velocity[ib].0 += b.inv_mass * pn;
+    velocity[ib].1 += b.inv_inertia * cross(rb, pn);
+}

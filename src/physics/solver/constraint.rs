@@ -96,8 +96,8 @@ pub(crate) struct ContactConstraint {
     /// Soft step: how far the spring has crept under its load this step (m), added to each
     /// point's separation in the biased pass (see `soft_step::creep`).
     pub creep: Real,
-    /// Soft step: the deepest overlap the spring acts on (m); deeper, a point is held rigidly
-    /// and pushed out in position (`recover.rs`).
+    /// Soft step: where the contact overlaps deeper than its spring reaches, that reach (m),
+    /// and the contact is held rigidly and pushed out in position (`recover.rs`); else 0.
     pub reach: Real,
     /// Two-point contacts: the normal block and its inverse (None: solve the points one at a
     /// time).

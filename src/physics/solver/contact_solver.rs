@@ -88,8 +88,6 @@ pub(crate) struct Bundle<L: Wide> {
     impulse_scale: L,
     /// How far the spring has crept (m; `ContactConstraint::creep`).
     creep: L,
-    /// The spring's reach, as a separation (m, <= 0; `ContactConstraint::reach`).
-    reach: L,
     /// The block K (symmetric) and its inverse (identity for a contact without one).
     k00: L,
     k01: L,
@@ -318,7 +316,6 @@ impl<L: Wide> Bundle<L> {
             mass_scale: zero,
             impulse_scale: zero,
             creep: zero,
-            reach: zero,
             k00: one,
             k01: zero,
             k11: one,
@@ -357,7 +354,6 @@ impl<L: Wide> Bundle<L> {
             (&mut self.mass_scale, sf.mass_scale),
             (&mut self.impulse_scale, sf.impulse_scale),
             (&mut self.creep, k.creep),
-            (&mut self.reach, -k.reach),
             (&mut self.inv_mass_a, body_a.inv_mass),
             (&mut self.inv_i_a, body_a.inv_inertia),
             (&mut self.inv_mass_b, body_b.inv_mass),
@@ -552,9 +548,10 @@ impl<L: Wide> Bundle<L> {
     /// impulse = -m_eff (mass_scale vn + bias) - impulse_scale P. Where the surfaces are apart
     /// (a speculative point) the bias lets them close the gap in one substep, no more; where
     /// they overlap it is the spring's, mass_scale bias_rate (s + creep), capped at the
-    /// push-out speed, within the spring's reach, in the biased pass, and nothing in a relax
-    /// pass. The separation is worked out from how far the bodies moved this step: s = s0 + (dpB - dpA) . n +
-    /// (qB rB - rB) . n - (qA rA - rA) . n, where for a rotation q = (c, s),
+    /// push-out speed, in the biased pass, and nothing in a relax pass (a contact deeper than
+    /// its spring reaches is prepared rigid: `recover.rs`). The separation is worked out from
+    /// how far the bodies moved this step: s = s0 + (dpB - dpA) . n + (qB rB - rB) . n -
+    /// (qA rA - rA) . n, where for a rotation q = (c, s),
     /// (q r) . n = c (r . n) + s (r x n). `dp_n` is (dpB - dpA) . n. On a rounded side
     /// (`round`) the point is its core's nearest point grown out along the normal, so only the
     /// core's point turns with the body: for B, rB + rad n turns and -rad n does not (a disc's
@@ -570,14 +567,10 @@ impl<L: Wide> Bundle<L> {
         let s = separation(p, (a, b), dp_n, round);
         let speculative = s.cmpgt(L::ZERO);
         let (soft_bias, soft_ms, soft_is) = if pass.use_bias {
-            // Deeper than the spring reaches, a point is held rigidly (a spring's damping
-            // under a load lets it sink on) and pushed out by the recover stage.
-            let deep = self.reach.cmpgt(s);
-            let spring = (self.mass_scale * self.bias_rate * (s + self.creep)).max(pass.push_out);
             (
-                L::select(deep, L::ZERO, spring),
-                L::select(deep, L::ONE, self.mass_scale),
-                L::select(deep, L::ZERO, self.impulse_scale),
+                (self.mass_scale * self.bias_rate * (s + self.creep)).max(pass.push_out),
+                self.mass_scale,
+                self.impulse_scale,
             )
         } else {
             (L::ZERO, L::ONE, L::ZERO)

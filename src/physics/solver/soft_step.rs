@@ -163,7 +163,9 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan) {
         selected: ctx.selected,
         prepare: |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
             let k = prepare_contact(a, b, c, stiffness);
-            recovery.note(c, (a, b), k.reach, limits);
+            if k.reach > 0.0 {
+                recovery.note(c, (a, b), k.reach, limits);
+            }
             k
         },
     });
@@ -243,9 +245,30 @@ fn prepare_contact(
     } else {
         0.0
     };
-    k.reach = spring_reach(c, k.softness, &k.points).max(stiffness.min_reach);
     k.block = BlockMass::of_contact(a, b, c);
+    hold_if_deep(c, &mut k, stiffness.min_reach);
     k
+}
+
+/// A contact overlapping deeper than its spring reaches ([`spring_reach`], at least
+/// `min_reach`, m) is held rigidly, with no spring and no creep (a spring's damping under a
+/// load lets it sink on), and `k.reach` records the reach for the recover stage, which pushes
+/// it out in position (`recover.rs`); any other keeps its spring and a reach of 0.
+#[inline]
+fn hold_if_deep(c: &Contact, k: &mut ContactConstraint, min_reach: Real) {
+    let deepest = c.points[..c.count]
+        .iter()
+        .map(|p| p.separation)
+        .fold(Real::INFINITY, Real::min);
+    if deepest >= -min_reach {
+        return;
+    }
+    let reach = spring_reach(c, k.softness, &k.points).max(min_reach);
+    if deepest < -reach {
+        k.softness = Softness::RIGID;
+        k.creep = 0.0;
+        k.reach = reach;
+    }
 }
 
 /// The end of a step for contact `c`, from its points' impulses `ends`: back from per

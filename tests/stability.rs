@@ -79,6 +79,13 @@ fn boxes_placed_inside_one_another_recover_under_the_push_out_cap() {
     check(extreme::overlap_recovery);
 }
 
+/// Issue 31: skinny spinning bodies at 100 m/s never put their centre past static geometry
+/// (continuous collision against static bodies) and rest within two slops of it.
+#[test]
+fn fast_thin_spinners_never_pass_static_geometry() {
+    check(extreme::fast_spinners);
+}
+
 #[test]
 fn pile_of_mixed_shapes_comes_to_rest() {
     check(extreme::mixed_pile);

@@ -207,6 +207,8 @@ pub struct Body {
     /// every pair and body each step (a square root for a box, a load from the heap for a
     /// polygon).
     pub(crate) bounding_radius: Real,
+    /// `shape.min_extent()` (m), kept for the continuous collision test each step.
+    pub(crate) min_extent: Real,
     pub(crate) position: Vec2,
     pub(crate) angle: Real,
     pub(crate) rot: Rot,
@@ -251,6 +253,7 @@ impl Body {
             id,
             shape: def.shape.clone(),
             bounding_radius: def.shape.bounding_radius(),
+            min_extent: def.shape.min_extent(),
             position: def.position,
             angle: def.angle,
             rot: Rot::from_angle(def.angle),

@@ -188,6 +188,23 @@ impl Shape {
         }
     }
 
+    /// The shortest distance from the centre of mass to the surface (m): half a rectangle's
+    /// smaller side, a disc's or a capsule's radius, a polygon's nearest face. A body that
+    /// moves more than a fraction of it in a step is fast (`world/continuous.rs`).
+    pub fn min_extent(&self) -> Real {
+        match *self {
+            Shape::Rect { half_extents } => half_extents.x.min(half_extents.y),
+            Shape::Circle { radius } | Shape::Capsule { radius, .. } => radius,
+            Shape::Polygon(ref p) => p
+                .normals()
+                .iter()
+                .zip(p.vertices())
+                .map(|(n, v)| n.dot(*v))
+                .fold(Real::INFINITY, Real::min),
+            Shape::Segment(ref s) => s.radius,
+        }
+    }
+
     /// The radius of the smallest circle about the centre of mass that holds the shape (m).
     pub fn bounding_radius(&self) -> Real {
         match *self {

@@ -9,6 +9,7 @@ mod capsule;
 mod circle;
 mod polygon;
 mod segment;
+pub(crate) mod toi;
 
 pub(crate) use capsule::{collide_capsules, Capsule};
 pub(crate) use circle::{collide_circles, collide_polygon_circle};

@@ -25,6 +25,7 @@ use super::solver::{clamp_speed, Kinematic, SolverBody};
 pub mod snapshot;
 
 mod contacts;
+mod continuous;
 mod islands;
 mod step;
 #[cfg(test)]
@@ -112,6 +113,10 @@ struct SolverScratch {
     bundles: ContactBundles,
     /// Soft step: the overlap beyond the springs' reach.
     recovery: Recovery,
+    /// The bodies that moved far for their size this step, in slot order, and the fraction
+    /// of the step each keeps (continuous collision).
+    fast: Vec<u32>,
+    fast_hits: Vec<Real>,
 }
 
 impl Default for World {

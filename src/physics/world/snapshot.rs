@@ -401,6 +401,7 @@ impl BodyState {
         Ok(Body {
             id,
             bounding_radius: shape.bounding_radius(),
+            min_extent: shape.min_extent(),
             shape,
             position: vec(b.position),
             angle: b.angle,

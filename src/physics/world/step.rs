@@ -1,6 +1,7 @@
 //! One step, stage by stage: find contacts, load the solver bodies, solve (the sequential
 //! solver, or the soft step tier by tier), finalize the bodies, then sleep.
 
+use super::continuous::{motion, FAST_FRACTION};
 use super::tiers::Tier;
 use super::*;
 use crate::physics::solver::soft_step::{self, StepContext};
@@ -29,6 +30,7 @@ impl World {
                 SolverKind::SoftStep => self.solve_soft_step(dt),
             }
             self.finalize_bodies();
+            self.solve_continuous();
             if self.settings.enable_sleep {
                 self.update_sleep(dt);
             }
@@ -208,8 +210,11 @@ impl World {
 
     /// Finalize: write velocities and the step's motion back to the bodies the solver moved
     /// (awake dynamic ones, and kinematic ones by their own velocity); clear forces.
+    /// The dynamic bodies that moved far for their size are listed for continuous collision.
     fn finalize_bodies(&mut self) {
-        for (slot, sb) in self.bodies.slots.iter_mut().zip(&self.solver.bodies) {
+        let fast = &mut self.solver.fast;
+        let slots = self.bodies.slots.iter_mut().zip(&self.solver.bodies);
+        for (i, (slot, sb)) in slots.enumerate() {
             let Some(b) = slot.body.as_mut() else {
                 continue;
             };
@@ -218,6 +223,9 @@ impl World {
             if b.is_active() {
                 b.linear_velocity = sb.v;
                 b.angular_velocity = sb.w;
+                if motion(sb.dp, sb.dtheta, b.bounding_radius) > FAST_FRACTION * b.min_extent {
+                    fast.push(i as u32);
+                }
             } else if !b.is_moving_kinematic() {
                 continue;
             }

@@ -16,7 +16,8 @@ mod stacks;
 mod terrain;
 
 pub use contacts::{
-    box_pile, bullet, deep_overlap, mass_ratio_100, mass_ratio_1000, mixed_pile, overlap_recovery,
+    box_pile, bullet, deep_overlap, fast_spinners, mass_ratio_100, mass_ratio_1000, mixed_pile,
+    overlap_recovery,
 };
 pub use limits::{gravity_flip, huge_dt, large_bodies, non_finite_refused, tiny_bodies};
 pub use motion::{kinematic_carrier, kinematic_pusher, restitution_drop, rolling_disc};
@@ -66,7 +67,7 @@ const fn report_case(name: &'static str, title: &'static str, run: Runner) -> Ex
 /// Every case, in report order (the report-only cases last). One row a case, kept as a
 /// table.
 #[rustfmt::skip]
-const CASES: [ExtremeCase; 26] = [
+const CASES: [ExtremeCase; 27] = [
     case("stack_20", "Stack of 20, 30 s", stack_20),
     case("stack_50", "Stack of 50, 10 s", stack_50),
     case("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
@@ -91,6 +92,7 @@ const CASES: [ExtremeCase; 26] = [
     case("rolling_disc", "A disc rolling at up to 20 m/s", rolling_disc),
     case("restitution_drop", "Discs dropped 2 m rebound at e x impact", restitution_drop),
     case("overlap_recovery", "Boxes placed 25 % inside one another", overlap_recovery),
+    case("fast_spinners", "Skinny bodies at 100 m/s, spinning, onto thin statics", fast_spinners),
     report_case("pyramid_134", "Pyramid base 134 (9,045 boxes) stands", pyramid_134),
     report_case("pyramid_100", "Pyramid base 100 (5,050 boxes)", pyramid_100),
 ];

@@ -1,0 +1,118 @@
+//! Continuous collision against static bodies (Box2D's time of impact).
+//!
+//! Speculative contacts stop a fast body at a surface it heads for, but only along the
+//! features the narrow phase found at the start of the step: a thin plank spinning at 50 rad/s
+//! swings an end through a post or a floor that no contact point stood for. So each dynamic
+//! body that moved more than [`FAST_FRACTION`] of its shortest extent in the step is swept,
+//! shape by shape, against the static bodies its box met this step (`collide/toi.rs`); where a
+//! shape would have come within the linear slop of one, the body goes back to that moment of
+//! its motion, keeping its velocity, and the next step's speculative contact stops it there.
+//! A shape that starts the step that close already (a box sliding fast along the floor, a
+//! plank lying on it while it spins) would stop at once, so only its core, a disc of
+//! [`CORE_FRACTION`] of its shortest extent about the centre of mass, is swept: the centre
+//! never passes the surface, and the contacts see to the rest. A one-sided piece is skipped by
+//! a body whose centre starts behind it, as its contacts are.
+
+use super::World;
+use crate::physics::broad_phase::pair_of;
+use crate::physics::collide::toi::{time_of_impact, Sweep};
+use crate::physics::math::{Real, Rot, Vec2};
+use crate::physics::shape::Shape;
+
+/// A body is fast when it moved more than this fraction of its shortest extent in a step
+/// (Box2D's default safety factor).
+pub(super) const FAST_FRACTION: Real = 0.5;
+
+/// The core swept for a shape that starts within the slop of a static body, as a fraction of
+/// its shortest extent (Box2D's core fraction).
+const CORE_FRACTION: Real = 0.25;
+
+impl World {
+    /// Continuous collision: each fast body (`solver.fast`, listed by finalize in slot order)
+    /// against the static bodies it was paired with this step, and moved back to its first
+    /// moment of impact.
+    pub(super) fn solve_continuous(&mut self) {
+        if self.solver.fast.is_empty() {
+            return;
+        }
+        let fast = std::mem::take(&mut self.solver.fast);
+        let mut hits = std::mem::take(&mut self.solver.fast_hits);
+        hits.clear();
+        hits.resize(fast.len(), 1.0);
+        for &key in &self.broad_phase.pair_keys {
+            let (a, b) = pair_of(key);
+            for (moving, other) in [(a, b), (b, a)] {
+                if let Ok(i) = fast.binary_search(&moving) {
+                    let t = self.impact(moving, other);
+                    hits[i] = hits[i].min(t);
+                }
+            }
+        }
+        for (&slot, &t) in fast.iter().zip(&hits) {
+            if t < 1.0 {
+                self.move_back(slot, t);
+            }
+        }
+        self.solver.fast = fast;
+        self.solver.fast.clear();
+        self.solver.fast_hits = hits;
+    }
+
+    /// The fraction of its step's motion at which body `moving` first comes within the slop of
+    /// body `other`, if that is static; 1 if never.
+    fn impact(&self, moving: u32, other: u32) -> Real {
+        let slots = &self.bodies.slots;
+        let (Some(body), Some(fixed)) = (
+            slots[moving as usize].body.as_ref(),
+            slots[other as usize].body.as_ref(),
+        ) else {
+            return 1.0;
+        };
+        if !fixed.is_static() {
+            return 1.0;
+        }
+        let sb = &self.solver.bodies[moving as usize];
+        let sweep = Sweep {
+            start: (body.position - sb.dp, body.angle - sb.dtheta),
+            end: (body.position, body.angle),
+        };
+        let xf_fixed = fixed.transform();
+        if let Shape::Segment(s) = &fixed.shape {
+            let (a, left) = (xf_fixed.apply(s.a), xf_fixed.q.rotate(s.left_normal()));
+            if s.one_sided && (sweep.start.0 - a).dot(left) < 0.0 {
+                return 1.0;
+            }
+        }
+        let target = self.settings.linear_slop;
+        let fixed = (&fixed.shape, xf_fixed);
+        match time_of_impact(fixed, &body.shape, &sweep, target) {
+            Some(t) if t > 0.0 => t,
+            None => 1.0,
+            Some(_) => {
+                let core = Shape::circle(CORE_FRACTION * body.min_extent);
+                match time_of_impact(fixed, &core, &sweep, target) {
+                    Some(t) if t > 0.0 => t,
+                    _ => 1.0,
+                }
+            }
+        }
+    }
+
+    /// Put body `slot` a fraction `t` of the way along its step's motion.
+    fn move_back(&mut self, slot: u32, t: Real) {
+        let sb = &self.solver.bodies[slot as usize];
+        let (dp, dtheta) = (sb.dp, sb.dtheta);
+        if let Some(b) = self.bodies.slots[slot as usize].body.as_mut() {
+            let back = 1.0 - t;
+            b.position -= back * dp;
+            b.angle -= back * dtheta;
+            b.rot = Rot::from_angle(b.angle);
+        }
+    }
+}
+
+/// How far a body moved this step (m): its centre's travel plus its turn times its reach.
+#[inline]
+pub(super) fn motion(dp: Vec2, dtheta: Real, reach: Real) -> Real {
+    dp.length() + dtheta.abs() * reach
+}

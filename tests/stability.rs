@@ -86,6 +86,13 @@ fn fast_thin_spinners_never_pass_static_geometry() {
     check(extreme::fast_spinners);
 }
 
+/// Issue 31: a disc rolling down a straight slope of many chain pieces is not bumped at the
+/// joints more than on one piece.
+#[test]
+fn a_disc_rolls_down_a_chain_slope_without_bumps_at_the_joints() {
+    check(extreme::chain_slope);
+}
+
 #[test]
 fn pile_of_mixed_shapes_comes_to_rest() {
     check(extreme::mixed_pile);

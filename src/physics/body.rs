@@ -151,7 +151,8 @@ impl BodyDef {
         {
             return Err(PhysicsError::InvalidShape {
                 field: "mass".into(),
-                reason: "must be static or kinematic for a segment (segments and chains are                          terrain, platforms and paddles; a thick moving rod is a capsule)"
+                reason: "must be static or kinematic for a segment (segments and chains are \
+                         terrain, platforms and paddles; a thick moving rod is a capsule)"
                     .into(),
             });
         }

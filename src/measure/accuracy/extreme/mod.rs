@@ -4,9 +4,10 @@
 
 //!
 //! - `stacks.rs`: stacks and pyramids, and a stack far from the origin;
-//! - `contacts.rs`: mass ratios, deep overlap, bullets, a pile of mixed shapes;
+//! - `contacts.rs`: mass ratios, deep overlap and overlap recovery, bullets and fast spinners,
+//!   a pile of mixed shapes;
 //! - `limits.rs`: tiny and large bodies, gravity flips, a huge step, non-finite input;
-//! - `terrain.rs`: sliding across a tiled floor, as boxes and as a chain;
+//! - `terrain.rs`: sliding across a tiled floor, as boxes and as a chain; rolling down a chain;
 //! - `motion.rs`: contacts that move: kinematic carriers and pushers, rolling, bouncing.
 
 mod contacts;
@@ -25,7 +26,7 @@ pub use stacks::{
     far_from_origin, pyramid_100, pyramid_134, pyramid_20, pyramid_30, pyramid_sleeps,
     real_spacing, stack_20, stack_50,
 };
-pub use terrain::{tiled_floor_boxes, tiled_floor_chain};
+pub use terrain::{chain_slope, tiled_floor_boxes, tiled_floor_chain};
 
 use super::{run_steps, steps_for, Breakdown, Verdict, DT_60, G};
 use crate::physics::{vec2, BodyId, Settings, Vec2, World};
@@ -67,7 +68,7 @@ const fn report_case(name: &'static str, title: &'static str, run: Runner) -> Ex
 /// Every case, in report order (the report-only cases last). One row a case, kept as a
 /// table.
 #[rustfmt::skip]
-const CASES: [ExtremeCase; 27] = [
+const CASES: [ExtremeCase; 28] = [
     case("stack_20", "Stack of 20, 30 s", stack_20),
     case("stack_50", "Stack of 50, 10 s", stack_50),
     case("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
@@ -93,6 +94,7 @@ const CASES: [ExtremeCase; 27] = [
     case("restitution_drop", "Discs dropped 2 m rebound at e x impact", restitution_drop),
     case("overlap_recovery", "Boxes placed 25 % inside one another", overlap_recovery),
     case("fast_spinners", "Skinny bodies at 100 m/s, spinning, onto thin statics", fast_spinners),
+    case("chain_slope", "A disc rolling down a slope of chain pieces", chain_slope),
     report_case("pyramid_134", "Pyramid base 134 (9,045 boxes) stands", pyramid_134),
     report_case("pyramid_100", "Pyramid base 100 (5,050 boxes)", pyramid_100),
 ];

@@ -82,7 +82,8 @@ impl Recovery {
     /// points that deep is pushed at their middle, by their mean depth: pushed point by point,
     /// the order of the two put a turn into every box of a column placed overlapped, and the
     /// column fell.
-    #[inline]
+    #[cold]
+    #[inline(never)]
     pub fn note(
         &mut self,
         c: &Contact,

@@ -73,6 +73,34 @@ pub(crate) fn time_of_impact(
     Some(t)
 }
 
+/// Whether shape `moving` at `xf` lies along the line of one of `fixed`'s faces, outside it and
+/// within `target` (m) of that line either way: it slides or rolls on a surface that `fixed`
+/// continues, as a disc rolling over the joint between two pieces of a chain or a box sliding
+/// onto the next floor tile. Swept whole, such a shape would stop at the seam (it comes within
+/// the target of the next piece's end at once), so the caller sweeps its core instead.
+pub(crate) fn lies_along_a_face(
+    (fixed, xf_fixed): (&Shape, Transform),
+    moving: &Shape,
+    xf: Transform,
+    target: Real,
+) -> bool {
+    let (core_f, radius_f) = core(fixed);
+    let (core_m, radius_m) = core(moving);
+    let (faces, points) = (core_f.transformed(xf_fixed), core_m.transformed(xf));
+    faces
+        .vertices()
+        .iter()
+        .zip(faces.normals())
+        .any(|(&v, &n)| {
+            let nearest = points
+                .vertices()
+                .iter()
+                .map(|&p| n.dot(p - v))
+                .fold(Real::INFINITY, Real::min);
+            (nearest - radius_f - radius_m).abs() < target
+        })
+}
+
 /// A lower bound on the distance (m) between cores `a` and `b` at their transforms grown by
 /// `radii` (m) in all, and the unit axis, from A towards B, it holds along.
 fn separation(
@@ -127,6 +155,7 @@ fn separation(
 mod tests {
     use super::*;
     use crate::physics::math::vec2;
+    use crate::physics::segment::Segment;
 
     fn at(p: Vec2, angle: Real) -> Transform {
         Transform {
@@ -208,5 +237,21 @@ mod tests {
             time_of_impact(block, &Shape::circle(0.5), &sweep, 0.01),
             None
         );
+    }
+
+    /// A disc resting on the line of a segment beyond its end (the next piece of a straight
+    /// chain) lies along its face; the same disc 5 cm up, or resting on a line at 90 degrees
+    /// to the segment, does not.
+    #[test]
+    fn a_disc_on_the_line_of_the_next_piece_lies_along_its_face() {
+        let piece = Shape::Segment(Box::new(Segment::new(vec2(0.0, 0.0), vec2(1.0, 0.0), 0.0)));
+        let fixed = (&piece, at(Vec2::ZERO, 0.0));
+        let disc = Shape::circle(0.25);
+        let on_line = at(vec2(-0.3, 0.25), 0.0);
+        assert!(lies_along_a_face(fixed, &disc, on_line, 0.005));
+        let above = at(vec2(-0.3, 0.30), 0.0);
+        assert!(!lies_along_a_face(fixed, &disc, above, 0.005));
+        let beside_end = at(vec2(-0.4, 0.0), 0.0);
+        assert!(!lies_along_a_face(fixed, &disc, beside_end, 0.005));
     }
 }

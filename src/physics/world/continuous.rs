@@ -10,12 +10,14 @@
 //! A shape that starts the step that close already (a box sliding fast along the floor, a
 //! plank lying on it while it spins) would stop at once, so only its core, a disc of
 //! [`CORE_FRACTION`] of its shortest extent about the centre of mass, is swept: the centre
-//! never passes the surface, and the contacts see to the rest. A one-sided piece is skipped by
+//! never passes the surface, and the contacts see to the rest. So does a shape that starts
+//! along the line of one of the static's faces (a disc rolling onto the next piece of a chain
+//! would otherwise stop at every joint). A one-sided piece is skipped by
 //! a body whose centre starts behind it, as its contacts are.
 
 use super::World;
 use crate::physics::broad_phase::pair_of;
-use crate::physics::collide::toi::{time_of_impact, Sweep};
+use crate::physics::collide::toi::{lies_along_a_face, time_of_impact, Sweep};
 use crate::physics::math::{Real, Rot, Vec2};
 use crate::physics::shape::Shape;
 
@@ -85,7 +87,12 @@ impl World {
         }
         let target = self.settings.linear_slop;
         let fixed = (&fixed.shape, xf_fixed);
-        match time_of_impact(fixed, &body.shape, &sweep, target) {
+        let whole = if lies_along_a_face(fixed, &body.shape, sweep.at(0.0), target) {
+            Some(0.0)
+        } else {
+            time_of_impact(fixed, &body.shape, &sweep, target)
+        };
+        match whole {
             Some(t) if t > 0.0 => t,
             None => 1.0,
             Some(_) => {

@@ -1,6 +1,6 @@
 //! Runs the stiff and extreme suite with the default settings and with adaptive stiffness off,
 //! and prints each case's verdict and numbers: a quick loop while tuning the soft step. Cases
-//! named on the command line run even when they are report-only (pyramid_100, pyramid_134).
+//! named on the command line run even when they are report-only (pyramid_100, pyramid_134, pyramid_200).
 //! Usage: cargo run --release --no-default-features --features measure --example stiff_suite [CASE...]
 use tiltbox::measure::accuracy::extreme;
 use tiltbox::physics::Settings;

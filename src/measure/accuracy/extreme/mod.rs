@@ -23,7 +23,7 @@ pub use contacts::{
 pub use limits::{gravity_flip, huge_dt, large_bodies, non_finite_refused, tiny_bodies};
 pub use motion::{kinematic_carrier, kinematic_pusher, restitution_drop, rolling_disc};
 pub use stacks::{
-    far_from_origin, pyramid_100, pyramid_134, pyramid_20, pyramid_30, pyramid_sleeps,
+    far_from_origin, pyramid_100, pyramid_134, pyramid_20, pyramid_200, pyramid_30, pyramid_sleeps,
     real_spacing, stack_20, stack_50,
 };
 pub use terrain::{chain_slope, tiled_floor_boxes, tiled_floor_chain};
@@ -68,7 +68,7 @@ const fn report_case(name: &'static str, title: &'static str, run: Runner) -> Ex
 /// Every case, in report order (the report-only cases last). One row a case, kept as a
 /// table.
 #[rustfmt::skip]
-const CASES: [ExtremeCase; 28] = [
+const CASES: [ExtremeCase; 29] = [
     case("stack_20", "Stack of 20, 30 s", stack_20),
     case("stack_50", "Stack of 50, 10 s", stack_50),
     case("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
@@ -97,6 +97,7 @@ const CASES: [ExtremeCase; 28] = [
     case("chain_slope", "A disc rolling down a slope of chain pieces", chain_slope),
     report_case("pyramid_134", "Pyramid base 134 (9,045 boxes) stands", pyramid_134),
     report_case("pyramid_100", "Pyramid base 100 (5,050 boxes)", pyramid_100),
+    report_case("pyramid_200", "Pyramid base 200 (20,100 boxes) holds its top", pyramid_200),
 ];
 
 /// Every case, in report order (the report-only cases last).

@@ -86,6 +86,13 @@ fn fast_thin_spinners_never_pass_static_geometry() {
     check(extreme::fast_spinners);
 }
 
+/// Issue 31: a pyramid of base 200 (20,100 boxes) holds its top within 1 m and 0.5 m
+/// sideways for 5 s (solved as a heavily loaded braced island, on twice the substeps).
+#[test]
+fn pyramid_of_base_200_holds_its_top_for_5_s() {
+    check(extreme::pyramid_200);
+}
+
 /// Issue 31: a disc rolling down a straight slope of many chain pieces is not bumped at the
 /// joints more than on one piece.
 #[test]

@@ -96,7 +96,8 @@ pub struct Settings {
     /// running, or joins bodies whose masses differ that much. A loaded island braced
     /// sideways (a pyramid, a pile: less than twice as tall as wide, along gravity, with at
     /// least `stiff_load_ratio` bodies) keeps the base substeps with a relax pass, a normal
-    /// relax pass and creeping springs. Any other loaded island (a stack) is solved with 1.5
+    /// relax pass and creeping springs, or twice the substeps and stiffness where it is 80
+    /// bodies deep or more on average (a pyramid of base 159 and up). Any other loaded island (a stack) is solved with 1.5
     /// times the substeps and contact stiffness, and with 1.75 times from 2.25 times that load
     /// (a spring's compression goes as load / omega^2) or where masses differ by
     /// `stiff_load_ratio`. An island joining masses `extreme_mass_ratio` apart gets four times

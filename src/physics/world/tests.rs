@@ -321,6 +321,32 @@ fn a_stack_is_slender_and_a_pyramid_braced() {
     );
 }
 
+/// A braced island is heavily loaded ([`Tier::HeavyBraced`], twice the substeps) when it is
+/// [`tiers::HEAVY_DEPTH`] (80) bodies deep or more on average: a pyramid of base n is
+/// (n + 1) / 2 deep, so one of base 170 (85.5) is, from its first step, and one of base 150
+/// (75.5) is not.
+#[test]
+fn a_deep_pyramid_is_heavily_loaded() {
+    let tier_after_a_step = |base: usize| {
+        let mut w = awake_world_on_floor(400.0);
+        let mut top = None;
+        for row in 0..base {
+            for i in 0..base - row {
+                let x = (i as Real - (base - 1 - row) as Real / 2.0) * 1.05;
+                let centre = vec2(x, 0.5 + row as Real);
+                top = Some(
+                    w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), centre))
+                        .unwrap(),
+                );
+            }
+        }
+        w.step(1.0 / 60.0).unwrap();
+        w.tiers.body_tier[top.unwrap().index as usize]
+    };
+    assert_eq!(tier_after_a_step(170), Tier::HeavyBraced, "base 170");
+    assert_eq!(tier_after_a_step(150), Tier::Braced, "base 150");
+}
+
 /// Contacts found in place over last step's (`World::find_contacts`, when the pairs keep their
 /// order) step exactly like contacts found into a fresh array every step, as bodies come and
 /// go at the front, in the middle and at the end of the key order: a row of resting boxes on

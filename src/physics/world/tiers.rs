@@ -22,6 +22,8 @@ pub(super) enum Tier {
     /// A stack under [`LOADED_RANGE`] times the load (a tall stack), or an island joining
     /// masses `stiff_load_ratio` apart.
     TallStack,
+    /// A loaded braced island at least [`HEAVY_DEPTH`] bodies deep (a pyramid of base 200).
+    HeavyBraced,
     /// An island joining masses `extreme_mass_ratio` apart.
     Extreme,
 }
@@ -51,12 +53,15 @@ pub(super) struct TierSpec {
 /// - **Stack** and **TallStack** need stiff springs, so more substeps: 1.5 and 1.75 times the
 ///   base (7 substeps hold a jittered 50-box stack, 6 do not) with creep, which damps their
 ///   slow bounce without more relax passes.
+/// - **HeavyBraced** islands carry so much that the base springs give way under them: twice
+///   the substeps and stiffness, so a spring holds four times the load at the same
+///   compression, with the braced tier's passes and creep.
 /// - **Extreme** (100:1 masses) needs four times the substeps and stiffness and eight times
 ///   the relax passes; its islands are small. Creep would leave its springs softer at rest,
 ///   which it cannot afford.
 ///
 /// docs/benchmarks.md and docs/design.md have the measurements behind each number.
-pub(super) const TIERS: [TierSpec; 5] = [
+pub(super) const TIERS: [TierSpec; 6] = [
     // Base
     TierSpec {
         substep_quarters: 4,
@@ -85,6 +90,13 @@ pub(super) const TIERS: [TierSpec; 5] = [
         normal_relax_scale: 0,
         creep: 0.5,
     },
+    // HeavyBraced
+    TierSpec {
+        substep_quarters: 8,
+        relax_scale: 1,
+        normal_relax_scale: 1,
+        creep: 0.5,
+    },
     // Extreme
     TierSpec {
         substep_quarters: 16,
@@ -96,11 +108,12 @@ pub(super) const TIERS: [TierSpec; 5] = [
 
 impl Tier {
     /// Every tier, in order.
-    pub const ALL: [Tier; 5] = [
+    pub const ALL: [Tier; 6] = [
         Tier::Base,
         Tier::Braced,
         Tier::Stack,
         Tier::TallStack,
+        Tier::HeavyBraced,
         Tier::Extreme,
     ];
 
@@ -266,6 +279,8 @@ impl World {
             tiers.island_driven[root] |= driven;
         }
         let stiff = self.settings.stiff_load_ratio;
+        // Depth stands for weight only where there is gravity.
+        let weighed = self.gravity.length() > 1e-3;
         let mut top = Tier::Base;
         let roots = parent.iter().enumerate().filter(|&(i, &p)| p as usize == i);
         for (i, _) in roots {
@@ -274,7 +289,8 @@ impl World {
             let braced = tiers.island_bodies[i] as Real >= stiff
                 && !tiers.island_extent[i].slender()
                 && !tiers.island_driven[i];
-            tiers.body_tier[i] = island_tier(tiers.body_tier[i], braced);
+            let heavy = weighed && tiers.island_extent[i].depth() >= HEAVY_DEPTH;
+            tiers.body_tier[i] = island_tier(tiers.body_tier[i], braced, heavy);
             top = top.max(tiers.body_tier[i]);
         }
         for i in 0..n as u32 {
@@ -353,6 +369,8 @@ pub(super) const SLENDER: Real = 2.0;
 pub(super) struct Extent {
     up: [Real; 2],
     side: [Real; 2],
+    /// The sum of the bodies' widths across gravity (m).
+    widths: Real,
 }
 
 impl Extent {
@@ -360,6 +378,7 @@ impl Extent {
     pub const EMPTY: Extent = Extent {
         up: [Real::INFINITY, Real::NEG_INFINITY],
         side: [Real::INFINITY, Real::NEG_INFINITY],
+        widths: 0.0,
     };
 
     /// Take in box `aabb`, with `down` the unit vector along gravity and `across` normal to it.
@@ -375,6 +394,15 @@ impl Extent {
             self.side[0].min(side - r_side),
             self.side[1].max(side + r_side),
         ];
+        self.widths += 2.0 * r_side;
+    }
+
+    /// How many bodies deep the island is on average: its bodies' widths across gravity over
+    /// its own. Laid side by side on the ground they would stand this many high, and that is
+    /// about how many of their weights its lowest contacts carry: (n + 1) / 2 for a pyramid
+    /// of base n, whose ground contacts carry up to 1.4 times that.
+    fn depth(&self) -> Real {
+        self.widths / (self.side[1] - self.side[0])
     }
 
     /// At least [`SLENDER`] times as tall as wide.
@@ -390,8 +418,9 @@ impl Extent {
 /// too new to be measured, unequal masses or an impact, and it is small, so it keeps the
 /// stack tiers (a box sliding over a chain of tiles, loaded by each new contact, tilted past
 /// 1e-4 rad when it was solved braced).
-fn island_tier(need: Tier, braced: bool) -> Tier {
+fn island_tier(need: Tier, braced: bool, heavy: bool) -> Tier {
     match need {
+        Tier::Stack | Tier::TallStack if braced && heavy => Tier::HeavyBraced,
         Tier::Stack | Tier::TallStack if braced => Tier::Braced,
         _ => need,
     }
@@ -400,6 +429,15 @@ fn island_tier(need: Tier, braced: bool) -> Tier {
 /// The loads [`Tier::Stack`] holds, as a multiple of `stiff_load_ratio`: 1.5^2, the square of
 /// its substep factor (a spring's compression is load / (m omega^2)).
 pub(super) const LOADED_RANGE: Real = 2.25;
+
+/// A braced island at least this many bodies deep ([`Extent::depth`]) is [`Tier::HeavyBraced`]:
+/// its lowest contacts carry some 80 to 110 of their bodies' weights, under which a ground
+/// spring at the base 60 Hz compresses 80 g / (2 pi 60)^2 = 5.5 mm or more, past the linear
+/// slop. A pyramid of base 134 (68 deep) stands braced; one of base 200 (100 deep), braced,
+/// caved in (its top 5 m down within 5 s). Known from the island's shape at once, as
+/// [`SLENDER`] is: a pyramid's loads take some 30 steps to build, and switching tiers as
+/// they pass a bound let it sag sideways.
+pub(super) const HEAVY_DEPTH: Real = 80.0;
 
 /// How many steps a new touching contact is solved as a loaded one before its measured load
 /// decides.

@@ -255,9 +255,10 @@ pub fn pyramid_134(settings: &Settings) -> Verdict {
     )
 }
 
-/// Pyramid of base 200 (20,100 boxes), 5 s at 60 Hz, sleep off: measured for the report
-/// against issue 31's bound (the top box within 1 m of its start at every frame and within
-/// 0.5 m sideways), which it does not meet yet.
+/// Pyramid of base 200 (20,100 boxes), 5 s at 60 Hz, sleep off: the top box stays within 1 m
+/// of its start at every frame and within 0.5 m sideways (issue 31's bound: a pyramid that
+/// stands sinks by the compression of 200 rows of contacts, some 5 mm each under load, and
+/// does not lean).
 pub fn pyramid_200(settings: &Settings) -> Verdict {
     let settings = Settings {
         enable_sleep: false,
@@ -277,17 +278,16 @@ pub fn pyramid_200(settings: &Settings) -> Verdict {
         sideways = sideways.max(d.x.abs() as f64);
     });
     let ms_per_step = t0.elapsed().as_secs_f64() * 1e3 / steps as f64;
-    let met = finite && farthest <= 1.0 && sideways <= 0.5;
-    report_verdict(
+    verdict(
         "pyramid_200",
-        "report only: 5 s at 60 Hz, sleep off; met = the top box within 1 m of its start at every frame and within 0.5 m sideways",
-        met,
+        "pyramid of base 200 (20,100 boxes of 1 m), 5 s at 60 Hz, sleep off: the top box within 1 m of its start at every frame and within 0.5 m sideways".into(),
+        finite && farthest <= 1.0 && sideways <= 0.5,
         vec![
             ("top box farthest from its start (m)", farthest),
             ("top box farthest sideways (m)", sideways),
-            ("met (1 = yes)", if met { 1.0 } else { 0.0 }),
             ("ms per step", ms_per_step),
         ],
+        "",
     )
 }
 

@@ -19,11 +19,14 @@ use super::World;
 use crate::physics::broad_phase::pair_of;
 use crate::physics::collide::toi::{lies_along_a_face, time_of_impact, Sweep};
 use crate::physics::math::{Real, Rot, Vec2};
-use crate::physics::shape::Shape;
+use crate::physics::shape::{Aabb, Shape};
 
 /// A body is fast when it moved more than this fraction of its shortest extent in a step
 /// (Box2D's default safety factor).
 pub(super) const FAST_FRACTION: Real = 0.5;
+
+/// A slot's place in the fast list when it is not on it.
+pub(super) const NOT_FAST: u32 = u32::MAX;
 
 /// The core swept for a shape that starts within the slop of a static body, as a fraction of
 /// its shortest extent (Box2D's core fraction).
@@ -39,18 +42,27 @@ impl World {
         }
         let fast = std::mem::take(&mut self.solver.fast);
         let mut hits = std::mem::take(&mut self.solver.fast_hits);
+        let mut place = std::mem::take(&mut self.solver.fast_place);
         hits.clear();
         hits.resize(fast.len(), 1.0);
+        place.resize(self.bodies.slots.len(), NOT_FAST);
+        for (i, &slot) in fast.iter().enumerate() {
+            place[slot as usize] = i as u32;
+        }
         for &key in &self.broad_phase.pair_keys {
             let (a, b) = pair_of(key);
             for (moving, other) in [(a, b), (b, a)] {
-                if let Ok(i) = fast.binary_search(&moving) {
+                let i = place[moving as usize];
+                // Only a static body can be `other`: it has no inverse mass (read from the
+                // solver's compact bodies before the body itself).
+                if i != NOT_FAST && self.solver.bodies[other as usize].inv_mass == 0.0 {
                     let t = self.impact(moving, other);
-                    hits[i] = hits[i].min(t);
+                    hits[i as usize] = hits[i as usize].min(t);
                 }
             }
         }
         for (&slot, &t) in fast.iter().zip(&hits) {
+            place[slot as usize] = NOT_FAST;
             if t < 1.0 {
                 self.move_back(slot, t);
             }
@@ -58,6 +70,7 @@ impl World {
         self.solver.fast = fast;
         self.solver.fast.clear();
         self.solver.fast_hits = hits;
+        self.solver.fast_place = place;
     }
 
     /// The fraction of its step's motion at which body `moving` first comes within the slop of
@@ -79,6 +92,17 @@ impl World {
             end: (body.position, body.angle),
         };
         let xf_fixed = fixed.transform();
+        // The swept shape stays within its bounding radius of its centre's path: where that
+        // box misses the static's (a box falling past a wall), nothing is swept.
+        let reach = Vec2::splat(body.bounding_radius + self.settings.linear_slop);
+        let (p0, p1) = (sweep.start.0, sweep.end.0);
+        let swept = Aabb {
+            min: p0.min(p1) - reach,
+            max: p0.max(p1) + reach,
+        };
+        if !swept.overlaps(&fixed.shape.aabb(xf_fixed)) {
+            return 1.0;
+        }
         if let Shape::Segment(s) = &fixed.shape {
             let (a, left) = (xf_fixed.apply(s.a), xf_fixed.q.rotate(s.left_normal()));
             if s.one_sided && (sweep.start.0 - a).dot(left) < 0.0 {

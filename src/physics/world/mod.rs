@@ -117,6 +117,8 @@ struct SolverScratch {
     /// of the step each keeps (continuous collision).
     fast: Vec<u32>,
     fast_hits: Vec<Real>,
+    /// Each slot's place in `fast`, or [`continuous::NOT_FAST`] (kept so between steps).
+    fast_place: Vec<u32>,
 }
 
 impl Default for World {

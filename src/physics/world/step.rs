@@ -1,7 +1,7 @@
 //! One step, stage by stage: find contacts, load the solver bodies, solve (the sequential
 //! solver, or the soft step tier by tier), finalize the bodies, then sleep.
 
-use super::continuous::{motion, FAST_FRACTION};
+use super::continuous::{moved_more_than, FAST_FRACTION};
 use super::tiers::Tier;
 use super::*;
 use crate::physics::solver::soft_step::{self, StepContext};
@@ -223,7 +223,8 @@ impl World {
             if b.is_active() {
                 b.linear_velocity = sb.v;
                 b.angular_velocity = sb.w;
-                if motion(sb.dp, sb.dtheta, b.bounding_radius) > FAST_FRACTION * b.min_extent {
+                let limit = FAST_FRACTION * b.min_extent;
+                if moved_more_than(sb.dp, sb.dtheta, b.bounding_radius, limit) {
                     fast.push(i as u32);
                 }
             } else if !b.is_moving_kinematic() {

@@ -33,7 +33,7 @@ struct Cli {
     /// pages only).
     #[arg(long, conflicts_with_all = ["tls_cert", "tls_key"])]
     no_tls: bool,
-    /// Commands pages may send: any of gravity, tilt, spawn, remove, reset, or none.
+    /// Commands pages may send: any of gravity, tilt, spawn, remove, reset, velocity, or none.
     #[arg(long, default_value = "tilt,spawn", value_parser = Allow::parse)]
     allow: Allow,
     /// Per-page limit on commands a second (a phone tilts at 30 Hz).

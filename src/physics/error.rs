@@ -26,6 +26,18 @@ pub enum PhysicsError {
         /// The accepted range, in words, e.g. `must be >= 0`.
         expected: &'static str,
     },
+    /// A number above a limit the World was built with (a setting), named with its value.
+    #[error("{field} = {value} is out of range: must not exceed {setting} = {limit}")]
+    AboveLimit {
+        /// The field, e.g. `velocity (speed)`.
+        field: &'static str,
+        /// The value that was given.
+        value: Real,
+        /// The setting that sets the limit, e.g. `Settings::max_linear_speed`.
+        setting: &'static str,
+        /// Its value in this World.
+        limit: Real,
+    },
     /// A body id that does not (or no longer) name a body in this World.
     #[error("no body with id {0}")]
     UnknownBody(BodyId),

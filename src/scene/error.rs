@@ -81,6 +81,15 @@ impl SceneError {
                 value,
                 expected,
             } => (field, Some(value.to_string()), expected),
+            PhysicsError::AboveLimit {
+                field,
+                value,
+                setting,
+                limit,
+            } => {
+                let message = format!("must not exceed {setting} = {limit}");
+                return SceneError::invalid(body, field, Some(value.to_string()), message);
+            }
             PhysicsError::InvalidShape { field, reason } => {
                 let (value, message) = split_value(&reason);
                 return SceneError::invalid(body, field, value, message);

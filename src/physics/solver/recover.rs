@@ -1,6 +1,7 @@
 //! Recover: overlap deeper than the contact spring reaches, pushed out in position only.
 //!
-//! The soft bias pushes a point apart on at most [`SPRING_REACH`] slops of its overlap (see
+//! The soft bias pushes a point apart on at most its spring's reach ([`SPRING_REACH`] slops
+//! of its overlap, or [`LOAD_REACH`] times the compression its load explains; see
 //! `PushOut`); bodies placed inside one another, or driven in by a fast impact, overlap far
 //! deeper. Pushing them apart through their velocities, as Box2D does, leaves the push behind
 //! as speed wherever the relax pass does not converge: in a pyramid of boxes placed 25 %
@@ -15,9 +16,10 @@ use super::SolverBody;
 use crate::physics::contact::Contact;
 use crate::physics::math::{cross, cross_sv, Real, Vec2};
 
-/// The deepest overlap the contact spring acts on, in linear slops: 4, Box2D's speculative
-/// distance. At rest a pile's most loaded contact overlaps less (a base-100 pyramid, 12.8 mm of
-/// the 20 mm), so the spring holds every resting load by itself.
+/// The deepest overlap the contact spring always acts on, in linear slops: 4, Box2D's
+/// speculative distance. A contact whose last load explains a deeper compression reaches
+/// further ([`LOAD_REACH`] times it), so a heavily loaded spring (the ground under a pyramid
+/// of base 200) holds its load by itself instead of being held rigidly.
 pub(crate) const SPRING_REACH: Real = 4.0;
 
 /// How far past the compression its last load explains a spring acts on an overlap, as a

@@ -303,23 +303,21 @@ impl World {
     /// body of bounding radius r. (The solver clamps speeds anyway; a velocity given at the
     /// API beyond the cap is a mistake worth naming.)
     fn check_speed(&self, v: Vec2, w: Real, radius: Real) -> Result<(), PhysicsError> {
-        let max = self.settings.max_linear_speed;
-        let expected = "must not exceed Settings::max_linear_speed (default 400 m/s)";
-        if v.length() > max {
-            return Err(PhysicsError::OutOfRange {
-                field: "velocity (speed)",
-                value: v.length(),
-                expected,
-            });
+        let limit = self.settings.max_linear_speed;
+        let above = |field, value: Real| {
+            (value > limit).then_some(PhysicsError::AboveLimit {
+                field,
+                value,
+                setting: "Settings::max_linear_speed (m/s)",
+                limit,
+            })
+        };
+        match above("velocity (speed)", v.length())
+            .or_else(|| above("angular_velocity (rim speed)", w.abs() * radius))
+        {
+            Some(error) => Err(error),
+            None => Ok(()),
         }
-        if w.abs() * radius > max {
-            return Err(PhysicsError::OutOfRange {
-                field: "angular_velocity (rim speed)",
-                value: w.abs() * radius,
-                expected,
-            });
-        }
-        Ok(())
     }
 
     /// Remove every body and contact; settings, gravity and time are kept.

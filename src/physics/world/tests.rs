@@ -518,3 +518,28 @@ fn the_constraint_graph_matches_the_contacts_at_every_step() {
     assert!(slept, "some island fell asleep (and woke)");
     assert!(coloured > 1000, "contacts were coloured: {coloured}");
 }
+
+/// A speed above the World's cap is refused naming the cap this World runs with (not the
+/// default): 60 m/s, or a rim speed of 60 m/s, against a cap of 50.
+#[test]
+fn a_speed_above_the_cap_names_this_worlds_cap() {
+    let settings = Settings {
+        max_linear_speed: 50.0,
+        ..Settings::default()
+    };
+    let mut w = World::new(settings, vec2(0.0, -10.0)).unwrap();
+    let id = w
+        .add_body(&BodyDef::dynamic(Shape::circle(0.5), Vec2::ZERO))
+        .unwrap();
+    let err = w.set_velocity(id, vec2(60.0, 0.0), 0.0).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "velocity (speed) = 60 is out of range: must not exceed Settings::max_linear_speed (m/s) = 50"
+    );
+    let err = w.set_velocity(id, Vec2::ZERO, 120.0).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "angular_velocity (rim speed) = 60 is out of range: must not exceed Settings::max_linear_speed (m/s) = 50"
+    );
+    assert_eq!(w.body(id).unwrap().linear_velocity(), Vec2::ZERO);
+}

@@ -65,6 +65,11 @@ position = [0, 100]
 density = 1
 "#;
 
+/// `tiltbox simulate SCENE --seconds 1 --timeline TIMELINE`, for timelines it must refuse.
+fn refused_run(scene: &str, timeline: &str) -> Output {
+    tiltbox(&["simulate", scene, "--seconds", "1", "--timeline", timeline])
+}
+
 fn write(dir: &Path, name: &str, text: &str) -> String {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
@@ -155,14 +160,7 @@ fn bad_timeline_entries_are_refused_before_anything_runs() {
     ];
     for (i, (entry, needles)) in cases.iter().enumerate() {
         let timeline = write(&dir, &format!("bad{i}.toml"), &format!("[[at]]\n{entry}\n"));
-        let o = tiltbox(&[
-            "simulate",
-            &scene,
-            "--seconds",
-            "1",
-            "--timeline",
-            &timeline,
-        ]);
+        let o = refused_run(&scene, &timeline);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{entry}: {err}");
         assert!(o.stdout.is_empty(), "{entry}: printed before refusing");
@@ -354,14 +352,7 @@ fn bad_velocity_entries_are_refused_with_the_documented_messages() {
     assert_eq!(cases.len(), documented.lines().count());
     let refuse = |name: &str, text: &str| {
         let timeline = write(&dir, name, text);
-        let o = tiltbox(&[
-            "simulate",
-            &scene,
-            "--seconds",
-            "1",
-            "--timeline",
-            &timeline,
-        ]);
+        let o = refused_run(&scene, &timeline);
         let err = String::from_utf8_lossy(&o.stderr).into_owned();
         assert_eq!(o.status.code(), Some(2), "{text}: {err}");
         assert!(o.stdout.is_empty(), "{text}: printed before refusing");
@@ -421,14 +412,7 @@ fn bad_velocity_entries_are_refused_with_the_documented_messages() {
         "fast.toml",
         &entry_at(0.5, &entry("0v0", "[0, 60]", "0")),
     );
-    let o = tiltbox(&[
-        "simulate",
-        &scene,
-        "--seconds",
-        "1",
-        "--timeline",
-        &timeline,
-    ]);
+    let o = refused_run(&scene, &timeline);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(

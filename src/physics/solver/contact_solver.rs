@@ -122,9 +122,10 @@ pub(crate) struct BounceLanes<L> {
     /// That is the speed it hit at: a body landing within a step is faster when its contact
     /// first pushes than when the step began (the step's gravity), and slower once pushed.
     approach: [L; 2],
-    /// Whether a biased pass pushed the point (1) or not (0): its surfaces met this step. A
-    /// relax pass's push on a point still apart only keeps the next substep from passing
-    /// the surface; the point bounces when it meets it, next step, at the approach it keeps.
+    /// Whether its surfaces met this step (1) or not (0): a biased pass pushed the point, or
+    /// a relax pass pushed it where it touches. A relax pass's push on a point still apart
+    /// only keeps the next substep from passing the surface; the point bounces when it meets
+    /// it, next step, at the approach it keeps.
     touched: [L; 2],
 }
 
@@ -703,8 +704,15 @@ impl<L: Wide> Bundle<L> {
                 p.tangent_impulse.to_lanes(),
                 p.total_normal_impulse.to_lanes(),
             );
+            // Carried to the next step: the approach of a point some pass pushed this step
+            // whose surfaces have not met yet; nothing from a step that did not push it (an
+            // approach kept past such a step could bounce a later, slower landing).
             let carried = match bounce {
-                Some(b) => L::select(b.touched[j].cmpgt(L::ZERO), L::ZERO, b.approach[j]),
+                Some(b) => {
+                    let pushed = (p.total_normal_impulse + p.normal_impulse).cmpgt(L::ZERO);
+                    let keep = pushed & L::ONE.cmpgt(b.touched[j]);
+                    L::select(keep, b.approach[j], L::ZERO)
+                }
                 None => L::ZERO,
             }
             .to_lanes();

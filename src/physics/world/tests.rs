@@ -543,3 +543,45 @@ fn a_speed_above_the_cap_names_this_worlds_cap() {
     );
     assert_eq!(w.body(id).unwrap().linear_velocity(), Vec2::ZERO);
 }
+
+/// An approach speed is carried to the next step only from a step that pushed the point: a
+/// disc of restitution 1 arriving at 6 m/s is pushed by the last relax pass of its first step
+/// while still 1 cm above a floor of restitution 1 (no gravity); stopped there for a step,
+/// then sent down at 2 m/s, it bounces at 2 m/s, not at the 6 m/s of the approach two steps
+/// before.
+#[test]
+fn a_stale_approach_does_not_bounce_a_later_landing() {
+    let settings = Settings {
+        enable_sleep: false,
+        ..Settings::default()
+    };
+    let mut w = World::new(settings, Vec2::ZERO).unwrap();
+    w.add_body(&BodyDef::fixed(Shape::rect(10.0, 1.0), vec2(0.0, -0.5)).with_restitution(1.0))
+        .unwrap();
+    let r = 0.25;
+    // Bottom 11 cm up, falling at 6 m/s: 10 cm in the step's four substeps, ending 1 cm up.
+    let disc = w
+        .add_body(
+            &BodyDef::dynamic(Shape::circle(r), vec2(0.0, r + 0.11))
+                .with_velocity(vec2(0.0, -6.0))
+                .with_restitution(1.0),
+        )
+        .unwrap();
+    w.step(1.0 / 60.0).unwrap();
+    let gap = w.body(disc).unwrap().position().y - r;
+    assert!((0.005..0.015).contains(&gap), "1 cm up after a step: {gap}");
+    w.set_velocity(disc, Vec2::ZERO, 0.0).unwrap();
+    w.step(1.0 / 60.0).unwrap();
+    w.set_velocity(disc, vec2(0.0, -2.0), 0.0).unwrap();
+    let mut fastest_up: Real = 0.0;
+    for _ in 0..10 {
+        w.step(1.0 / 60.0).unwrap();
+        fastest_up = fastest_up.max(w.body(disc).unwrap().linear_velocity().y);
+    }
+    // e = 1 returns the 2 m/s (restitution_drop holds rebounds within 2 % of e times the
+    // impact speed).
+    assert!(
+        (fastest_up - 2.0).abs() < 0.04,
+        "bounced at {fastest_up} m/s"
+    );
+}

@@ -42,7 +42,8 @@ impl Sweep {
 
 /// The first fraction (0 to 1) of `sweep` at which shape `moving` comes within `target` (m) of
 /// shape `fixed` placed at `xf_fixed`, give or take a quarter of the target; None if it stays
-/// farther all along. 0 when it starts that close.
+/// farther all along. 0 when it starts that close. After [`MAX_ITERATIONS`] steps of
+/// advancement still short of the target, the moment reached (earlier than the true one).
 pub(crate) fn time_of_impact(
     (fixed, xf_fixed): (&Shape, Transform),
     moving: &Shape,
@@ -52,7 +53,9 @@ pub(crate) fn time_of_impact(
     let (core_f, radius_f) = core(fixed);
     let (core_m, radius_m) = core(moving);
     let travel = sweep.end.0 - sweep.start.0;
-    let turn = (sweep.end.1 - sweep.start.1).abs() * moving.bounding_radius();
+    // Turning moves the core's points at most its reach from the centre (a disc's not at all).
+    let core_reach = moving.bounding_radius() - moving.rounding();
+    let turn = (sweep.end.1 - sweep.start.1).abs() * core_reach;
     let tolerance = 0.25 * target;
     let mut t = 0.0;
     for _ in 0..MAX_ITERATIONS {

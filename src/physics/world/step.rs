@@ -224,7 +224,9 @@ impl World {
                 b.linear_velocity = sb.v;
                 b.angular_velocity = sb.w;
                 let limit = FAST_FRACTION * b.min_extent;
-                if moved_more_than(sb.dp, sb.dtheta, b.bounding_radius, limit) {
+                // Turning moves the shape's core at most its reach (a disc's not at all).
+                let core_reach = b.bounding_radius - b.shape.rounding();
+                if moved_more_than(sb.dp, sb.dtheta, core_reach, limit) {
                     fast.push(i as u32);
                 }
             } else if !b.is_moving_kinematic() {

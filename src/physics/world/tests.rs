@@ -585,3 +585,34 @@ fn a_stale_approach_does_not_bounce_a_later_landing() {
         "bounced at {fastest_up} m/s"
     );
 }
+
+/// Turning moves no point of a disc's core, so continuous collision does not count a spin as
+/// motion toward a surface: a disc of radius 0.5 m gliding at 10 m/s 1 cm above a floor
+/// (no gravity) while it spins at 50 rad/s goes its full 10 m/s x 1/60 s every step (before,
+/// the spin's 25 m/s rim speed read as an approach and it was moved back most of each step).
+#[test]
+fn a_spinning_disc_gliding_over_a_floor_is_not_held_back() {
+    let settings = Settings {
+        enable_sleep: false,
+        ..Settings::default()
+    };
+    let mut w = World::new(settings, Vec2::ZERO).unwrap();
+    w.add_body(&BodyDef::fixed(Shape::rect(40.0, 1.0), vec2(0.0, -0.5)))
+        .unwrap();
+    let disc = w
+        .add_body(
+            &BodyDef::dynamic(Shape::circle(0.5), vec2(-10.0, 0.51))
+                .with_velocity(vec2(10.0, 0.0))
+                .with_angular_velocity(50.0),
+        )
+        .unwrap();
+    for step in 0..30 {
+        let x0 = w.body(disc).unwrap().position().x;
+        w.step(1.0 / 60.0).unwrap();
+        let moved = w.body(disc).unwrap().position().x - x0;
+        assert!(
+            (moved - 10.0 / 60.0).abs() < 1e-4,
+            "step {step}: moved {moved} m"
+        );
+    }
+}

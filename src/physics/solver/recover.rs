@@ -42,8 +42,9 @@ struct DeepPoint {
     arms: [Vec2; 2],
     /// Effective mass along the normal (kg).
     mass: Real,
-    /// The pseudo normal velocity (m/s) that pushes the overlap beyond the reach out in one
-    /// step, capped at the push-out speed.
+    /// The pseudo normal velocity (m/s) that pushes the point out in one step to half its
+    /// spring's reach (the overlap beyond the reach and half the reach besides, so the spring
+    /// takes over well inside its range), capped at the push-out speed.
     target: Real,
     /// Accumulated pseudo impulse (N s), >= 0.
     impulse: Real,

@@ -403,8 +403,9 @@ fn creep(c: &Contact, sf: Softness, inv_mass: Real) -> Real {
 }
 
 /// The overlap (m) contact `c`'s spring may need for the load it carried last step:
-/// [`LOAD_REACH`] times the compression at which each point would carry its share, P / (m
-/// ms br) with P its impulse (see [`creep`]) and m its mass along the normal, turning included
+/// [`LOAD_REACH`] times the compression at which each point would carry its share,
+/// is P / (m ms br) with P its impulse, `is` the spring's impulse scale (see [`creep`]) and m
+/// its mass along the normal, turning included
 /// (the corner of a tilted box deep in a pile rests 34 mm into the box under it). `sf` is the
 /// contact's spring this step, `points` its constraints.
 fn spring_reach(c: &Contact, sf: Softness, points: &[PointConstraint; 2]) -> Real {

@@ -175,8 +175,9 @@ impl World {
     /// loaded where a contact's lasting force is `stiff_load_ratio` times the lighter body's
     /// weight or more, or a touching contact is too new for its load to be known. A loaded
     /// island braced sideways (less than [`SLENDER`] times as tall as it is wide, along
-    /// gravity, with at least `stiff_load_ratio` moving bodies) is [`Tier::Braced`]; any other
-    /// a stack tier. Masses `stiff_load_ratio` apart ask for [`Tier::TallStack`] (braced if the
+    /// gravity, with at least `stiff_load_ratio` moving bodies, and not driven by a moving
+    /// kinematic body) is [`Tier::Braced`], or [`Tier::HeavyBraced`] from [`HEAVY_DEPTH`]
+    /// bodies deep; any other a stack tier. Masses `stiff_load_ratio` apart ask for [`Tier::TallStack`] (braced if the
     /// island is), `extreme_mass_ratio` apart for [`Tier::Extreme`]. Fills `contact_tier` and
     /// `body_tier`; returns the highest tier.
     pub(super) fn assign_tiers(&mut self) -> Tier {
@@ -400,7 +401,10 @@ impl Extent {
     /// How many bodies deep the island is on average: its bodies' widths across gravity over
     /// its own. Laid side by side on the ground they would stand this many high, and that is
     /// about how many of their weights its lowest contacts carry: (n + 1) / 2 for a pyramid
-    /// of base n, whose ground contacts carry up to 1.4 times that.
+    /// of base n, whose ground contacts carry up to 1.4 times that. The widths are the
+    /// broad phase's boxes (grown by the contact margin and the step's travel, and a turned
+    /// body's box is wider than the body), so a pile of small or jumbled bodies reads
+    /// somewhat deeper than it is.
     fn depth(&self) -> Real {
         self.widths / (self.side[1] - self.side[0])
     }

@@ -300,6 +300,15 @@ impl Aabb {
         }
     }
 
+    /// True when `other` lies wholly inside this box.
+    #[inline]
+    pub fn contains(&self, other: &Aabb) -> bool {
+        self.min.x <= other.min.x
+            && self.min.y <= other.min.y
+            && other.max.x <= self.max.x
+            && other.max.y <= self.max.y
+    }
+
     /// True when the two boxes overlap or touch.
     #[inline]
     pub fn overlaps(&self, other: &Aabb) -> bool {

@@ -4,7 +4,8 @@
 //! features the narrow phase found at the start of the step: a thin plank spinning at 50 rad/s
 //! swings an end through a post or a floor that no contact point stood for. So each dynamic
 //! body that moved more than [`FAST_FRACTION`] of its shortest extent in the step is swept,
-//! shape by shape, against the static bodies its box met this step (`collide/toi.rs`); where a
+//! shape by shape, against the static bodies its box met this step, or every static its
+//! path's box meets if it left that box (struck within the step) (`collide/toi.rs`); where a
 //! shape would have come within the linear slop of one, the body goes back to that moment of
 //! its motion, keeping its velocity, and the next step's speculative contact stops it there.
 //! A shape that starts the step that close already (a box sliding fast along the floor, a
@@ -15,7 +16,7 @@
 //! would otherwise stop at every joint). A one-sided piece is skipped by
 //! a body whose centre starts behind it, as its contacts are.
 
-use super::World;
+use super::{Slot, World};
 use crate::physics::broad_phase::pair_of;
 use crate::physics::collide::toi::{lies_along_a_face, time_of_impact, Sweep};
 use crate::physics::math::{Real, Rot, Vec2};
@@ -61,6 +62,7 @@ impl World {
                 }
             }
         }
+        self.sweep_escaped(&fast, &mut hits);
         for (&slot, &t) in fast.iter().zip(&hits) {
             place[slot as usize] = NOT_FAST;
             if t < 1.0 {
@@ -71,6 +73,36 @@ impl World {
         self.solver.fast.clear();
         self.solver.fast_hits = hits;
         self.solver.fast_place = place;
+    }
+
+    /// A fast body whose box at the end of the step is not inside the box the broad phase
+    /// paired it by (grown by the travel its velocity at the start of the step foretold) gained
+    /// speed within the step, struck by another body: the statics it reached were never
+    /// paired with it, so it is swept against every static whose box its path's box meets
+    /// (Box2D queries its static tree alike). Rare: the statics are listed only then.
+    fn sweep_escaped(&mut self, fast: &[u32], hits: &mut [Real]) {
+        let mut statics = std::mem::take(&mut self.solver.statics);
+        statics.clear();
+        let mut listed = false;
+        for (i, &slot) in fast.iter().enumerate() {
+            let Some(body) = self.bodies.slots[slot as usize].body.as_ref() else {
+                continue;
+            };
+            let paired_by = &self.broad_phase.proxies[slot as usize].aabb;
+            if paired_by.contains(&body.shape.aabb(body.transform())) {
+                continue;
+            }
+            if !listed {
+                let slots = self.bodies.slots.iter().enumerate();
+                let is_static = |s: &Slot| s.body.as_ref().is_some_and(|b| b.is_static());
+                statics.extend(slots.filter(|(_, s)| is_static(s)).map(|(j, _)| j as u32));
+                listed = true;
+            }
+            for &other in &statics {
+                hits[i] = hits[i].min(self.impact(slot, other));
+            }
+        }
+        self.solver.statics = statics;
     }
 
     /// The fraction of its step's motion at which body `moving` first comes within the slop of

@@ -119,6 +119,8 @@ struct SolverScratch {
     fast_hits: Vec<Real>,
     /// Each slot's place in `fast`, or [`continuous::NOT_FAST`] (kept so between steps).
     fast_place: Vec<u32>,
+    /// The static bodies' slots, listed when a fast body left its broad-phase box.
+    statics: Vec<u32>,
 }
 
 impl Default for World {

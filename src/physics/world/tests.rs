@@ -10,6 +10,15 @@ use crate::physics::solver::graph::OVERFLOW;
 
 /// A World on the defaults with sleep off (g = 10 m/s^2 down) and a fixed floor `width` m wide
 /// whose top is at y = 0.
+/// A World with the default settings but sleep off, under `gravity`.
+fn awake_world(gravity: Vec2) -> World {
+    let settings = Settings {
+        enable_sleep: false,
+        ..Settings::default()
+    };
+    World::new(settings, gravity).unwrap()
+}
+
 fn awake_world_on_floor(width: Real) -> World {
     let settings = Settings {
         enable_sleep: false,
@@ -551,11 +560,7 @@ fn a_speed_above_the_cap_names_this_worlds_cap() {
 /// before.
 #[test]
 fn a_stale_approach_does_not_bounce_a_later_landing() {
-    let settings = Settings {
-        enable_sleep: false,
-        ..Settings::default()
-    };
-    let mut w = World::new(settings, Vec2::ZERO).unwrap();
+    let mut w = awake_world(Vec2::ZERO);
     w.add_body(&BodyDef::fixed(Shape::rect(10.0, 1.0), vec2(0.0, -0.5)).with_restitution(1.0))
         .unwrap();
     let r = 0.25;
@@ -592,11 +597,7 @@ fn a_stale_approach_does_not_bounce_a_later_landing() {
 /// the spin's 25 m/s rim speed read as an approach and it was moved back most of each step).
 #[test]
 fn a_spinning_disc_gliding_over_a_floor_is_not_held_back() {
-    let settings = Settings {
-        enable_sleep: false,
-        ..Settings::default()
-    };
-    let mut w = World::new(settings, Vec2::ZERO).unwrap();
+    let mut w = awake_world(Vec2::ZERO);
     w.add_body(&BodyDef::fixed(Shape::rect(40.0, 1.0), vec2(0.0, -0.5)))
         .unwrap();
     let disc = w
@@ -624,11 +625,7 @@ fn a_spinning_disc_gliding_over_a_floor_is_not_held_back() {
 /// step): its centre never passes the wall's near face.
 #[test]
 fn a_struck_body_does_not_pass_a_wall_it_was_not_paired_with() {
-    let settings = Settings {
-        enable_sleep: false,
-        ..Settings::default()
-    };
-    let mut w = World::new(settings, Vec2::ZERO).unwrap();
+    let mut w = awake_world(Vec2::ZERO);
     let face = 0.15;
     w.add_body(&BodyDef::fixed(
         Shape::rect(0.05, 2.0),

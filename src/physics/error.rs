@@ -1,6 +1,6 @@
 //! Typed errors for input the engine refuses.
 
-use super::id::BodyId;
+use super::id::{BodyId, JointId};
 use super::math::{Real, Vec2};
 use thiserror::Error;
 
@@ -56,6 +56,39 @@ pub enum PhysicsError {
     /// The World already holds as many bodies as a body id can address.
     #[error("the world is full ({0} bodies)")]
     Full(usize),
+    /// A joint id that does not (or no longer) name a joint in this World.
+    #[error("no {0}")]
+    UnknownJoint(JointId),
+    /// A joint that names the same body as both of its ends.
+    #[error("body_a and body_b are both body {0}: a joint joins two different bodies")]
+    SameBody(BodyId),
+    /// A joint neither of whose ends a force can move (static or kinematic bodies, or the
+    /// world).
+    #[error("{0}: a joint needs at least one dynamic body")]
+    NoDynamicBody(String),
+    /// A range whose lower end is above its upper end.
+    #[error("{lower_field} = {lower} is above {upper_field} = {upper}: the lower end must not exceed the upper")]
+    Reversed {
+        /// The lower end's field, e.g. `limit.lower`.
+        lower_field: &'static str,
+        /// Its value.
+        lower: Real,
+        /// The upper end's field.
+        upper_field: &'static str,
+        /// Its value.
+        upper: Real,
+    },
+    /// A setting that only one kind of joint has, asked of another (e.g. a motor speed of a
+    /// weld joint).
+    #[error("{joint} is a {kind} joint, which has no {what}")]
+    WrongJointKind {
+        /// The joint.
+        joint: JointId,
+        /// Its kind.
+        kind: &'static str,
+        /// What was asked of it.
+        what: &'static str,
+    },
 }
 
 /// Check that `value` is finite, naming `field` if not.
@@ -84,6 +117,22 @@ pub(crate) fn positive(field: &'static str, value: Real) -> Result<Real, Physics
             field,
             value,
             expected: "must be > 0",
+        })
+    }
+}
+
+/// Check that `value` is not NaN and not negative (infinity allowed: "no limit").
+pub(crate) fn non_negative_or_infinite(
+    field: &'static str,
+    value: Real,
+) -> Result<Real, PhysicsError> {
+    if value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(PhysicsError::OutOfRange {
+            field,
+            value,
+            expected: "must be >= 0 (infinity for no limit)",
         })
     }
 }

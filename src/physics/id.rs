@@ -33,3 +33,31 @@ impl fmt::Display for BodyId {
         write!(f, "{}v{}", self.index, self.generation)
     }
 }
+
+/// A stable handle to a joint in a [`super::World`], generational as [`BodyId`] is: a removed
+/// or broken joint's id is never reused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct JointId {
+    /// Slot in the World's joint array.
+    pub(super) index: u32,
+    /// How many times the slot has been reused.
+    pub(super) generation: u32,
+}
+
+impl JointId {
+    /// The slot in the World's joint array (reused after a removal).
+    pub fn index(self) -> u32 {
+        self.index
+    }
+
+    /// How many times the slot had been reused when this joint was added.
+    pub fn generation(self) -> u32 {
+        self.generation
+    }
+}
+
+impl fmt::Display for JointId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "joint {}v{}", self.index, self.generation)
+    }
+}

@@ -15,6 +15,7 @@ pub mod convex;
 pub mod error;
 pub(crate) mod hash;
 pub mod id;
+pub mod joint;
 pub mod math;
 pub mod segment;
 pub mod settings;
@@ -26,6 +27,10 @@ pub use body::{Body, BodyDef, BodyId, MassSpec};
 pub use contact::{ContactInfo, ContactPointInfo};
 pub use convex::Polygon;
 pub use error::PhysicsError;
+pub use joint::{
+    Distance, Joint, JointDef, JointId, JointKind, Limit, Motor, MotorJoint, Prismatic, Revolute,
+    Spring, Target, Weld, Wheel,
+};
 pub use math::{vec2, Real, Rot, Transform, Vec2};
 pub use segment::Segment;
 pub use settings::{Mixing, Settings, SolverKind};

@@ -31,7 +31,8 @@ use std::thread::JoinHandle;
 /// 8: contact points no longer carry a friction anchor (no slip, no stuck flag).
 /// 9: the solver's history (contacts, now with their colours in the constraint graph) is one
 /// record with a version of its own (`physics::world::snapshot::SolverHistory`).
-pub const FORMAT_VERSION: u32 = 9;
+/// 10: the World carries its joints (definitions and impulses) and their free list.
+pub const FORMAT_VERSION: u32 = 10;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

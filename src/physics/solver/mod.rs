@@ -14,6 +14,7 @@ pub(crate) mod bundles;
 pub(crate) mod constraint;
 pub(crate) mod contact_solver;
 pub(crate) mod graph;
+pub(crate) mod joint;
 pub(crate) mod lanes;
 pub(crate) mod recover;
 pub(crate) mod sequential;

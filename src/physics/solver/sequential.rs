@@ -13,17 +13,20 @@ use crate::physics::math::{cross, cross_sv, Real, Vec2};
 use crate::physics::settings::Settings;
 
 /// Prepare, warm start and iterate. Velocities in `bodies` are updated in place;
-/// `constraints` (one per contact) receive this step's constraints.
+/// `constraints` (one per contact) receive this step's constraints. `joints` solves the
+/// joints once after each sweep over the contacts (box2d-lite's order).
 pub(crate) fn solve(
     bodies: &mut [SolverBody],
     contacts: &mut [Contact],
     constraints: &mut [ContactConstraint],
     settings: &Settings,
     dt: Real,
+    mut joints: impl FnMut(&mut [SolverBody]),
 ) {
     prepare(bodies, contacts, constraints, settings, dt);
     for _ in 0..settings.iterations {
         iterate(bodies, contacts, constraints, settings);
+        joints(bodies);
     }
     for c in contacts.iter_mut() {
         for p in &mut c.points[..c.count] {

@@ -19,12 +19,14 @@
 //! push-out speed is capped; speculative points (separation > 0) only let the bodies close
 //! the gap in one substep, which stops fast bodies at the surface. Every stage but prepare and
 //! store runs on the bundles (`bundles.rs`): the overflow, then the colours, in one kernel
-//! (`contact_solver.rs`). A joint kind will be its own functions for these same stages.
+//! (`contact_solver.rs`). Joints (`joint.rs`) go through the same stages, before the contacts
+//! in each.
 
 use super::block::BlockMass;
 use super::bundles::{ContactBundles, PackInput};
 use super::constraint::{Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
+use super::joint::{self, JointConstraint, JointStep};
 use super::recover::{Recovery, LOAD_REACH, SPRING_REACH};
 use super::softness::Softness;
 use super::{
@@ -67,6 +69,9 @@ pub(crate) struct StepContext<'a> {
     pub bundles: &'a mut ContactBundles,
     /// The points overlapping deeper than the spring reaches (`recover.rs`).
     pub recovery: &'a mut Recovery,
+    /// This step's joints; the solve works on the `joint_selected` ones.
+    pub joints: &'a mut [JointConstraint],
+    pub joint_selected: Selected<'a>,
     pub settings: &'a Settings,
     /// The step (s).
     pub dt: Real,
@@ -82,6 +87,7 @@ struct Plan {
     normal_relax_passes: u32,
     stiffness: Stiffness,
     limits: Limits,
+    joints: JointStep,
 }
 
 impl Plan {
@@ -126,6 +132,12 @@ impl Plan {
                 max_linear_speed: settings.max_linear_speed,
                 max_rotation: settings.max_rotation,
             },
+            joints: JointStep {
+                h,
+                substeps,
+                baumgarte: 0.0,
+                warm_starting: settings.warm_starting,
+            },
         }
     }
 }
@@ -136,10 +148,11 @@ pub(crate) fn solve(ctx: &mut StepContext, effort: &Effort) {
     let plan = Plan::new(ctx.settings, effort, ctx.dt);
     restart_motion(ctx.bodies, ctx.kinematic);
     prepare_contacts(ctx, &plan);
+    joint::prepare(ctx.joints, ctx.joint_selected, ctx.bodies, plan.joints);
     for _ in 0..plan.substeps {
         integrate_velocities(ctx.bodies, ctx.moving, plan.h, plan.limits);
         warm_start(ctx);
-        solve_contacts(ctx, &plan, PassKind::Biased);
+        solve_pass(ctx, &plan, PassKind::Biased);
         let movers = (ctx.moving, ctx.kinematic);
         integrate_positions(ctx.bodies, movers, plan.h, plan.limits);
         relax(ctx, &plan);
@@ -171,14 +184,26 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan) {
     });
 }
 
-/// Warm start: apply each contact's accumulated impulses (zero them with warm starting off).
+/// Warm start: apply each joint's and contact's accumulated impulses (zero them with warm
+/// starting off).
 fn warm_start(ctx: &mut StepContext) {
+    joint::warm_start(ctx.joints, ctx.joint_selected, ctx.bodies);
     let warm_starting = ctx.settings.warm_starting;
     ctx.bundles.warm_start(ctx.bodies, warm_starting);
 }
 
-/// One solve pass of `kind` over the contacts.
-fn solve_contacts(ctx: &mut StepContext, plan: &Plan, kind: PassKind) {
+/// One solve pass of `kind` over the joints (but for a normal relax pass), then the contacts.
+fn solve_pass(ctx: &mut StepContext, plan: &Plan, kind: PassKind) {
+    if kind != PassKind::NormalRelax {
+        let biased = kind == PassKind::Biased;
+        joint::solve(
+            ctx.joints,
+            ctx.joint_selected,
+            ctx.bodies,
+            biased,
+            plan.inv_h,
+        );
+    }
     let push_out = ctx.settings.max_push_out_speed;
     ctx.bundles.solve(ctx.bodies, kind, plan.inv_h, push_out);
 }
@@ -191,10 +216,10 @@ fn recover(ctx: &mut StepContext) {
 /// Relax: the relax passes, then the normal relax passes.
 fn relax(ctx: &mut StepContext, plan: &Plan) {
     for _ in 0..plan.relax_passes {
-        solve_contacts(ctx, plan, PassKind::Relax);
+        solve_pass(ctx, plan, PassKind::Relax);
     }
     for _ in 0..plan.normal_relax_passes {
-        solve_contacts(ctx, plan, PassKind::NormalRelax);
+        solve_pass(ctx, plan, PassKind::NormalRelax);
     }
 }
 
@@ -204,8 +229,9 @@ fn apply_restitution(ctx: &mut StepContext) {
     ctx.bundles.apply_restitution(ctx.bodies, threshold);
 }
 
-/// Store: each contact's impulses back into it, per step, and its load.
+/// Store: each joint's and contact's impulses back into it, per step, and its load.
 fn store_impulses(ctx: &mut StepContext, plan: &Plan) {
+    joint::store(ctx.joints, ctx.joint_selected, ctx.bodies, plan.joints);
     let (substeps, inv_dt) = (plan.substeps as Real, 1.0 / ctx.dt);
     ctx.bundles
         .store(ctx.contacts, |c, ends| finish(c, ends, substeps, inv_dt));

@@ -68,6 +68,7 @@ impl World {
             broad_phase,
             tiers,
             islands,
+            joints,
             ..
         } = self;
         let pairs = PairInput {
@@ -79,6 +80,10 @@ impl World {
         tiers.inputs.clear();
         let mut merge = Merge::begin(contacts);
         for &key in &broad_phase.pair_keys {
+            // (A pair kept apart by a joint keeps no contact: any it had ends here.)
+            if !joints.may_collide(key) {
+                continue;
+            }
             if let Some(input) = pairs.update(key, &mut merge, contacts, &mut islands.wake_queue) {
                 tiers.inputs.push(input);
             }

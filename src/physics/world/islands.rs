@@ -1,4 +1,4 @@
-//! Islands: bodies joined by contacts. Sleep puts an island to rest when all of it has
+//! Islands: bodies joined by contacts and joints. Sleep puts an island to rest when all of it has
 //! rested, and wakes it whole; adaptive stiffness (`tiers.rs`) gives each awake one a tier.
 
 use super::*;
@@ -60,12 +60,16 @@ impl World {
         }
     }
 
-    /// Islands of awake dynamic bodies (static bodies join nothing), by union-find.
+    /// Islands of awake dynamic bodies joined by contacts and joints (static bodies join
+    /// nothing), by union-find.
     fn unite_awake_islands(&mut self) {
         let slots = &self.bodies.slots;
         let pairs = &mut self.islands.contact_bodies;
         pairs.clear();
         pairs.extend(self.contacts.awake.iter().map(|c| [c.a, c.b]));
+        if self.joints.count > 0 {
+            pairs.extend(super::joints::joint_pairs(&self.joints, slots));
+        }
         unite_islands(&mut self.islands.parent, slots.len(), pairs, |i| {
             is_active(slots, i)
         });

@@ -27,6 +27,7 @@ pub mod snapshot;
 mod contacts;
 mod continuous;
 mod islands;
+mod joints;
 mod step;
 #[cfg(test)]
 mod tests;
@@ -57,6 +58,7 @@ pub struct World {
     solver: SolverScratch,
     tiers: tiers::TierScratch,
     islands: islands::IslandScratch,
+    joints: joints::Joints,
 }
 
 /// The bodies: a slot array with a free list.
@@ -149,6 +151,7 @@ impl World {
             solver: SolverScratch::default(),
             tiers: Default::default(),
             islands: Default::default(),
+            joints: Default::default(),
         }
     }
 
@@ -224,13 +227,13 @@ impl World {
         Ok(id)
     }
 
-    /// Remove a body and every contact it had; returns the removed body.
+    /// Remove a body and every contact and joint it had; returns the removed body.
     pub fn remove_body(&mut self, id: BodyId) -> Result<Body, PhysicsError> {
         let mut removed = self.remove_bodies(&[id])?;
         Ok(removed.pop().expect("one id, one body"))
     }
 
-    /// Remove several bodies and every contact they had, all or none: each id must name a
+    /// Remove several bodies and every contact and joint they had, all or none: each id must name a
     /// live body, once. One pass over the contacts and the broad phase however many go
     /// (removing them one at a time costs a pass each). Returns the bodies in the order given.
     pub fn remove_bodies(&mut self, ids: &[BodyId]) -> Result<Vec<Body>, PhysicsError> {
@@ -279,6 +282,7 @@ impl World {
             !gone
         });
         self.wake_queued();
+        self.remove_joints_of(&gone);
         clear(&mut gone);
         self.bodies.removing = gone;
         let mut removed = Vec::with_capacity(ids.len());
@@ -322,8 +326,9 @@ impl World {
         }
     }
 
-    /// Remove every body and contact; settings, gravity and time are kept.
+    /// Remove every body, joint and contact; settings, gravity and time are kept.
     pub fn clear(&mut self) {
+        self.joints = Default::default();
         self.bodies.slots.clear();
         self.bodies.free.clear();
         self.bodies.count = 0;

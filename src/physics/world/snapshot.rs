@@ -22,6 +22,7 @@ use super::super::body::{Body, BodyId};
 use super::super::contact::{Contact, ContactPoint};
 use super::super::error::PhysicsError;
 use super::super::hash::Fnv1a;
+use super::super::joint::{JointDef, JointImpulses};
 use super::super::math::{Real, Rot, Vec2};
 use super::super::settings::Settings;
 use super::super::shape::Shape;
@@ -154,6 +155,20 @@ pub struct WorldState {
     pub steps: u64,
     /// The solver's history.
     pub solver: SolverHistory,
+    /// Every joint slot in index order. Appended: checkpoint format version 10 on.
+    pub joints: Vec<JointSlotState>,
+    /// Free joint slots, in the order they will be reused (last first).
+    pub joint_free: Vec<u32>,
+}
+
+/// A joint slot: its generation and its joint, if live.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointSlotState {
+    /// Generation.
+    pub generation: u32,
+    /// The joint's definition (reference angle and length worked out) and the impulses it
+    /// carries to the next step.
+    pub joint: Option<(JointDef, JointImpulses)>,
 }
 
 fn v2(v: Vec2) -> [Real; 2] {
@@ -471,6 +486,8 @@ impl World {
             free: self.bodies.free.clone(),
             time: self.time,
             steps: self.steps,
+            joints: self.export_joints(),
+            joint_free: self.joints.free.clone(),
             solver: SolverHistory {
                 version: SOLVER_HISTORY_VERSION,
                 contacts: self.contacts.awake.iter().map(ContactRecord::of).collect(),
@@ -497,6 +514,7 @@ impl World {
         world.time = state.time;
         world.steps = state.steps;
         world.import_contacts(&state.solver)?;
+        world.import_joints(&state.joints, &state.joint_free)?;
         Ok(world)
     }
 

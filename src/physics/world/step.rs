@@ -4,7 +4,13 @@
 use super::continuous::{moved_more_than, FAST_FRACTION};
 use super::tiers::Tier;
 use super::*;
+use crate::physics::solver::joint::{self, JointConstraint, JointStep};
 use crate::physics::solver::soft_step::{self, StepContext};
+
+/// The sequential solver's joint bias factor (box2d-lite's `k_biasFactor`): the fraction of a
+/// joint's position error its velocity removes per step.
+const JOINT_BAUMGARTE: Real = 0.2;
+
 use crate::physics::solver::{
     integrate_positions, integrate_velocities, sequential, Limits, Moving, Selected,
 };
@@ -24,12 +30,20 @@ impl World {
             // woken: nothing moves, nothing to find or solve.)
             self.find_contacts(dt);
             self.load_solver_bodies();
+            self.joints.constraints.clear();
+            if self.joints.count > 0 {
+                self.build_joint_constraints();
+            }
             self.solver.recovery.clear();
             match self.settings.solver {
                 SolverKind::Sequential => self.solve_sequential(dt),
                 SolverKind::SoftStep => self.solve_soft_step(dt),
             }
             self.finalize_bodies();
+            self.joints.broken.clear();
+            if !self.joints.constraints.is_empty() {
+                self.finish_joints();
+            }
             self.solve_continuous();
             if self.settings.enable_sleep {
                 self.update_sleep(dt);
@@ -51,7 +65,28 @@ impl World {
             .resize(contacts.len(), ContactConstraint::default());
         integrate_velocities(&mut solver.bodies, Moving::All, dt, limits);
         let (bodies, constraints) = (&mut solver.bodies, &mut solver.constraints);
-        sequential::solve(bodies, contacts, constraints, &self.settings, dt);
+        let joints = &mut self.joints.constraints;
+        let step = JointStep {
+            h: dt,
+            substeps: 1,
+            baumgarte: JOINT_BAUMGARTE,
+            warm_starting: self.settings.warm_starting,
+        };
+        joint::prepare(joints, Selected::All, bodies, step);
+        joint::warm_start(joints, Selected::All, bodies);
+        let inv_dt = 1.0 / dt;
+        let solve_joints = |bodies: &mut [SolverBody]| {
+            joint::solve(joints, Selected::All, bodies, true, inv_dt);
+        };
+        sequential::solve(
+            bodies,
+            contacts,
+            constraints,
+            &self.settings,
+            dt,
+            solve_joints,
+        );
+        joint::store(joints, Selected::All, bodies, step);
         let movers = (Moving::All, solver.kinematic.as_slice());
         integrate_positions(&mut solver.bodies, movers, dt, limits);
         let (bodies, constraints) = (&mut solver.bodies, &solver.constraints);
@@ -68,7 +103,8 @@ impl World {
             Tier::Base
         };
         if top == Tier::Base {
-            self.solve_tier(Tier::Base, (Moving::All, Selected::All), dt);
+            let all = Selected::All;
+            self.solve_tier(Tier::Base, (Moving::All, all, all), dt);
             return;
         }
         let ranges = self.group_by_tier();
@@ -80,9 +116,10 @@ impl World {
             .count();
         // The tier lists are taken out while a tier is solved (they are its parts) and put
         // back, so their storage is kept from step to step.
-        let (mut bodies, contacts) = (
+        let (mut bodies, contacts, mut joints) = (
             std::mem::take(&mut self.tiers.tier_bodies),
             std::mem::take(&mut self.tiers.tier_contacts),
+            std::mem::take(&mut self.tiers.tier_joints),
         );
         for tier in Tier::ALL.into_iter().filter(|&t| t <= top) {
             let body_tier = &self.tiers.body_tier;
@@ -106,13 +143,42 @@ impl World {
                 // Bodies touching nothing: only integrated.
                 None => Selected::Only(&[]),
             };
-            self.solve_tier(tier, (moving, selected), dt);
+            self.tier_joints(tier, &mut joints);
+            self.solve_tier(tier, (moving, selected, Selected::Only(&joints)), dt);
         }
         (self.tiers.tier_bodies, self.tiers.tier_contacts) = (bodies, contacts);
+        self.tiers.tier_joints = joints;
     }
 
-    /// One soft-step solve of `tier`'s work on the `moving` bodies and `selected` contacts.
-    fn solve_tier(&mut self, tier: Tier, (moving, selected): (Moving, Selected), dt: Real) {
+    /// The joints of `tier`'s islands, by index into this step's joint constraints.
+    fn tier_joints(&self, tier: Tier, list: &mut Vec<u32>) {
+        list.clear();
+        let (body_tier, solver_bodies) = (&self.tiers.body_tier, &self.solver.bodies);
+        let of = |k: &JointConstraint| {
+            let dynamic = if solver_bodies[k.b as usize].inv_mass > 0.0 {
+                k.b
+            } else {
+                k.a
+            };
+            body_tier
+                .get(dynamic as usize)
+                .copied()
+                .unwrap_or(Tier::Base)
+        };
+        let constraints = &self.joints.constraints;
+        list.extend(
+            (0..constraints.len() as u32).filter(|&k| of(&constraints[k as usize]) == tier),
+        );
+    }
+
+    /// One soft-step solve of `tier`'s work on the `moving` bodies, `selected` contacts and
+    /// `joints`.
+    fn solve_tier(
+        &mut self,
+        tier: Tier,
+        (moving, selected, joints): (Moving, Selected, Selected),
+        dt: Real,
+    ) {
         let mut ctx = StepContext {
             bodies: &mut self.solver.bodies,
             moving,
@@ -121,6 +187,8 @@ impl World {
             selected,
             bundles: &mut self.solver.bundles,
             recovery: &mut self.solver.recovery,
+            joints: &mut self.joints.constraints,
+            joint_selected: joints,
             settings: &self.settings,
             dt,
         };

@@ -168,6 +168,10 @@ pub(super) struct TierScratch {
     pub tier_contacts: Vec<u32>,
     /// The bodies of the tier being solved.
     pub tier_bodies: Vec<u32>,
+    /// A body of each joint that asks for [`Tier::Extreme`].
+    pub joint_needs: Vec<u32>,
+    /// The joints (indices of this step's joint constraints) of the tier being solved.
+    pub tier_joints: Vec<u32>,
 }
 
 impl World {
@@ -181,10 +185,34 @@ impl World {
     /// island is), `extreme_mass_ratio` apart for [`Tier::Extreme`]. Fills `contact_tier` and
     /// `body_tier`; returns the highest tier.
     pub(super) fn assign_tiers(&mut self) -> Tier {
-        if self.contact_needs() == Tier::Base {
+        let need = self.contact_needs().max(self.joint_needs());
+        if need == Tier::Base {
             return Tier::Base;
         }
         self.island_tiers()
+    }
+
+    /// What the joints ask: their pairs of dynamic bodies join islands (appended to
+    /// `islands.contact_bodies`, so that no tier splits jointed bodies), and a joint joining
+    /// masses `extreme_mass_ratio` apart asks for [`Tier::Extreme`], as a contact does
+    /// (`joint_needs`). A joint's load asks for nothing: the tiers' loads are contacts'.
+    fn joint_needs(&mut self) -> Tier {
+        self.tiers.joint_needs.clear();
+        let extreme = self.settings.extreme_mass_ratio;
+        let mut top = Tier::Base;
+        for k in &self.joints.constraints {
+            let inv_mass = |i: u32| self.solver.bodies[i as usize].inv_mass;
+            let (ma, mb) = (inv_mass(k.a), inv_mass(k.b));
+            if ma == 0.0 || mb == 0.0 {
+                continue;
+            }
+            self.islands.contact_bodies.push([k.a, k.b]);
+            if ma.max(mb) / ma.min(mb) >= extreme {
+                self.tiers.joint_needs.push(k.b);
+                top = Tier::Extreme;
+            }
+        }
+        top
     }
 
     /// What each contact asks of its island before the island's shape is known, into
@@ -278,6 +306,10 @@ impl World {
             let root = find(parent, if moving(a) { a } else { b }) as usize;
             tiers.body_tier[root] = tiers.body_tier[root].max(need);
             tiers.island_driven[root] |= driven;
+        }
+        for &b in &tiers.joint_needs {
+            let root = find(parent, b) as usize;
+            tiers.body_tier[root] = Tier::Extreme;
         }
         let stiff = self.settings.stiff_load_ratio;
         // Depth stands for weight only where there is gravity.

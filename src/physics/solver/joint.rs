@@ -1,0 +1,652 @@
+//! Joints in the solver: every kind is built from the same parts, written once and shared by
+//! both solvers.
+//!
+//! - a **point block**: the anchors meet, C = d = (cB + rB) - (cA + rA), solved as one 2x2
+//!   block (K = J M^-1 J^T with J = [-I, -[rA]x, I, [rB]x]);
+//! - **rows**, one-dimensional: C is the joint angle (J = [0, -1, 0, 1]), the travel of B's
+//!   anchor along or across an axis fixed in A (J = [-u, -(d + rA) x u, u, rB x u]), or the
+//!   anchors' distance (J = [-u, -rA x u, u, rB x u], u = d / |d|).
+//!
+//! Each row holds its value at a target (rigidly, as a spring, or with a correction factor),
+//! drives it at a speed (a motor, its impulse capped at h times its force), or keeps it on one
+//! side of a bound (a limit: speculative while open, C / h, so a fast joint stops at the bound
+//! instead of passing it). The soft step solves them as Box2D v3 does: soft (the joint's
+//! `constraint_hertz`) in the biased pass, rigid in the relax pass, springs in both, warm
+//! started every substep. The sequential solver solves them once per step as box2d-lite's
+//! `Joint` does, with a Baumgarte bias of 0.2 C / dt in the velocity. Positions are read from the bodies' motion since the start of
+//! the step (dp, dq), so nothing is recomputed from the World between substeps.
+
+use super::softness::Softness;
+use super::{Selected, SolverBody};
+use crate::physics::joint::{JointImpulses, JointKind, Limit, Motor, Spring, MAX_ROWS};
+use crate::physics::math::{cross, Real, Vec2};
+
+/// What a row measures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Measure {
+    /// The joint angle: B's angle minus A's minus the reference (rad).
+    Angle,
+    /// The travel of B's anchor from A's along the axis fixed in A (m).
+    Along,
+    /// The same across the axis (m).
+    Across,
+    /// The anchors' distance (m).
+    Length,
+}
+
+/// How a row or the point block pulls its value to its target.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Pull {
+    /// Rigidly: soft at the joint's stiffness in the biased pass, rigid in the relax pass.
+    Joint,
+    /// A spring, in every pass.
+    Spring(Spring),
+    /// A fraction of the error per substep in the biased pass (the motor joint).
+    Correct(Real),
+}
+
+/// What a row does with its value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Role {
+    /// Holds it at the row's target.
+    Hold(Pull),
+    /// Drives it at a speed (rad/s or m/s).
+    Motor(Real),
+    /// Keeps it at or above the target.
+    Lower,
+    /// Keeps it at or below the target.
+    Upper,
+}
+
+/// One row of a joint.
+#[derive(Clone, Copy, Debug)]
+struct Row {
+    measure: Measure,
+    role: Role,
+    /// The value held or bounded (rad or m).
+    target: Real,
+    /// Largest force or torque (N, N m); infinity: none.
+    max: Real,
+    /// This solve's spring, and whether it acts in the relax pass too.
+    soft: Softness,
+    always: bool,
+    /// Largest impulse per substep (N s).
+    max_impulse: Real,
+    /// Accumulated impulse (per substep during a solve, per step between steps).
+    impulse: Real,
+}
+
+/// The point block of a joint.
+#[derive(Clone, Copy, Debug)]
+struct PointBlock {
+    pull: Pull,
+    max: Real,
+    soft: Softness,
+    always: bool,
+    max_impulse: Real,
+    impulse: Vec2,
+}
+
+/// Where a joint's bodies and anchors are at the start of the step.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Frame {
+    /// The anchors' arms from the centres of mass, in world axes (m).
+    pub ra: Vec2,
+    pub rb: Vec2,
+    /// cB - cA (m).
+    pub centres: Vec2,
+    /// The joint angle (rad).
+    pub angle: Real,
+    /// The axis fixed in A, in world axes (unit).
+    pub axis: Vec2,
+}
+
+/// A joint as one solve sees it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointConstraint {
+    /// The joint's slot in the World, and its bodies' solver indices (a fixed body for the
+    /// world).
+    pub slot: u32,
+    pub a: u32,
+    pub b: u32,
+    frame: Frame,
+    point: Option<PointBlock>,
+    rows: [Row; MAX_ROWS],
+    count: usize,
+    /// The rigid rows' spring this solve (the joint's `constraint_hertz`).
+    soft: Softness,
+    hertz: Real,
+    zeta: Real,
+    /// Inverse masses and inertias of A and B.
+    masses: [Real; 4],
+    /// The force (N) and torque (N m) on B at the end of the solve.
+    pub force: Vec2,
+    pub torque: Real,
+}
+
+/// The joint's pose during a solve.
+#[derive(Clone, Copy, Debug)]
+struct Pose {
+    ra: Vec2,
+    rb: Vec2,
+    d: Vec2,
+    angle: Real,
+    axis: Vec2,
+}
+
+/// A row's Jacobian at a pose: J = [-u, -ka, u, kb], and its value.
+#[derive(Clone, Copy, Debug)]
+struct Jacobian {
+    u: Vec2,
+    ka: Real,
+    kb: Real,
+    value: Real,
+}
+
+impl Row {
+    const fn new(measure: Measure, role: Role, target: Real, max: Real) -> Row {
+        Row {
+            measure,
+            role,
+            target,
+            max,
+            soft: Softness::RIGID,
+            always: false,
+            max_impulse: Real::INFINITY,
+            impulse: 0.0,
+        }
+    }
+}
+
+/// A joint's rows, in solve order.
+#[derive(Clone, Copy, Debug)]
+struct RowList {
+    rows: [Row; MAX_ROWS],
+    count: usize,
+}
+
+impl RowList {
+    const EMPTY: RowList = RowList {
+        rows: [Row::new(Measure::Angle, Role::Lower, 0.0, 0.0); MAX_ROWS],
+        count: 0,
+    };
+
+    fn push(&mut self, row: Row) {
+        self.rows[self.count] = row;
+        self.count += 1;
+    }
+}
+
+/// The rows a kind's coordinate gets from its spring, motor and limit, in Box2D's order
+/// (spring, motor, limits: the hard rows last, so they have the last word).
+fn coordinate_rows(
+    measure: Measure,
+    spring: Option<Spring>,
+    motor: Option<Motor>,
+    limit: Option<Limit>,
+    rows: &mut RowList,
+) {
+    if let Some(s) = spring.filter(|s| s.hertz > 0.0) {
+        rows.push(Row::new(
+            measure,
+            Role::Hold(Pull::Spring(s)),
+            0.0,
+            Real::INFINITY,
+        ));
+    }
+    if let Some(m) = motor {
+        rows.push(Row::new(measure, Role::Motor(m.speed), 0.0, m.max));
+    }
+    if let Some(l) = limit {
+        rows.push(Row::new(measure, Role::Lower, l.lower, Real::INFINITY));
+        rows.push(Row::new(measure, Role::Upper, l.upper, Real::INFINITY));
+    }
+}
+
+/// The kind's point block (with its pull and largest force) and rows, in solve order.
+fn parts(kind: &JointKind, length: Real) -> (Option<(Pull, Real)>, RowList) {
+    let mut rows = RowList::EMPTY;
+    let hold = |measure, pull| Row::new(measure, Role::Hold(pull), 0.0, Real::INFINITY);
+    let spring = |hertz, damping_ratio| Spring {
+        hertz,
+        damping_ratio,
+    };
+    let point = match kind {
+        JointKind::Revolute(r) => {
+            coordinate_rows(Measure::Angle, r.spring, r.motor, r.limit, &mut rows);
+            Some((Pull::Joint, Real::INFINITY))
+        }
+        JointKind::Prismatic(p) => {
+            coordinate_rows(Measure::Along, p.spring, p.motor, p.limit, &mut rows);
+            rows.push(hold(Measure::Across, Pull::Joint));
+            rows.push(hold(Measure::Angle, Pull::Joint));
+            None
+        }
+        JointKind::Distance(d) => {
+            // The spring's (or the rigid row's) target is the rest length; the limits are
+            // lengths already.
+            match d.spring.filter(|s| s.hertz > 0.0) {
+                Some(_) => coordinate_rows(Measure::Length, d.spring, None, d.limit, &mut rows),
+                None => rows.push(hold(Measure::Length, Pull::Joint)),
+            }
+            rows.rows[0].target = length;
+            None
+        }
+        JointKind::Weld(w) => {
+            let pull = |hertz, zeta| match hertz > 0.0 {
+                true => Pull::Spring(spring(hertz, zeta)),
+                false => Pull::Joint,
+            };
+            let angular = pull(w.angular_hertz, w.angular_damping_ratio);
+            rows.push(hold(Measure::Angle, angular));
+            Some((pull(w.linear_hertz, w.linear_damping_ratio), Real::INFINITY))
+        }
+        JointKind::Wheel(w) => {
+            coordinate_rows(Measure::Along, w.spring, None, w.limit, &mut rows);
+            coordinate_rows(Measure::Angle, None, w.motor, None, &mut rows);
+            rows.push(hold(Measure::Across, Pull::Joint));
+            None
+        }
+        JointKind::Motor(m) => {
+            let mut angular = hold(Measure::Angle, Pull::Correct(m.correction_factor));
+            angular.target = m.angular_offset;
+            angular.max = m.max_torque;
+            rows.push(angular);
+            Some((Pull::Correct(m.correction_factor), m.max_force))
+        }
+        JointKind::Target(t) => Some((Pull::Spring(spring(t.hertz, t.damping_ratio)), t.max_force)),
+    };
+    (point, rows)
+}
+
+impl JointConstraint {
+    /// The constraint of a joint of `kind` (distance joints: rest `length`, m) between solver
+    /// bodies `a` and `b` posed as `frame`, carrying last step's `impulses`; `hertz` and
+    /// `zeta` are its rigid rows' stiffness (Hz) and damping ratio.
+    pub fn new(
+        (slot, a, b): (u32, u32, u32),
+        kind: &JointKind,
+        length: Real,
+        frame: Frame,
+        impulses: &JointImpulses,
+        (hertz, zeta): (Real, Real),
+    ) -> JointConstraint {
+        let (point, mut list) = parts(kind, length);
+        for (row, &impulse) in list.rows.iter_mut().zip(&impulses.rows) {
+            row.impulse = impulse;
+        }
+        JointConstraint {
+            slot,
+            a,
+            b,
+            frame,
+            point: point.map(|(pull, max)| PointBlock {
+                pull,
+                max,
+                soft: Softness::RIGID,
+                always: false,
+                max_impulse: Real::INFINITY,
+                impulse: Vec2::from(impulses.point),
+            }),
+            rows: list.rows,
+            count: list.count,
+            soft: Softness::RIGID,
+            hertz,
+            zeta,
+            masses: [0.0; 4],
+            force: Vec2::ZERO,
+            torque: 0.0,
+        }
+    }
+
+    /// The impulses to carry to the next step (per step).
+    pub fn impulses(&self) -> JointImpulses {
+        let mut out = JointImpulses::default();
+        if let Some(p) = &self.point {
+            out.point = p.impulse.into();
+        }
+        for (o, r) in out.rows.iter_mut().zip(&self.rows[..self.count]) {
+            *o = r.impulse;
+        }
+        out
+    }
+}
+
+/// How a solve steps its joints.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointStep {
+    /// Substep (s).
+    pub h: Real,
+    /// Substeps in the step.
+    pub substeps: u32,
+    /// The sequential solver's Baumgarte factor for the rigid rows (box2d-lite's 0.2: the
+    /// fraction of the position error the velocity removes per step); 0: the soft step.
+    pub baumgarte: Real,
+    /// Whether the joints start from last step's impulses.
+    pub warm_starting: bool,
+}
+
+/// Prepare: masses, springs and impulse caps for this solve; last step's impulses made per
+/// substep.
+pub(crate) fn prepare(
+    joints: &mut [JointConstraint],
+    selected: Selected,
+    bodies: &[SolverBody],
+    step: JointStep,
+) {
+    let per_substep = 1.0 / step.substeps as Real;
+    selected.for_each_index(joints.len(), |k| {
+        let j = &mut joints[k];
+        let (a, b) = (&bodies[j.a as usize], &bodies[j.b as usize]);
+        j.masses = [a.inv_mass, a.inv_inertia, b.inv_mass, b.inv_inertia];
+        j.soft = if step.baumgarte > 0.0 {
+            Softness {
+                bias_rate: step.baumgarte / step.h,
+                mass_scale: 1.0,
+                impulse_scale: 0.0,
+            }
+        } else {
+            Softness::new(j.hertz.min(0.25 / step.h), j.zeta, step.h)
+        };
+        let scale = if step.warm_starting { per_substep } else { 0.0 };
+        if let Some(p) = &mut j.point {
+            (p.soft, p.always) = pull_softness(p.pull, j.soft, step.h);
+            p.max_impulse = p.max * step.h;
+            p.impulse *= scale;
+        }
+        let soft = j.soft;
+        for row in &mut j.rows[..j.count] {
+            (row.soft, row.always) = match row.role {
+                Role::Hold(pull) => pull_softness(pull, soft, step.h),
+                _ => (soft, false),
+            };
+            row.max_impulse = row.max * step.h;
+            row.impulse *= scale;
+        }
+    });
+}
+
+/// The spring of a pull for substep `h`, and whether it acts in the relax pass too.
+fn pull_softness(pull: Pull, joint: Softness, h: Real) -> (Softness, bool) {
+    match pull {
+        Pull::Joint => (joint, false),
+        Pull::Spring(s) => (Softness::new(s.hertz, s.damping_ratio, h), true),
+        Pull::Correct(beta) => (
+            Softness {
+                bias_rate: beta / h,
+                mass_scale: 1.0,
+                impulse_scale: 0.0,
+            },
+            false,
+        ),
+    }
+}
+
+/// Warm start: apply each joint's accumulated impulses.
+pub(crate) fn warm_start(
+    joints: &[JointConstraint],
+    selected: Selected,
+    bodies: &mut [SolverBody],
+) {
+    selected.for_each_index(joints.len(), |k| {
+        let j = &joints[k];
+        let (a, b) = two_mut(bodies, j.a, j.b);
+        let pose = j.pose(a, b);
+        if let Some(p) = &j.point {
+            j.apply_point(a, b, &pose, p.impulse);
+        }
+        for row in &j.rows[..j.count] {
+            let jac = jacobian(row.measure, &pose);
+            j.apply_row(a, b, &jac, row.sign() * row.impulse);
+        }
+    });
+}
+
+/// One pass over the joints: `biased` (the soft bias) or a relax pass (rigid); `inv_h` is
+/// 1 / substep (1/s).
+pub(crate) fn solve(
+    joints: &mut [JointConstraint],
+    selected: Selected,
+    bodies: &mut [SolverBody],
+    biased: bool,
+    inv_h: Real,
+) {
+    selected.for_each_index(joints.len(), |k| {
+        let j = &mut joints[k];
+        let (a, b) = two_mut(bodies, j.a, j.b);
+        for r in 0..j.count {
+            let pose = j.pose(a, b);
+            j.solve_row(r, (a, b), &pose, (biased, inv_h));
+        }
+        if j.point.is_some() {
+            let pose = j.pose(a, b);
+            j.solve_point((a, b), &pose, biased);
+        }
+    });
+}
+
+/// Store: the impulses back to per step, and each joint's force and torque on B (N, N m)
+/// from its impulses over the substep.
+pub(crate) fn store(
+    joints: &mut [JointConstraint],
+    selected: Selected,
+    bodies: &[SolverBody],
+    step: JointStep,
+) {
+    let (substeps, inv_h) = (step.substeps as Real, 1.0 / step.h);
+    selected.for_each_index(joints.len(), |k| {
+        let j = &mut joints[k];
+        let pose = j.pose(&bodies[j.a as usize], &bodies[j.b as usize]);
+        let (mut force, mut torque) = (Vec2::ZERO, 0.0);
+        if let Some(p) = &mut j.point {
+            force += p.impulse * inv_h;
+            p.impulse *= substeps;
+        }
+        for row in &mut j.rows[..j.count] {
+            let jac = jacobian(row.measure, &pose);
+            let impulse = row.sign() * row.impulse;
+            force += jac.u * impulse * inv_h;
+            if row.measure == Measure::Angle {
+                torque += impulse * inv_h;
+            }
+            row.impulse *= substeps;
+        }
+        (j.force, j.torque) = (force, torque);
+    });
+}
+
+impl Row {
+    /// +1, or -1 for an upper limit (whose value is target - C).
+    fn sign(&self) -> Real {
+        if self.role == Role::Upper {
+            -1.0
+        } else {
+            1.0
+        }
+    }
+}
+
+impl JointConstraint {
+    /// Where the joint is now, from the bodies' motion since the start of the step.
+    #[inline]
+    fn pose(&self, a: &SolverBody, b: &SolverBody) -> Pose {
+        let f = &self.frame;
+        let ra = a.dq.rotate(f.ra);
+        let rb = b.dq.rotate(f.rb);
+        Pose {
+            ra,
+            rb,
+            d: (b.dp - a.dp) + f.centres + rb - ra,
+            angle: f.angle + b.dtheta - a.dtheta,
+            axis: a.dq.rotate(f.axis),
+        }
+    }
+
+    /// Solve row `r` at `pose`: `biased` pass or not, `inv_h` 1 / substep.
+    fn solve_row(
+        &mut self,
+        r: usize,
+        (a, b): (&mut SolverBody, &mut SolverBody),
+        pose: &Pose,
+        (biased, inv_h): (bool, Real),
+    ) {
+        let masses = self.masses;
+        let row = &mut self.rows[r];
+        let jac = jacobian(row.measure, pose);
+        let sign = row.sign();
+        let k = row_mass_inverse(masses, &jac);
+        if k <= 0.0 {
+            return;
+        }
+        let mass = 1.0 / k;
+        let cdot = sign * (jac.u.dot(b.v - a.v) + jac.kb * b.w - jac.ka * a.w);
+        let error = sign * (jac.value - row.target);
+        let old = row.impulse;
+        let new = match row.role {
+            Role::Motor(speed) => old - mass * (cdot - speed),
+            Role::Hold(_) => {
+                let s = if biased || row.always {
+                    row.soft
+                } else {
+                    Softness::RIGID
+                };
+                old - mass * s.mass_scale * (cdot + s.bias_rate * error) - s.impulse_scale * old
+            }
+            Role::Lower | Role::Upper => {
+                let (bias, s) = if error > 0.0 {
+                    (error * inv_h, Softness::RIGID)
+                } else if biased {
+                    (row.soft.bias_rate * error, row.soft)
+                } else {
+                    (0.0, Softness::RIGID)
+                };
+                let raw = old - mass * s.mass_scale * (cdot + bias) - s.impulse_scale * old;
+                raw.max(0.0)
+            }
+        };
+        let new = new.clamp(-row.max_impulse, row.max_impulse);
+        row.impulse = new;
+        self.apply_row(a, b, &jac, sign * (new - old));
+    }
+
+    /// Solve the point block at `pose`.
+    fn solve_point(
+        &mut self,
+        (a, b): (&mut SolverBody, &mut SolverBody),
+        pose: &Pose,
+        biased: bool,
+    ) {
+        let [ma, ia, mb, ib] = self.masses;
+        let Some(p) = &mut self.point else { return };
+        let (ra, rb) = (pose.ra, pose.rb);
+        let cdot = (b.v + cross_w(b.w, rb)) - (a.v + cross_w(a.w, ra));
+        let s = if biased || p.always {
+            p.soft
+        } else {
+            Softness::RIGID
+        };
+        let rhs = cdot + s.bias_rate * pose.d;
+        let Some(solved) = block_solve([ma, ia, mb, ib], pose, rhs) else {
+            return;
+        };
+        let old = p.impulse;
+        let mut new = old - s.mass_scale * solved - s.impulse_scale * old;
+        let len = new.length();
+        if len > p.max_impulse {
+            new *= p.max_impulse / len;
+        }
+        p.impulse = new;
+        self.apply_point(a, b, pose, new - old);
+    }
+
+    /// Apply impulse `p` (N s) at the anchors: -p on A, +p on B.
+    #[inline]
+    fn apply_point(&self, a: &mut SolverBody, b: &mut SolverBody, pose: &Pose, p: Vec2) {
+        let [ma, ia, mb, ib] = self.masses;
+        a.v -= ma * p;
+        a.w -= ia * cross(pose.ra, p);
+        b.v += mb * p;
+        b.w += ib * cross(pose.rb, p);
+    }
+
+    /// Apply impulse `lambda` along a row's Jacobian.
+    #[inline]
+    fn apply_row(&self, a: &mut SolverBody, b: &mut SolverBody, jac: &Jacobian, lambda: Real) {
+        let [ma, ia, mb, ib] = self.masses;
+        a.v -= ma * lambda * jac.u;
+        a.w -= ia * lambda * jac.ka;
+        b.v += mb * lambda * jac.u;
+        b.w += ib * lambda * jac.kb;
+    }
+}
+
+/// 1 / the effective mass of a row with Jacobian `jac`, for inverse masses
+/// `[mA, iA, mB, iB]`: J M^-1 J^T.
+#[inline]
+fn row_mass_inverse([ma, ia, mb, ib]: [Real; 4], jac: &Jacobian) -> Real {
+    (ma + mb) * jac.u.length_squared() + ia * jac.ka * jac.ka + ib * jac.kb * jac.kb
+}
+
+/// K^-1 `rhs` for the point block at `pose` with inverse masses `[mA, iA, mB, iB]`
+/// (K = J M^-1 J^T, 2x2, by Cramer's rule); None where K is singular.
+#[inline]
+fn block_solve([ma, ia, mb, ib]: [Real; 4], pose: &Pose, rhs: Vec2) -> Option<Vec2> {
+    let (ra, rb) = (pose.ra, pose.rb);
+    let k11 = ma + mb + ia * ra.y * ra.y + ib * rb.y * rb.y;
+    let k12 = -ia * ra.x * ra.y - ib * rb.x * rb.y;
+    let k22 = ma + mb + ia * ra.x * ra.x + ib * rb.x * rb.x;
+    let det = k11 * k22 - k12 * k12;
+    (det > 0.0).then(|| Vec2::new(k22 * rhs.x - k12 * rhs.y, k11 * rhs.y - k12 * rhs.x) / det)
+}
+
+/// w x r.
+#[inline]
+fn cross_w(w: Real, r: Vec2) -> Vec2 {
+    Vec2::new(-w * r.y, w * r.x)
+}
+
+/// A row's Jacobian and value at `pose`.
+#[inline]
+fn jacobian(measure: Measure, pose: &Pose) -> Jacobian {
+    let along = |u: Vec2| Jacobian {
+        u,
+        ka: cross(pose.d + pose.ra, u),
+        kb: cross(pose.rb, u),
+        value: u.dot(pose.d),
+    };
+    match measure {
+        Measure::Angle => Jacobian {
+            u: Vec2::ZERO,
+            ka: 1.0,
+            kb: 1.0,
+            value: pose.angle,
+        },
+        Measure::Along => along(pose.axis),
+        Measure::Across => along(Vec2::new(-pose.axis.y, pose.axis.x)),
+        Measure::Length => {
+            let len = pose.d.length();
+            // Anchors that meet have no direction: along the axis then (any will do).
+            let u = if len > 1e-9 { pose.d / len } else { pose.axis };
+            Jacobian {
+                u,
+                ka: cross(pose.ra, u),
+                kb: cross(pose.rb, u),
+                value: len,
+            }
+        }
+    }
+}
+
+/// Mutable references to two distinct solver bodies, in either order.
+#[inline]
+fn two_mut(bodies: &mut [SolverBody], a: u32, b: u32) -> (&mut SolverBody, &mut SolverBody) {
+    let (a, b) = (a as usize, b as usize);
+    debug_assert!(a != b, "a joint joins two bodies");
+    if a < b {
+        let (lo, hi) = bodies.split_at_mut(b);
+        (&mut lo[a], &mut hi[0])
+    } else {
+        let (lo, hi) = bodies.split_at_mut(a);
+        (&mut hi[0], &mut lo[b])
+    }
+}

@@ -1,0 +1,455 @@
+//! The World's joints: adding, removing and reading them, and what a step does with them
+//! (their constraints for the solvers, breaking). A World without joints skips all of it.
+
+use super::snapshot::{JointSlotState, StateError};
+use super::*;
+use crate::physics::broad_phase::pair_key;
+use crate::physics::joint::{Joint, JointDef, JointId, JointImpulses, JointKind};
+use crate::physics::solver::joint::{Frame, JointConstraint};
+use std::collections::HashMap;
+
+/// One entry of the joint array: a joint, or a free slot remembering its generation.
+#[derive(Clone, Debug, Default)]
+pub(super) struct JointSlot {
+    pub generation: u32,
+    pub joint: Option<Joint>,
+}
+
+/// The joints: a slot array with a free list, and the body pairs they keep from colliding.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Joints {
+    pub slots: Vec<JointSlot>,
+    /// Free slots, reused last first.
+    pub free: Vec<u32>,
+    /// Live joints.
+    pub count: usize,
+    /// Per pair key of bodies joined by joints that keep them from colliding: how many.
+    no_collide: HashMap<u64, u32>,
+    /// This step's constraints, for the joints with an awake body.
+    pub constraints: Vec<JointConstraint>,
+    /// The joints that broke in the last step, in id order.
+    pub broken: Vec<JointId>,
+}
+
+impl Joints {
+    /// Whether the bodies of pair `key` may collide: no joint between them says otherwise.
+    #[inline]
+    pub fn may_collide(&self, key: u64) -> bool {
+        self.no_collide.is_empty() || !self.no_collide.contains_key(&key)
+    }
+}
+
+/// The world's end of a joint (`body_a: None`): the solver's fixed body, last.
+fn solver_index(body: Option<BodyId>, fixed: u32) -> u32 {
+    body.map_or(fixed, |id| id.index)
+}
+
+impl World {
+    /// Add a joint. Refused, naming the field and the value, with nothing changed: an invalid
+    /// definition ([`JointDef::validate`]), a body that is not in this World, the same body
+    /// at both ends, or no dynamic body. A reference angle or distance left `None` is taken
+    /// from the bodies as they are now. Both bodies wake.
+    pub fn add_joint(&mut self, def: &JointDef) -> Result<JointId, PhysicsError> {
+        let def = self.checked_joint(def)?;
+        self.wake_joint_bodies(&def);
+        Ok(self.insert_joint(def))
+    }
+
+    /// `def` validated against this World's bodies, its reference angle and length worked
+    /// out.
+    fn checked_joint(&self, def: &JointDef) -> Result<JointDef, PhysicsError> {
+        def.validate()?;
+        let b = self
+            .body(def.body_b)
+            .ok_or(PhysicsError::UnknownBody(def.body_b))?;
+        let a = match def.body_a {
+            Some(id) => Some(self.body(id).ok_or(PhysicsError::UnknownBody(id))?),
+            None => None,
+        };
+        if b.inv_mass == 0.0 && a.map_or(true, |a| a.inv_mass == 0.0) {
+            return Err(PhysicsError::NoDynamicBody(format!(
+                "body_a ({}) and body_b ({}) are static or kinematic",
+                def.body_a.map_or("the world".into(), |id| id.to_string()),
+                def.body_b
+            )));
+        }
+        Ok(resolved(def, a, b))
+    }
+
+    /// Put a checked joint in a free slot (or a new one).
+    fn insert_joint(&mut self, def: JointDef) -> JointId {
+        let index = self.joints.free.pop().unwrap_or_else(|| {
+            self.joints.slots.push(JointSlot::default());
+            self.joints.slots.len() as u32 - 1
+        });
+        let id = JointId {
+            index,
+            generation: self.joints.slots[index as usize].generation,
+        };
+        if !def.collide_connected {
+            if let Some(a) = def.body_a {
+                let key = pair_key(a.index, def.body_b.index);
+                *self.joints.no_collide.entry(key).or_insert(0) += 1;
+            }
+        }
+        self.joints.slots[index as usize].joint = Some(Joint {
+            id,
+            def,
+            impulses: JointImpulses::default(),
+            force: Vec2::ZERO,
+            torque: 0.0,
+        });
+        self.joints.count += 1;
+        id
+    }
+
+    /// Remove a joint; its bodies wake. Returns it.
+    pub fn remove_joint(&mut self, id: JointId) -> Result<Joint, PhysicsError> {
+        let slot = self
+            .joints
+            .slots
+            .get_mut(id.index() as usize)
+            .filter(|s| s.generation == id.generation() && s.joint.is_some())
+            .ok_or(PhysicsError::UnknownJoint(id))?;
+        let joint = slot.joint.take().expect("checked above");
+        slot.generation = slot.generation.wrapping_add(1);
+        self.joints.free.push(id.index());
+        self.joints.count -= 1;
+        if !joint.def.collide_connected {
+            if let Some(a) = joint.def.body_a {
+                let key = pair_key(a.index, joint.def.body_b.index);
+                let n = self
+                    .joints
+                    .no_collide
+                    .get_mut(&key)
+                    .expect("counted when added");
+                *n -= 1;
+                if *n == 0 {
+                    self.joints.no_collide.remove(&key);
+                }
+            }
+        }
+        self.wake_joint_bodies(&joint.def);
+        Ok(joint)
+    }
+
+    /// The joint with this id, if it is still in the World.
+    pub fn joint(&self, id: JointId) -> Option<&Joint> {
+        self.joints
+            .slots
+            .get(id.index() as usize)
+            .filter(|s| s.generation == id.generation())
+            .and_then(|s| s.joint.as_ref())
+    }
+
+    /// Every joint, in slot order.
+    pub fn joints(&self) -> impl Iterator<Item = &Joint> + '_ {
+        self.joints.slots.iter().filter_map(|s| s.joint.as_ref())
+    }
+
+    /// Number of joints.
+    pub fn joint_count(&self) -> usize {
+        self.joints.count
+    }
+
+    /// The joints that broke in the last step (their force or torque passed the break force
+    /// or torque), in id order. They are gone from the World.
+    pub fn broken_joints(&self) -> &[JointId] {
+        &self.joints.broken
+    }
+
+    /// Move a target joint's target (world point, m; held in A's frame when A is a body); its
+    /// bodies wake.
+    pub fn set_joint_target(&mut self, id: JointId, target: Vec2) -> Result<(), PhysicsError> {
+        finite_vec(["target.x", "target.y"], target)?;
+        let frame_a = match self.joint(id).and_then(|j| j.def.body_a) {
+            Some(a) => self.body(a).map(Body::transform),
+            None => None,
+        };
+        let def = self.joint_def_mut(id, "target", |k| matches!(k, JointKind::Target(_)))?;
+        def.anchor_a = frame_a.map_or(target, |xf| xf.apply_inv(target));
+        Ok(())
+    }
+
+    /// Set the speed of a joint's motor (rad/s, or m/s for a prismatic joint's); its bodies
+    /// wake.
+    pub fn set_motor_speed(&mut self, id: JointId, speed: Real) -> Result<(), PhysicsError> {
+        finite("motor.speed", speed)?;
+        let has_motor = |k: &JointKind| match k {
+            JointKind::Revolute(r) => r.motor.is_some(),
+            JointKind::Prismatic(p) => p.motor.is_some(),
+            JointKind::Wheel(w) => w.motor.is_some(),
+            _ => false,
+        };
+        let def = self.joint_def_mut(id, "motor", has_motor)?;
+        let motor = match &mut def.kind {
+            JointKind::Revolute(r) => r.motor.as_mut(),
+            JointKind::Prismatic(p) => p.motor.as_mut(),
+            JointKind::Wheel(w) => w.motor.as_mut(),
+            _ => None,
+        };
+        motor.expect("checked above").speed = speed;
+        Ok(())
+    }
+
+    /// A joint's definition to change, its bodies woken, if `fits` its kind (else an error
+    /// saying it has no `what`).
+    fn joint_def_mut(
+        &mut self,
+        id: JointId,
+        what: &'static str,
+        fits: impl Fn(&JointKind) -> bool,
+    ) -> Result<&mut JointDef, PhysicsError> {
+        let def = self
+            .joint(id)
+            .ok_or(PhysicsError::UnknownJoint(id))?
+            .def
+            .clone();
+        if !fits(&def.kind) {
+            return Err(PhysicsError::WrongJointKind {
+                joint: id,
+                kind: def.kind.name(),
+                what,
+            });
+        }
+        self.wake_joint_bodies(&def);
+        let slot = &mut self.joints.slots[id.index() as usize];
+        Ok(&mut slot.joint.as_mut().expect("checked above").def)
+    }
+
+    /// Wake both bodies of a joint (with their islands).
+    fn wake_joint_bodies(&mut self, def: &JointDef) {
+        let ids = def.body_a.into_iter().chain([def.body_b]);
+        for id in ids {
+            if self.body(id).is_some_and(|b| !b.awake) {
+                self.islands.wake_queue.push(id.index);
+            }
+        }
+        self.wake_queued();
+    }
+
+    /// Remove the joints of the bodies flagged in `gone` (their other bodies wake).
+    pub(super) fn remove_joints_of(&mut self, gone: &[bool]) {
+        if self.joints.count == 0 {
+            return;
+        }
+        let doomed: Vec<JointId> = self
+            .joints()
+            .filter(|j| {
+                let ends = j.def.body_a.into_iter().chain([j.def.body_b]);
+                ends.into_iter().any(|id| gone[id.index as usize])
+            })
+            .map(|j| j.id)
+            .collect();
+        for id in doomed {
+            self.remove_joint(id).expect("listed live");
+        }
+    }
+
+    /// This step's constraints: one for each joint with an awake body, posed as the bodies
+    /// are at the start of the step, carrying last step's impulses.
+    pub(super) fn build_joint_constraints(&mut self) {
+        let fixed = self.solver.bodies.len() as u32 - 1;
+        let mut constraints = std::mem::take(&mut self.joints.constraints);
+        constraints.clear();
+        for (slot, s) in self.joints.slots.iter().enumerate() {
+            let Some(j) = &s.joint else { continue };
+            let d = &j.def;
+            let a = d.body_a.and_then(|id| self.body(id));
+            let b = self
+                .body(d.body_b)
+                .expect("joints of removed bodies are removed");
+            if !b.is_active() && !a.is_some_and(Body::is_active) {
+                continue;
+            }
+            let ends = (
+                slot as u32,
+                solver_index(d.body_a, fixed),
+                solver_index(Some(d.body_b), fixed),
+            );
+            let stiffness = (d.constraint_hertz, d.constraint_damping_ratio);
+            constraints.push(JointConstraint::new(
+                ends,
+                &d.kind,
+                rest_length(&d.kind),
+                frame(d, a, b),
+                &j.impulses,
+                stiffness,
+            ));
+        }
+        self.joints.constraints = constraints;
+    }
+
+    /// After the solve: each solved joint's impulses and reaction back into it; then the
+    /// joints whose force or torque passed their break force or torque are removed, in id
+    /// order, and listed in [`World::broken_joints`].
+    pub(super) fn finish_joints(&mut self) {
+        self.joints.broken.clear();
+        for k in &self.joints.constraints {
+            let j = self.joints.slots[k.slot as usize].joint.as_mut();
+            let j = j.expect("constraints are of live joints");
+            j.impulses = k.impulses();
+            (j.force, j.torque) = (k.force, k.torque);
+            if j.overloaded() {
+                self.joints.broken.push(j.id);
+            }
+        }
+        self.joints.broken.sort_unstable();
+        for id in self.joints.broken.clone() {
+            self.remove_joint(id).expect("live");
+        }
+    }
+}
+
+/// The definition with a missing reference angle or length taken from the bodies as they are
+/// (`a` None: the world).
+fn resolved(def: &JointDef, a: Option<&Body>, b: &Body) -> JointDef {
+    let mut def = def.clone();
+    let angle = b.angle - a.map_or(0.0, |a| a.angle);
+    let world_a = a.map_or(def.anchor_a, |a| a.transform().apply(def.anchor_a));
+    let world_b = b.transform().apply(def.anchor_b);
+    match &mut def.kind {
+        JointKind::Revolute(r) => r.reference_angle = r.reference_angle.or(Some(angle)),
+        JointKind::Prismatic(p) => p.reference_angle = p.reference_angle.or(Some(angle)),
+        JointKind::Weld(w) => w.reference_angle = w.reference_angle.or(Some(angle)),
+        JointKind::Distance(d) => {
+            d.length = d
+                .length
+                .or(Some((world_b - world_a).length().max(MIN_LENGTH)));
+        }
+        JointKind::Wheel(_) | JointKind::Motor(_) | JointKind::Target(_) => {}
+    }
+    def
+}
+
+/// The shortest rest length a distance joint takes from its bodies (m): anchors that meet
+/// have no direction to hold a distance along.
+const MIN_LENGTH: Real = 0.005;
+
+/// A distance joint's rest length (m; 0 for other kinds).
+fn rest_length(kind: &JointKind) -> Real {
+    match kind {
+        JointKind::Distance(d) => d.length.unwrap_or(MIN_LENGTH),
+        _ => 0.0,
+    }
+}
+
+/// The joint's reference angle (rad): what its angle counts from.
+fn reference_angle(kind: &JointKind) -> Real {
+    match kind {
+        JointKind::Revolute(r) => r.reference_angle.unwrap_or(0.0),
+        JointKind::Prismatic(p) => p.reference_angle.unwrap_or(0.0),
+        JointKind::Weld(w) => w.reference_angle.unwrap_or(0.0),
+        _ => 0.0,
+    }
+}
+
+/// The joint's axis in A's frame (unit; the x axis for kinds without one).
+fn local_axis(kind: &JointKind) -> Vec2 {
+    match kind {
+        JointKind::Prismatic(p) => p.axis.normalize(),
+        JointKind::Wheel(w) => w.axis.normalize(),
+        _ => Vec2::X,
+    }
+}
+
+/// Where joint `d`'s anchors and axis are with its bodies posed as now (`a` None: the world).
+fn frame(d: &JointDef, a: Option<&Body>, b: &Body) -> Frame {
+    let (ca, qa, angle_a) = a.map_or((Vec2::ZERO, Rot::IDENTITY, 0.0), |a| {
+        (a.position, a.rot, a.angle)
+    });
+    Frame {
+        ra: qa.rotate(d.anchor_a),
+        rb: b.rot.rotate(d.anchor_b),
+        centres: b.position - ca,
+        angle: b.angle - angle_a - reference_angle(&d.kind),
+        axis: qa.rotate(local_axis(&d.kind)),
+    }
+}
+
+/// The slots of the bodies of every joint between two dynamic bodies (islands go through
+/// them; joints to static or kinematic bodies or the world join none).
+pub(super) fn joint_pairs<'a>(
+    joints: &'a Joints,
+    slots: &'a [Slot],
+) -> impl Iterator<Item = [u32; 2]> + 'a {
+    let dynamic = |i: u32| {
+        slots[i as usize]
+            .body
+            .as_ref()
+            .is_some_and(|b| b.inv_mass > 0.0)
+    };
+    let live = joints.slots.iter().filter_map(|s| s.joint.as_ref());
+    live.filter_map(move |j| match j.def.body_a {
+        Some(a) if dynamic(a.index) && dynamic(j.def.body_b.index) => {
+            Some([a.index, j.def.body_b.index])
+        }
+        _ => None,
+    })
+}
+
+impl World {
+    /// The joint slots as plain data (checkpoints).
+    pub(super) fn export_joints(&self) -> Vec<JointSlotState> {
+        let slots = self.joints.slots.iter();
+        slots
+            .map(|s| JointSlotState {
+                generation: s.generation,
+                joint: s.joint.as_ref().map(|j| (j.def.clone(), j.impulses)),
+            })
+            .collect()
+    }
+
+    /// The joints of a checkpoint, each checked as [`World::add_joint`] checks it and its
+    /// impulses finite, with the free list checked against the slots; after the bodies.
+    pub(super) fn import_joints(
+        &mut self,
+        slots: &[JointSlotState],
+        free: &[u32],
+    ) -> Result<(), StateError> {
+        let mut is_free = vec![false; slots.len()];
+        for &i in free {
+            match slots.get(i as usize) {
+                Some(s)
+                    if s.joint.is_none() && !std::mem::replace(&mut is_free[i as usize], true) => {}
+                _ => {
+                    return Err(StateError(format!(
+                        "joint free list names slot {i}, which is not a free joint slot"
+                    )))
+                }
+            }
+        }
+        for (index, s) in slots.iter().enumerate() {
+            self.joints.slots.push(JointSlot {
+                generation: s.generation,
+                joint: None,
+            });
+            let Some((def, impulses)) = &s.joint else {
+                if !is_free[index] {
+                    return Err(StateError(format!(
+                        "joint slot {index} is empty but not in the free list"
+                    )));
+                }
+                continue;
+            };
+            let finite = impulses
+                .point
+                .iter()
+                .chain(&impulses.rows)
+                .all(|x| x.is_finite());
+            if !finite {
+                return Err(StateError(format!("joint {index}: impulses not finite")));
+            }
+            let def = self
+                .checked_joint(def)
+                .map_err(|e| StateError(format!("joint {index}: {e}")))?;
+            // Into this very slot, without waking anything.
+            self.joints.free.push(index as u32);
+            self.insert_joint(def);
+            let joint = self.joints.slots[index].joint.as_mut().expect("just added");
+            joint.impulses = *impulses;
+        }
+        self.joints.free = free.to_vec();
+        Ok(())
+    }
+}

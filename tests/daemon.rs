@@ -630,6 +630,7 @@ async fn serve_floor(port: u16) -> Server {
         gravity: vec2(0.0, 0.0),
         settings: Default::default(),
         bodies: vec![SceneBody::new("floor", floor)],
+        joints: Vec::new(),
     };
     let options = ServerOptions {
         source: Some(tiltbox::service::SceneSource::Given(Box::new(scene))),

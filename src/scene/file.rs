@@ -7,6 +7,7 @@
 //! line at hand for the message.
 
 use super::error::{body_label, describe, LineCounter};
+use super::joints::{JointEntry, RopeEntry};
 use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
 use crate::physics::error::{finite, non_negative, positive, unit_interval};
 use crate::physics::segment::chain;
@@ -51,6 +52,10 @@ struct SceneFile<B, S, P> {
     stack: Vec<Spanned<S>>,
     #[serde(default = "Vec::new")]
     pyramid: Vec<Spanned<P>>,
+    #[serde(default = "Vec::new")]
+    rope: Vec<RopeEntry>,
+    #[serde(default = "Vec::new")]
+    joint: Vec<JointEntry>,
 }
 
 /// A scene file whose entry tables are typed.
@@ -314,13 +319,16 @@ fn generator_label(kind: Kind, name: Option<&str>, k: usize) -> String {
 /// table kept loose and read in its turn, so that the error names the table, its index and
 /// its line, after any refusal of an earlier table, as the file is read top to bottom.
 pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
-    let (name, gravity, settings, mut entries) = match toml::from_str::<TypedFile>(text) {
+    let (name, gravity, settings, mut entries, ropes, joint_entries) = match toml::from_str::<
+        TypedFile,
+    >(text)
+    {
         Ok(f) => {
             let mut entries = Vec::with_capacity(f.body.len() + f.stack.len() + f.pyramid.len());
             push_all(&mut entries, Kind::Body, f.body, Entry::Body);
             push_all(&mut entries, Kind::Stack, f.stack, Entry::Stack);
             push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Pyramid);
-            (f.name, f.gravity, f.settings, entries)
+            (f.name, f.gravity, f.settings, entries, f.rope, f.joint)
         }
         Err(_) => {
             let f: LooseFile = toml::from_str(text).map_err(|e| SceneError::Parse {
@@ -331,7 +339,7 @@ pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
             push_all(&mut entries, Kind::Body, f.body, Entry::Loose);
             push_all(&mut entries, Kind::Stack, f.stack, Entry::Loose);
             push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Loose);
-            (f.name, f.gravity, f.settings, entries)
+            (f.name, f.gravity, f.settings, entries, f.rope, f.joint)
         }
     };
 
@@ -375,11 +383,21 @@ pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
             Entry::Loose(_) => unreachable!("read above"),
         }
     }
+    // Ropes after every other body (their links are named `NAME[i]`), then the joints, which
+    // may name any body, a rope's links included.
+    let mut joints = Vec::with_capacity(joint_entries.len());
+    for (k, rope) in ropes.into_iter().enumerate() {
+        rope.expand(k, &mut bodies, &mut joints)?;
+    }
+    for (k, entry) in joint_entries.into_iter().enumerate() {
+        joints.push(entry.into_joint(k, &bodies)?);
+    }
     Ok(Scene {
         name,
         gravity,
         settings,
         bodies,
+        joints,
     })
 }
 

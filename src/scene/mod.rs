@@ -50,11 +50,13 @@
 mod colour;
 mod error;
 mod file;
+mod joints;
 
 pub use colour::{Colour, ParseColourError};
 pub use error::SceneError;
+pub use joints::SceneJoint;
 
-use crate::physics::{BodyDef, BodyId, Settings, Vec2, World};
+use crate::physics::{BodyDef, BodyId, JointDef, Settings, Vec2, World};
 use serde::Serialize;
 use std::path::Path;
 
@@ -92,8 +94,10 @@ pub struct Scene {
     pub gravity: Vec2,
     /// Engine settings: the file's `[settings]` table over `Settings::default()`.
     pub settings: Settings,
-    /// The bodies in file order, generators expanded in place.
+    /// The bodies in file order, generators expanded in place, ropes' links last.
     pub bodies: Vec<SceneBody>,
+    /// The joints: every rope's, then the `[[joint]]` tables in file order.
+    pub joints: Vec<SceneJoint>,
 }
 
 impl Scene {
@@ -117,7 +121,8 @@ impl Scene {
         Scene::from_toml_str(FALLING_BRICKS)
     }
 
-    /// A fresh World with the scene's settings and gravity; `ids[i]` is `bodies[i]`.
+    /// A fresh World with the scene's settings and gravity, its bodies and joints; `ids[i]`
+    /// is `bodies[i]`.
     /// Nothing half-built on error: the World is returned only when every body was added.
     pub fn build_world(&self) -> Result<(World, Vec<BodyId>), SceneError> {
         let mut world = World::new(self.settings.clone(), self.gravity)
@@ -132,6 +137,18 @@ impl Scene {
                     .map_err(|e| SceneError::physics(error::body_label(Some(&body.name), i), e))
             })
             .collect::<Result<Vec<BodyId>, SceneError>>()?;
+        for j in &self.joints {
+            let def = JointDef {
+                anchor_a: j.anchor_a,
+                anchor_b: j.anchor_b,
+                collide_connected: j.collide_connected,
+                ..JointDef::new(j.kind.clone(), j.a.map(|i| ids[i]), ids[j.b])
+                    .with_break(j.break_force, j.break_torque)
+            };
+            world
+                .add_joint(&def)
+                .map_err(|e| SceneError::physics(format!("joint {:?}", j.name), e))?;
+        }
         Ok((world, ids))
     }
 

@@ -1,6 +1,7 @@
 //! Rigid bodies: their definition (what a caller asks for) and their state (what the World keeps).
 
 use super::error::{finite, finite_vec, non_negative, positive, unit_interval, PhysicsError};
+use super::filter::Filter;
 use super::math::{is_finite_vec, Real, Rot, Transform, Vec2};
 use super::shape::Shape;
 use serde::{Deserialize, Serialize};
@@ -43,6 +44,9 @@ pub struct BodyDef {
     pub friction: Real,
     /// Coefficient of restitution in [0, 1] (mixed per pair as sqrt(eA eB)).
     pub restitution: Real,
+    /// Which other bodies it collides with (default: all).
+    #[serde(default)]
+    pub filter: Filter,
 }
 
 /// `BodyDef`'s builder methods: each takes the definition, sets one field and hands it back.
@@ -70,6 +74,7 @@ impl BodyDef {
             mass: MassSpec::Density(1.0),
             friction: 0.6,
             restitution: 0.0,
+            filter: Filter::DEFAULT,
         }
     }
 
@@ -124,6 +129,8 @@ impl BodyDef {
         with_friction(friction: Real) => friction = friction;
         /// Set the coefficient of restitution.
         with_restitution(restitution: Real) => restitution = restitution;
+        /// Set the collision filter.
+        with_filter(filter: Filter) => filter = filter;
     }
 
     /// A chain as static bodies, one segment each (friction 0.6, restitution 0; change them
@@ -223,6 +230,7 @@ pub struct Body {
     pub(crate) inv_inertia: Real,
     pub(crate) friction: Real,
     pub(crate) restitution: Real,
+    pub(crate) filter: Filter,
     /// False while the body sleeps (it then costs nothing per step).
     pub(crate) awake: bool,
     /// How long the body has been slower than the sleep threshold (s).
@@ -272,6 +280,7 @@ impl Body {
             inv_inertia,
             friction: def.friction,
             restitution: def.restitution,
+            filter: def.filter,
             awake: true,
             sleep_time: 0.0,
             sleep_island: id.index,
@@ -294,6 +303,10 @@ impl Body {
     /// Orientation (rad), accumulated: not wrapped to (-pi, pi].
     pub fn angle(&self) -> Real {
         self.angle
+    }
+    /// Collision filter.
+    pub fn filter(&self) -> Filter {
+        self.filter
     }
     /// Orientation as a rotation.
     pub fn rotation(&self) -> Rot {
@@ -387,6 +400,7 @@ impl Body {
             },
             friction: self.friction,
             restitution: self.restitution,
+            filter: self.filter,
         }
     }
     /// True when every number in the body's state is finite.

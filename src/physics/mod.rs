@@ -13,6 +13,7 @@ pub mod collide;
 pub mod contact;
 pub mod convex;
 pub mod error;
+pub mod filter;
 pub(crate) mod hash;
 pub mod id;
 pub mod joint;
@@ -27,6 +28,7 @@ pub use body::{Body, BodyDef, BodyId, MassSpec};
 pub use contact::{ContactInfo, ContactPointInfo};
 pub use convex::Polygon;
 pub use error::PhysicsError;
+pub use filter::Filter;
 pub use joint::{
     Distance, Joint, JointDef, JointId, JointKind, Limit, Motor, MotorJoint, Prismatic, Revolute,
     Spring, Target, Weld, Wheel,

@@ -12,7 +12,7 @@ use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
 use crate::physics::error::{finite, non_negative, positive, unit_interval};
 use crate::physics::segment::chain;
 use crate::physics::{
-    BodyDef, MassSpec, PhysicsError, Polygon, Real, Rot, Segment, Settings, Shape, Vec2,
+    BodyDef, Filter, MassSpec, PhysicsError, Polygon, Real, Rot, Segment, Settings, Shape, Vec2,
 };
 use serde::Deserialize;
 use toml::{Spanned, Table};
@@ -230,7 +230,53 @@ entry_table! {
         is_static: bool,
         #[serde(default)]
         kinematic: bool,
+        filter: Option<FilterEntry>,
     }
+}
+
+/// A `filter` inline table: `category` and `mask` as integers (bits 0 to 62) or hex strings
+/// (`"0x..."`, all 64 bits; `mask = "all"`), `group` an integer.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FilterEntry {
+    category: Option<Bits>,
+    mask: Option<Bits>,
+    #[serde(default)]
+    group: i32,
+}
+
+/// A 64-bit set as TOML can write it: an integer (TOML's are signed 64-bit) or a string.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Bits {
+    Integer(i64),
+    Text(String),
+}
+
+impl FilterEntry {
+    /// The engine's filter, or an error naming `filter.category` or `filter.mask`.
+    fn to_filter(&self, at: &str) -> Result<Filter, SceneError> {
+        let bits = |field: &str, bits: &Option<Bits>, default: u64| match bits {
+            None => Ok(default),
+            Some(Bits::Integer(n)) if *n >= 0 => Ok(*n as u64),
+            Some(Bits::Text(t)) if t == "all" => Ok(u64::MAX),
+            Some(Bits::Text(t)) => t
+                .strip_prefix("0x")
+                .and_then(|hex| u64::from_str_radix(&hex.replace('_', ""), 16).ok())
+                .ok_or_else(|| bad_bits(at, field, format!("{t:?}"))),
+            Some(Bits::Integer(n)) => Err(bad_bits(at, field, n.to_string())),
+        };
+        Ok(Filter {
+            category: bits("filter.category", &self.category, Filter::DEFAULT.category)?,
+            mask: bits("filter.mask", &self.mask, Filter::DEFAULT.mask)?,
+            group: self.group,
+        })
+    }
+}
+
+fn bad_bits(at: &str, field: &str, value: String) -> SceneError {
+    let message = "must be an integer >= 0, a hex string \"0x...\" (64 bits) or \"all\"";
+    SceneError::invalid(at, field, Some(value), message)
 }
 
 /// Declares the entry table of a box generator: `name`, its count field, then the fields
@@ -519,6 +565,7 @@ impl BodyEntry {
             return refuse("velocity", format!("[{vx}, {vy}]"));
         }
         let colour = parse_colour(&at, self.colour.as_deref())?;
+        let filter = self.filter(&at)?;
         let local = read_points(&at, "shape.points", points)?;
         let position = Vec2::new(self.position[0], self.position[1]);
         check(&at, finite("position.x", position.x))?;
@@ -537,7 +584,8 @@ impl BodyEntry {
                 )
                 .with_angle(self.angle)
                 .with_friction(self.friction)
-                .with_restitution(self.restitution);
+                .with_restitution(self.restitution)
+                .with_filter(filter);
                 def.validate()
                     .map_err(|e| SceneError::physics(at.clone(), e))?;
                 Ok(SceneBody {
@@ -551,6 +599,13 @@ impl BodyEntry {
     }
 
     /// Validate and translate; `index` is the body's position in the scene.
+    /// The body's collision filter (the default when the table gives none).
+    fn filter(&self, at: &str) -> Result<Filter, SceneError> {
+        self.filter
+            .as_ref()
+            .map_or(Ok(Filter::DEFAULT), |f| f.to_filter(at))
+    }
+
     fn into_body(self, index: usize) -> Result<SceneBody, SceneError> {
         let at = body_label(self.name.as_deref(), index);
         let value = |v: Real| Some(v.to_string());
@@ -653,6 +708,7 @@ impl BodyEntry {
             mass,
             friction: self.friction,
             restitution: self.restitution,
+            filter: self.filter(&at)?,
             ..placed
         };
         def.validate()

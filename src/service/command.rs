@@ -90,6 +90,7 @@ mod compact_def {
             mass: c.mass,
             friction: c.friction,
             restitution: c.restitution,
+            filter: Default::default(),
         })
     }
 }

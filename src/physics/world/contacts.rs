@@ -80,8 +80,9 @@ impl World {
         tiers.inputs.clear();
         let mut merge = Merge::begin(contacts);
         for &key in &broad_phase.pair_keys {
-            // (A pair kept apart by a joint keeps no contact: any it had ends here.)
-            if !joints.may_collide(key) {
+            // (A pair kept apart by a joint or by its filters keeps no contact: any it had
+            // ends here.)
+            if !joints.may_collide(key) || (bodies.filtered > 0 && !filters_allow(key, bodies)) {
                 continue;
             }
             if let Some(input) = pairs.update(key, &mut merge, contacts, &mut islands.wake_queue) {
@@ -89,6 +90,16 @@ impl World {
             }
         }
         merge.end(contacts);
+    }
+}
+
+/// Whether the filters of pair `key`'s bodies let them collide.
+fn filters_allow(key: u64, bodies: &Bodies) -> bool {
+    let (a, b) = pair_of(key);
+    let filter = |i: u32| bodies.slots[i as usize].body.as_ref().map(|b| b.filter);
+    match (filter(a), filter(b)) {
+        (Some(fa), Some(fb)) => fa.should_collide(&fb),
+        _ => true,
     }
 }
 

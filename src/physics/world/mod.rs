@@ -12,6 +12,7 @@ use super::broad_phase::{pair_of, Proxy, SweepAndPrune};
 use super::collide::collide;
 use super::contact::{Contact, ContactInfo, ContactPoint, ContactPointInfo};
 use super::error::{finite, finite_vec, positive, PhysicsError};
+use super::filter::Filter;
 use super::math::{cross, Real, Rot, Vec2};
 use super::settings::{Settings, SolverKind};
 use super::solver::bundles::ContactBundles;
@@ -69,6 +70,8 @@ struct Bodies {
     free: Vec<u32>,
     /// Live bodies.
     count: usize,
+    /// Live bodies whose filter is not the default (none: no pair is filtered).
+    filtered: usize,
     /// Scratch for `remove_bodies`: a flag per slot, all false between calls.
     removing: Vec<bool>,
 }
@@ -221,6 +224,7 @@ impl World {
         };
         let body = Body::from_def(id, def);
         let passive = body.is_static();
+        self.bodies.filtered += usize::from(body.filter != Filter::DEFAULT);
         slot.body = Some(body);
         self.bodies.count += 1;
         self.broad_phase.sweep.insert(index, passive);
@@ -290,7 +294,9 @@ impl World {
         self.broad_phase.sweep.remove(&slots);
         for &id in ids {
             let slot = &mut self.bodies.slots[id.index as usize];
-            removed.push(slot.body.take().expect("checked above"));
+            let body = slot.body.take().expect("checked above");
+            self.bodies.filtered -= usize::from(body.filter != Filter::DEFAULT);
+            removed.push(body);
             slot.generation = slot.generation.wrapping_add(1);
             self.bodies.free.push(id.index);
         }
@@ -332,6 +338,7 @@ impl World {
         self.bodies.slots.clear();
         self.bodies.free.clear();
         self.bodies.count = 0;
+        self.bodies.filtered = 0;
         self.broad_phase.sweep.clear();
         self.contacts.awake.clear();
         self.contacts.previous.clear();
@@ -474,6 +481,16 @@ impl World {
             b.linear_velocity = linear;
             b.angular_velocity = angular;
         }
+        Ok(())
+    }
+
+    /// Set a body's collision filter. Its island wakes; from the next step, its contacts with
+    /// bodies the filter now refuses end and new ones begin where it now allows them.
+    pub fn set_filter(&mut self, id: BodyId, filter: Filter) -> Result<(), PhysicsError> {
+        let b = self.body_mut(id)?;
+        let was = std::mem::replace(&mut b.filter, filter);
+        self.bodies.filtered += usize::from(filter != Filter::DEFAULT);
+        self.bodies.filtered -= usize::from(was != Filter::DEFAULT);
         Ok(())
     }
 

@@ -21,6 +21,7 @@
 use super::super::body::{Body, BodyId};
 use super::super::contact::{Contact, ContactPoint};
 use super::super::error::PhysicsError;
+use super::super::filter::Filter;
 use super::super::hash::Fnv1a;
 use super::super::joint::{JointDef, JointImpulses};
 use super::super::math::{Real, Rot, Vec2};
@@ -68,6 +69,8 @@ pub struct BodyState {
     pub sleep_island: u32,
     /// Kinematic (moved by its velocity only). Appended: checkpoint format version 4 on.
     pub kinematic: bool,
+    /// Collision filter. Appended: checkpoint format version 10 on.
+    pub filter: Filter,
 }
 
 /// A slot: its generation and its body, if live.
@@ -385,6 +388,7 @@ impl BodyState {
             sleep_time: b.sleep_time,
             sleep_island: b.sleep_island,
             kinematic: b.kinematic,
+            filter: b.filter,
         }
     }
 
@@ -435,6 +439,7 @@ impl BodyState {
             sleep_time: b.sleep_time,
             sleep_island: b.sleep_island,
             kinematic: b.kinematic && b.mass[1] == 0.0,
+            filter: b.filter,
         })
     }
 }
@@ -554,6 +559,7 @@ impl World {
                 let passive = b.is_static() || !b.awake;
                 self.broad_phase.sweep.insert(id.index, passive);
                 self.bodies.count += 1;
+                self.bodies.filtered += usize::from(b.filter != Filter::DEFAULT);
             }
             self.bodies.slots.push(Slot {
                 generation: s.generation,

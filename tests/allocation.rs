@@ -80,3 +80,23 @@ fn a_steady_step_does_not_allocate() {
     let _ = benchmark_setups()[1].build();
     assert!(allocations() > before);
 }
+
+#[test]
+fn a_steady_step_with_joints_does_not_allocate() {
+    // Box2D's joint grid, 20 a side, hanging: its joints' constraints and rows are rebuilt
+    // into the same buffers every step.
+    let setup = cases::joint_grid(20);
+    let mut world = setup.build().expect("valid scene");
+    for _ in 0..300 {
+        world.step(1.0 / 60.0).expect("valid dt");
+    }
+    let before = allocations();
+    for _ in 0..60 {
+        world.step(1.0 / 60.0).expect("valid dt");
+    }
+    let during = allocations() - before;
+    assert_eq!(
+        during, 0,
+        "joint_grid(20): {during} allocations in 60 steady steps"
+    );
+}

@@ -4,7 +4,10 @@
 //! measurement code comes from here. Units: metres, kilograms, radians.
 
 use crate::physics::math::PI;
-use crate::physics::{BodyDef, BodyId, PhysicsError, Polygon, Real, Shape, Vec2, World};
+use crate::physics::{
+    BodyDef, BodyId, Filter, JointDef, JointKind, PhysicsError, Polygon, Real, Revolute, Shape,
+    Vec2, World,
+};
 
 /// A static ground box `width` x `thickness` metres whose top surface is at y = 0, centred on x = `x`.
 pub fn ground(
@@ -172,6 +175,22 @@ pub struct Setup {
     pub sleep: bool,
     /// Steps to run before timing starts (0 = time from the first step).
     pub warm_up: usize,
+    /// Revolute joints between the bodies.
+    pub joints: Vec<SetupJoint>,
+}
+
+/// A revolute joint of a [`Setup`]: bodies by index into `bodies`, anchors in each body's
+/// frame (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SetupJoint {
+    /// Index of body A.
+    pub a: usize,
+    /// Index of body B.
+    pub b: usize,
+    /// A's anchor, in A's frame (m).
+    pub anchor_a: Vec2,
+    /// B's anchor, in B's frame (m).
+    pub anchor_b: Vec2,
 }
 
 impl Setup {
@@ -182,8 +201,16 @@ impl Setup {
             ..Default::default()
         };
         let mut world = World::new(settings, self.gravity)?;
-        for def in &self.bodies {
-            world.add_body(def)?;
+        let ids = self
+            .bodies
+            .iter()
+            .map(|def| world.add_body(def))
+            .collect::<Result<Vec<_>, _>>()?;
+        for j in &self.joints {
+            let hinge = JointKind::Revolute(Revolute::free());
+            let def =
+                JointDef::new(hinge, Some(ids[j.a]), ids[j.b]).with_anchors(j.anchor_a, j.anchor_b);
+            world.add_joint(&def)?;
         }
         Ok(world)
     }
@@ -212,7 +239,8 @@ fn boxes_pyramid(base: usize, x: Real, y0: Real, out: &mut Vec<BodyDef>) {
 /// - `resting_pyramid`: `pyramid_20` with sleep on, timed after 300 steps of settling;
 /// - `mixed_shapes`: 1,200 bodies cycling through circle, capsule, box, triangle and hexagon
 ///   (see [`mixed_shapes`]) dropped from a 40 x 30 grid into a 50 m wide container, 500 steps,
-///   sleep off.
+///   sleep off;
+/// - `joint_grid`: Box2D's benchmark of that name ([`joint_grid`]), 500 steps, sleep off.
 pub fn benchmark_setups() -> Vec<Setup> {
     let g = Vec2::new(0.0, -10.0);
     let ground = |width: Real| BodyDef::fixed(Shape::rect(width, 2.0), Vec2::new(0.0, -1.0));
@@ -259,6 +287,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 500,
             sleep: false,
             warm_up: 0,
+            joints: Vec::new(),
         },
         Setup {
             name: "pyramid_20",
@@ -267,6 +296,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 500,
             sleep: false,
             warm_up: 0,
+            joints: Vec::new(),
         },
         Setup {
             name: "falling_bricks",
@@ -275,6 +305,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 600,
             sleep: false,
             warm_up: 0,
+            joints: Vec::new(),
         },
         Setup {
             name: "many_boxes",
@@ -283,6 +314,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 500,
             sleep: false,
             warm_up: 0,
+            joints: Vec::new(),
         },
         Setup {
             name: "resting_pyramid",
@@ -291,7 +323,9 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 300,
             sleep: true,
             warm_up: 300,
+            joints: Vec::new(),
         },
+        joint_grid(100),
         Setup {
             name: "mixed_shapes",
             gravity: g,
@@ -299,8 +333,67 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 500,
             sleep: false,
             warm_up: 0,
+            joints: Vec::new(),
         },
     ]
+}
+
+/// Box2D v3's `joint_grid` benchmark (`shared/benchmarks.c`) with `n` bodies a side: discs of
+/// radius 0.4 m (density 1) on a 1 m grid, column k at x = k and row i at y = -i, each joined to
+/// the one above and the one to its left by a revolute joint at the midpoint between them; the
+/// top discs of the 7 middle columns are static, so the grid hangs from them. The discs are in
+/// category 2 with a mask without it: they never collide with each other. Gravity 10 m/s^2,
+/// 500 steps, sleep off. The 6 joints between two static discs that Box2D's makes are left
+/// out (they join nothing that moves).
+pub fn joint_grid(n: usize) -> Setup {
+    let filter = Filter {
+        category: 2,
+        mask: !2,
+        group: 0,
+    };
+    let mut bodies = Vec::with_capacity(n * n);
+    let mut joints = Vec::with_capacity(2 * n * n);
+    let anchored = |k: usize, i: usize| i == 0 && k + 3 >= n / 2 && k <= n / 2 + 3;
+    for k in 0..n {
+        for i in 0..n {
+            let at = Vec2::new(k as Real, -(i as Real));
+            let disc = Shape::circle(0.4);
+            let def = if anchored(k, i) {
+                BodyDef::fixed(disc, at)
+            } else {
+                BodyDef::dynamic(disc, at)
+            };
+            let index = bodies.len();
+            bodies.push(def.with_filter(filter));
+            if i > 0 {
+                joints.push(SetupJoint {
+                    a: index - 1,
+                    b: index,
+                    anchor_a: Vec2::new(0.0, -0.5),
+                    anchor_b: Vec2::new(0.0, 0.5),
+                });
+            }
+            // (Box2D also joins the static discs to each other; tiltbox refuses a joint with
+            // no dynamic body, and such a joint does nothing.)
+            if k > 0 && !(anchored(k, i) && anchored(k - 1, i)) {
+                joints.push(SetupJoint {
+                    a: index - n,
+                    b: index,
+                    anchor_a: Vec2::new(0.5, 0.0),
+                    anchor_b: Vec2::new(-0.5, 0.0),
+                });
+            }
+        }
+    }
+    Setup {
+        name: "joint_grid",
+        gravity: Vec2::new(0.0, -10.0),
+        bodies,
+        steps: 500,
+        sleep: false,
+        warm_up: 0,
+        joints,
+    }
 }
 
 /// The five shapes of `mixed_shapes`, all between 0.7 m and 1 m across (areas 0.35 to 0.49

@@ -58,6 +58,7 @@ fn setup(name: &'static str, bodies: Vec<BodyDef>) -> Setup {
         steps: 0,
         sleep: false,
         warm_up: 0,
+        joints: Vec::new(),
     }
 }
 

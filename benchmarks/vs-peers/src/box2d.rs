@@ -87,6 +87,8 @@ fn mixing(m: Mixing) -> unsafe extern "C" fn(f32, u64, f32, u64) -> f32 {
 pub struct Box2d {
     world: b2WorldId,
     dynamic: Vec<b2BodyId>,
+    /// Each joint's bodies and local anchors, for the gap in the sanity column.
+    joints: Vec<(b2BodyId, b2BodyId, b2Vec2, b2Vec2)>,
     floor: f32,
     dt: f32,
     substeps: i32,
@@ -123,6 +125,7 @@ impl Box2d {
             // Continuous collision and everything else: Box2D's defaults.
             let world = b2CreateWorld(&def);
             let mut dynamic = Vec::new();
+            let mut all = Vec::with_capacity(setup.bodies.len());
             for d in &setup.bodies {
                 let mut bd = b2DefaultBodyDef();
                 let is_static = d.mass == MassSpec::Static;
@@ -144,6 +147,9 @@ impl Box2d {
                 let body = b2CreateBody(world, &bd);
 
                 let mut sd = b2DefaultShapeDef();
+                sd.filter.categoryBits = d.filter.category;
+                sd.filter.maskBits = d.filter.mask;
+                sd.filter.groupIndex = d.filter.group;
                 sd.material.friction = d.friction as f32;
                 sd.material.restitution = d.restitution as f32;
                 sd.density = match d.mass {
@@ -197,10 +203,26 @@ impl Box2d {
                 if !is_static {
                     dynamic.push(body);
                 }
+                all.push(body);
+            }
+            let mut joints = Vec::with_capacity(setup.joints.len());
+            for j in &setup.joints {
+                let mut jd = b2DefaultRevoluteJointDef();
+                jd.base.bodyIdA = all[j.a];
+                jd.base.bodyIdB = all[j.b];
+                let (pa, pb) = (
+                    v(j.anchor_a.x as f32, j.anchor_a.y as f32),
+                    v(j.anchor_b.x as f32, j.anchor_b.y as f32),
+                );
+                jd.base.localFrameA.p = pa;
+                jd.base.localFrameB.p = pb;
+                b2CreateRevoluteJoint(world, &jd);
+                joints.push((all[j.a], all[j.b], pa, pb));
             }
             Box2d {
                 world,
                 dynamic,
+                joints,
                 floor: crate::lowest_static(&setup.bodies),
                 dt,
                 substeps,
@@ -252,13 +274,24 @@ impl Engine for Box2d {
             .collect()
     }
     fn sanity(&self) -> Sanity {
-        crate::summarise(
+        let mut sanity = crate::summarise(
             self.dynamic.iter().map(|&b| {
                 // SAFETY: live bodies of a live world.
                 unsafe { (b2Body_GetPosition(b).y, b2Body_IsAwake(b)) }
             }),
             self.floor,
-        )
+        );
+        sanity.joint_gap = self
+            .joints
+            .iter()
+            .map(|&(a, b, pa, pb)| {
+                // SAFETY: live bodies of a live world.
+                let (wa, wb) =
+                    unsafe { (b2Body_GetWorldPoint(a, pa), b2Body_GetWorldPoint(b, pb)) };
+                (wa.x - wb.x).hypot(wa.y - wb.y)
+            })
+            .fold(0.0, f32::max);
+        sanity
     }
     fn max_penetration(&self) -> f64 {
         let mut deepest = 0.0f64;

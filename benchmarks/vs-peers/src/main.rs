@@ -41,8 +41,9 @@ mod box2d;
 mod remote;
 
 use rapier2d::prelude::{
-    CoefficientCombineRule, ColliderBuilder, IntegrationParameters, MassProperties, PhysicsWorld,
-    RigidBodyBuilder, RigidBodyHandle, SharedShape, Vector,
+    CoefficientCombineRule, ColliderBuilder, Group, IntegrationParameters, InteractionGroups,
+    InteractionTestMode, MassProperties, PhysicsWorld, RevoluteJointBuilder, RigidBodyBuilder,
+    RigidBodyHandle, SharedShape, Vector,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::PathBuf;
@@ -119,6 +120,8 @@ pub(crate) struct Sanity {
     pub(crate) awake: usize,
     /// Dynamic bodies with non-finite positions or more than 50 m below the lowest static body.
     pub(crate) lost: usize,
+    /// The widest gap between a joint's two anchors (m; 0 in a scene without joints).
+    pub(crate) joint_gap: f32,
 }
 
 /// One dynamic body's state, for the settle report and the set-up check.
@@ -218,6 +221,7 @@ pub(crate) fn summarise(ys: impl Iterator<Item = (f32, bool)>, floor: f32) -> Sa
         },
         awake,
         lost,
+        joint_gap: 0.0,
     }
 }
 
@@ -253,13 +257,26 @@ impl Engine for Tiltbox {
             .filter(|b| b.is_static())
             .map(|b| b.position().y as f32)
             .fold(f32::INFINITY, f32::min);
-        summarise(
+        let mut sanity = summarise(
             self.world
                 .bodies()
                 .filter(|b| !b.is_static())
                 .map(|b| (b.position().y as f32, b.is_awake())),
             floor,
-        )
+        );
+        let world = &self.world;
+        let at = |id: Option<tiltbox::physics::BodyId>, p| match id {
+            Some(id) => world.body(id).expect("live").transform().apply(p),
+            None => p,
+        };
+        sanity.joint_gap = world
+            .joints()
+            .map(|j| {
+                let d = j.def();
+                (at(d.body_a, d.anchor_a) - at(Some(d.body_b), d.anchor_b)).length() as f32
+            })
+            .fold(0.0, f32::max);
+        sanity
     }
 }
 
@@ -267,6 +284,18 @@ pub(crate) struct Rapier {
     world: PhysicsWorld,
     dynamic: Vec<RigidBodyHandle>,
     floor: f32,
+    /// Each joint's bodies and local anchors, for the gap in the sanity column.
+    joints: Vec<(RigidBodyHandle, RigidBodyHandle, Vector, Vector)>,
+}
+
+/// A tiltbox filter as rapier's interaction groups (32 bits; rapier has no group index).
+fn rapier_groups(f: tiltbox::physics::Filter) -> InteractionGroups {
+    assert_eq!(f.group, 0, "rapier has no group index");
+    InteractionGroups::new(
+        Group::from_bits_truncate(f.category as u32),
+        Group::from_bits_truncate(f.mask as u32),
+        InteractionTestMode::And,
+    )
 }
 
 /// tiltbox's mixing rule as rapier's combine rule. Rapier 0.36 has `GeometricMean`
@@ -337,6 +366,7 @@ impl Rapier {
             ..IntegrationParameters::default()
         };
         let mut dynamic = Vec::new();
+        let mut handles = Vec::with_capacity(setup.bodies.len());
         for def in &setup.bodies {
             let builder = match def.mass {
                 MassSpec::Static => RigidBodyBuilder::fixed(),
@@ -354,7 +384,8 @@ impl Rapier {
                 .friction(def.friction as f32)
                 .friction_combine_rule(friction_rule)
                 .restitution(def.restitution as f32)
-                .restitution_combine_rule(restitution_rule);
+                .restitution_combine_rule(restitution_rule)
+                .collision_groups(rapier_groups(def.filter));
             let collider = match (def.mass, &def.shape) {
                 (MassSpec::Static, _) => collider,
                 // parry2d 0.31 moves a capsule's two half discs out by 3r/8 (a 3D hemisphere's
@@ -382,11 +413,28 @@ impl Rapier {
             if def.mass != MassSpec::Static {
                 dynamic.push(handle);
             }
+            handles.push(handle);
+        }
+        let mut joints = Vec::with_capacity(setup.joints.len());
+        for j in &setup.joints {
+            let anchor = |p: Vec2| Vector::new(p.x as f32, p.y as f32);
+            let hinge = RevoluteJointBuilder::new()
+                .local_anchor1(anchor(j.anchor_a))
+                .local_anchor2(anchor(j.anchor_b))
+                .contacts_enabled(false);
+            world.insert_impulse_joint(handles[j.a], handles[j.b], hinge);
+            joints.push((
+                handles[j.a],
+                handles[j.b],
+                anchor(j.anchor_a),
+                anchor(j.anchor_b),
+            ));
         }
         Rapier {
             world,
             dynamic,
             floor: lowest_static(&setup.bodies),
+            joints,
         }
     }
 }
@@ -431,13 +479,24 @@ impl Engine for Rapier {
             .collect()
     }
     fn sanity(&self) -> Sanity {
-        summarise(
+        let bodies = &self.world.bodies;
+        let gap = self
+            .joints
+            .iter()
+            .map(|&(a, b, pa, pb)| {
+                let world = |h: RigidBodyHandle, p: Vector| bodies[h].position() * p;
+                (world(a, pa) - world(b, pb)).length()
+            })
+            .fold(0.0, f32::max);
+        let mut sanity = summarise(
             self.dynamic.iter().map(|&h| {
                 let b = &self.world.bodies[h];
                 (b.translation().y, !b.is_sleeping())
             }),
             self.floor,
-        )
+        );
+        sanity.joint_gap = gap;
+        sanity
     }
 }
 
@@ -651,6 +710,9 @@ fn fmt_ms(ms: f64) -> String {
 
 fn fmt_sanity(s: &Sanity) -> String {
     let mut out = format!("{:.2} / {:.2} / {}", s.top_y, s.mean_y, s.awake);
+    if s.joint_gap > 0.0 {
+        out += &format!(" / gap {:.1} mm", 1e3 * s.joint_gap);
+    }
     if s.lost > 0 {
         out += &format!(" ({} lost)", s.lost);
     }
@@ -929,6 +991,7 @@ pub(crate) fn pyramid_setup(base: usize) -> Setup {
         steps: 0,
         sleep: false,
         warm_up: 0,
+        joints: Vec::new(),
     }
 }
 

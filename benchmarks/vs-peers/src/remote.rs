@@ -91,7 +91,10 @@ pub fn serve(scene: &str) {
             }
             (Some("sanity"), _) => {
                 let s = engine.sanity();
-                format!("{} {} {} {}", s.top_y, s.mean_y, s.awake, s.lost)
+                format!(
+                    "{} {} {} {} {}",
+                    s.top_y, s.mean_y, s.awake, s.lost, s.joint_gap
+                )
             }
             (Some("contacts"), _) => engine.contact_pairs().to_string(),
             _ => return,
@@ -191,6 +194,7 @@ impl Engine for Remote {
             mean_y: f(1),
             awake: u(2),
             lost: u(3),
+            joint_gap: f(4),
         }
     }
     fn contact_pairs(&self) -> usize {

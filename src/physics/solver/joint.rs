@@ -111,8 +111,8 @@ pub(crate) struct JointConstraint {
     pub b: u32,
     frame: Frame,
     point: Option<PointBlock>,
-    rows: [Row; MAX_ROWS],
-    count: usize,
+    /// Its rows: `JointSet::rows[rows.0..rows.1]`.
+    rows: (u32, u32),
     /// The rigid rows' spring this solve (the joint's `constraint_hertz`).
     soft: Softness,
     hertz: Real,
@@ -259,23 +259,44 @@ fn parts(kind: &JointKind, length: Real) -> (Option<(Pull, Real)>, RowList) {
     (point, rows)
 }
 
-impl JointConstraint {
-    /// The constraint of a joint of `kind` (distance joints: rest `length`, m) between solver
-    /// bodies `a` and `b` posed as `frame`, carrying last step's `impulses`; `hertz` and
+/// This step's joints: their constraints, and their rows side by side (a joint with none,
+/// a free hinge, stays small).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct JointSet {
+    pub constraints: Vec<JointConstraint>,
+    rows: Vec<Row>,
+}
+
+impl JointSet {
+    /// No joints.
+    pub fn clear(&mut self) {
+        self.constraints.clear();
+        self.rows.clear();
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.constraints.is_empty()
+    }
+
+    /// Add the constraint of a joint of `kind` (distance joints: rest `length`, m) between
+    /// solver bodies `a` and `b` posed as `frame`, carrying last step's `impulses`; `hertz` and
     /// `zeta` are its rigid rows' stiffness (Hz) and damping ratio.
-    pub fn new(
+    pub fn push(
+        &mut self,
         (slot, a, b): (u32, u32, u32),
         kind: &JointKind,
         length: Real,
         frame: Frame,
         impulses: &JointImpulses,
         (hertz, zeta): (Real, Real),
-    ) -> JointConstraint {
-        let (point, mut list) = parts(kind, length);
-        for (row, &impulse) in list.rows.iter_mut().zip(&impulses.rows) {
-            row.impulse = impulse;
-        }
-        JointConstraint {
+    ) {
+        let (point, list) = parts(kind, length);
+        let start = self.rows.len() as u32;
+        let rows = list.rows[..list.count].iter().zip(&impulses.rows);
+        self.rows
+            .extend(rows.map(|(row, &impulse)| Row { impulse, ..*row }));
+        self.constraints.push(JointConstraint {
             slot,
             a,
             b,
@@ -288,27 +309,35 @@ impl JointConstraint {
                 max_impulse: Real::INFINITY,
                 impulse: Vec2::from(impulses.point),
             }),
-            rows: list.rows,
-            count: list.count,
+            rows: (start, start + list.count as u32),
             soft: Softness::RIGID,
             hertz,
             zeta,
             masses: [0.0; 4],
             force: Vec2::ZERO,
             torque: 0.0,
-        }
+        });
     }
 
-    /// The impulses to carry to the next step (per step).
-    pub fn impulses(&self) -> JointImpulses {
+    /// The impulses joint `k` carries to the next step (per step).
+    pub fn impulses(&self, k: usize) -> JointImpulses {
+        let j = &self.constraints[k];
         let mut out = JointImpulses::default();
-        if let Some(p) = &self.point {
+        if let Some(p) = &j.point {
             out.point = p.impulse.into();
         }
-        for (o, r) in out.rows.iter_mut().zip(&self.rows[..self.count]) {
+        for (o, r) in out.rows.iter_mut().zip(&self.rows[j.row_range()]) {
             *o = r.impulse;
         }
         out
+    }
+}
+
+impl JointConstraint {
+    /// Where its rows are in `JointSet::rows`.
+    #[inline]
+    fn row_range(&self) -> std::ops::Range<usize> {
+        self.rows.0 as usize..self.rows.1 as usize
     }
 }
 
@@ -329,14 +358,15 @@ pub(crate) struct JointStep {
 /// Prepare: masses, springs and impulse caps for this solve; last step's impulses made per
 /// substep.
 pub(crate) fn prepare(
-    joints: &mut [JointConstraint],
+    set: &mut JointSet,
     selected: Selected,
     bodies: &[SolverBody],
     step: JointStep,
 ) {
     let per_substep = 1.0 / step.substeps as Real;
-    selected.for_each_index(joints.len(), |k| {
-        let j = &mut joints[k];
+    let JointSet { constraints, rows } = set;
+    selected.for_each_index(constraints.len(), |k| {
+        let j = &mut constraints[k];
         let (a, b) = (&bodies[j.a as usize], &bodies[j.b as usize]);
         j.masses = [a.inv_mass, a.inv_inertia, b.inv_mass, b.inv_inertia];
         j.soft = if step.baumgarte > 0.0 {
@@ -355,7 +385,7 @@ pub(crate) fn prepare(
             p.impulse *= scale;
         }
         let soft = j.soft;
-        for row in &mut j.rows[..j.count] {
+        for row in &mut rows[j.row_range()] {
             (row.soft, row.always) = match row.role {
                 Role::Hold(pull) => pull_softness(pull, soft, step.h),
                 _ => (soft, false),
@@ -383,19 +413,15 @@ fn pull_softness(pull: Pull, joint: Softness, h: Real) -> (Softness, bool) {
 }
 
 /// Warm start: apply each joint's accumulated impulses.
-pub(crate) fn warm_start(
-    joints: &[JointConstraint],
-    selected: Selected,
-    bodies: &mut [SolverBody],
-) {
-    selected.for_each_index(joints.len(), |k| {
-        let j = &joints[k];
+pub(crate) fn warm_start(set: &JointSet, selected: Selected, bodies: &mut [SolverBody]) {
+    selected.for_each_index(set.constraints.len(), |k| {
+        let j = &set.constraints[k];
         let (a, b) = two_mut(bodies, j.a, j.b);
         let pose = j.pose(a, b);
         if let Some(p) = &j.point {
             j.apply_point(a, b, &pose, p.impulse);
         }
-        for row in &j.rows[..j.count] {
+        for row in &set.rows[j.row_range()] {
             let jac = jacobian(row.measure, &pose);
             j.apply_row(a, b, &jac, row.sign() * row.impulse);
         }
@@ -405,18 +431,19 @@ pub(crate) fn warm_start(
 /// One pass over the joints: `biased` (the soft bias) or a relax pass (rigid); `inv_h` is
 /// 1 / substep (1/s).
 pub(crate) fn solve(
-    joints: &mut [JointConstraint],
+    set: &mut JointSet,
     selected: Selected,
     bodies: &mut [SolverBody],
     biased: bool,
     inv_h: Real,
 ) {
-    selected.for_each_index(joints.len(), |k| {
-        let j = &mut joints[k];
+    let JointSet { constraints, rows } = set;
+    selected.for_each_index(constraints.len(), |k| {
+        let j = &mut constraints[k];
         let (a, b) = two_mut(bodies, j.a, j.b);
-        for r in 0..j.count {
+        for row in &mut rows[j.row_range()] {
             let pose = j.pose(a, b);
-            j.solve_row(r, (a, b), &pose, (biased, inv_h));
+            solve_row(row, j.masses, (a, b), &pose, (biased, inv_h));
         }
         if j.point.is_some() {
             let pose = j.pose(a, b);
@@ -428,21 +455,22 @@ pub(crate) fn solve(
 /// Store: the impulses back to per step, and each joint's force and torque on B (N, N m)
 /// from its impulses over the substep.
 pub(crate) fn store(
-    joints: &mut [JointConstraint],
+    set: &mut JointSet,
     selected: Selected,
     bodies: &[SolverBody],
     step: JointStep,
 ) {
     let (substeps, inv_h) = (step.substeps as Real, 1.0 / step.h);
-    selected.for_each_index(joints.len(), |k| {
-        let j = &mut joints[k];
+    let JointSet { constraints, rows } = set;
+    selected.for_each_index(constraints.len(), |k| {
+        let j = &mut constraints[k];
         let pose = j.pose(&bodies[j.a as usize], &bodies[j.b as usize]);
         let (mut force, mut torque) = (Vec2::ZERO, 0.0);
         if let Some(p) = &mut j.point {
             force += p.impulse * inv_h;
             p.impulse *= substeps;
         }
-        for row in &mut j.rows[..j.count] {
+        for row in &mut rows[j.row_range()] {
             let jac = jacobian(row.measure, &pose);
             let impulse = row.sign() * row.impulse;
             force += jac.u * impulse * inv_h;
@@ -480,53 +508,6 @@ impl JointConstraint {
             angle: f.angle + b.dtheta - a.dtheta,
             axis: a.dq.rotate(f.axis),
         }
-    }
-
-    /// Solve row `r` at `pose`: `biased` pass or not, `inv_h` 1 / substep.
-    fn solve_row(
-        &mut self,
-        r: usize,
-        (a, b): (&mut SolverBody, &mut SolverBody),
-        pose: &Pose,
-        (biased, inv_h): (bool, Real),
-    ) {
-        let masses = self.masses;
-        let row = &mut self.rows[r];
-        let jac = jacobian(row.measure, pose);
-        let sign = row.sign();
-        let k = row_mass_inverse(masses, &jac);
-        if k <= 0.0 {
-            return;
-        }
-        let mass = 1.0 / k;
-        let cdot = sign * (jac.u.dot(b.v - a.v) + jac.kb * b.w - jac.ka * a.w);
-        let error = sign * (jac.value - row.target);
-        let old = row.impulse;
-        let new = match row.role {
-            Role::Motor(speed) => old - mass * (cdot - speed),
-            Role::Hold(_) => {
-                let s = if biased || row.always {
-                    row.soft
-                } else {
-                    Softness::RIGID
-                };
-                old - mass * s.mass_scale * (cdot + s.bias_rate * error) - s.impulse_scale * old
-            }
-            Role::Lower | Role::Upper => {
-                let (bias, s) = if error > 0.0 {
-                    (error * inv_h, Softness::RIGID)
-                } else if biased {
-                    (row.soft.bias_rate * error, row.soft)
-                } else {
-                    (0.0, Softness::RIGID)
-                };
-                let raw = old - mass * s.mass_scale * (cdot + bias) - s.impulse_scale * old;
-                raw.max(0.0)
-            }
-        };
-        let new = new.clamp(-row.max_impulse, row.max_impulse);
-        row.impulse = new;
-        self.apply_row(a, b, &jac, sign * (new - old));
     }
 
     /// Solve the point block at `pose`.
@@ -572,11 +553,7 @@ impl JointConstraint {
     /// Apply impulse `lambda` along a row's Jacobian.
     #[inline]
     fn apply_row(&self, a: &mut SolverBody, b: &mut SolverBody, jac: &Jacobian, lambda: Real) {
-        let [ma, ia, mb, ib] = self.masses;
-        a.v -= ma * lambda * jac.u;
-        a.w -= ia * lambda * jac.ka;
-        b.v += mb * lambda * jac.u;
-        b.w += ib * lambda * jac.kb;
+        apply_row(self.masses, a, b, jac, lambda);
     }
 }
 
@@ -597,6 +574,67 @@ fn block_solve([ma, ia, mb, ib]: [Real; 4], pose: &Pose, rhs: Vec2) -> Option<Ve
     let k22 = ma + mb + ia * ra.x * ra.x + ib * rb.x * rb.x;
     let det = k11 * k22 - k12 * k12;
     (det > 0.0).then(|| Vec2::new(k22 * rhs.x - k12 * rhs.y, k11 * rhs.y - k12 * rhs.x) / det)
+}
+
+/// Solve `row` of a joint with inverse masses `masses` at `pose`: `biased` pass or not,
+/// `inv_h` 1 / substep.
+fn solve_row(
+    row: &mut Row,
+    masses: [Real; 4],
+    (a, b): (&mut SolverBody, &mut SolverBody),
+    pose: &Pose,
+    (biased, inv_h): (bool, Real),
+) {
+    let jac = jacobian(row.measure, pose);
+    let sign = row.sign();
+    let k = row_mass_inverse(masses, &jac);
+    if k <= 0.0 {
+        return;
+    }
+    let mass = 1.0 / k;
+    let cdot = sign * (jac.u.dot(b.v - a.v) + jac.kb * b.w - jac.ka * a.w);
+    let error = sign * (jac.value - row.target);
+    let old = row.impulse;
+    let new = match row.role {
+        Role::Motor(speed) => old - mass * (cdot - speed),
+        Role::Hold(_) => {
+            let s = if biased || row.always {
+                row.soft
+            } else {
+                Softness::RIGID
+            };
+            old - mass * s.mass_scale * (cdot + s.bias_rate * error) - s.impulse_scale * old
+        }
+        Role::Lower | Role::Upper => {
+            let (bias, s) = if error > 0.0 {
+                (error * inv_h, Softness::RIGID)
+            } else if biased {
+                (row.soft.bias_rate * error, row.soft)
+            } else {
+                (0.0, Softness::RIGID)
+            };
+            let raw = old - mass * s.mass_scale * (cdot + bias) - s.impulse_scale * old;
+            raw.max(0.0)
+        }
+    };
+    let new = new.clamp(-row.max_impulse, row.max_impulse);
+    row.impulse = new;
+    apply_row(masses, a, b, &jac, sign * (new - old));
+}
+
+/// Apply impulse `lambda` along a row's Jacobian `jac` to bodies of inverse masses `masses`.
+#[inline]
+fn apply_row(
+    [ma, ia, mb, ib]: [Real; 4],
+    a: &mut SolverBody,
+    b: &mut SolverBody,
+    jac: &Jacobian,
+    lambda: Real,
+) {
+    a.v -= ma * lambda * jac.u;
+    a.w -= ia * lambda * jac.ka;
+    b.v += mb * lambda * jac.u;
+    b.w += ib * lambda * jac.kb;
 }
 
 /// w x r.

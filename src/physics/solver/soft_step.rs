@@ -26,7 +26,7 @@ use super::block::BlockMass;
 use super::bundles::{ContactBundles, PackInput};
 use super::constraint::{Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
-use super::joint::{self, JointConstraint, JointStep};
+use super::joint::{self, JointSet, JointStep};
 use super::recover::{Recovery, LOAD_REACH, SPRING_REACH};
 use super::softness::Softness;
 use super::{
@@ -70,7 +70,7 @@ pub(crate) struct StepContext<'a> {
     /// The points overlapping deeper than the spring reaches (`recover.rs`).
     pub recovery: &'a mut Recovery,
     /// This step's joints; the solve works on the `joint_selected` ones.
-    pub joints: &'a mut [JointConstraint],
+    pub joints: &'a mut JointSet,
     pub joint_selected: Selected<'a>,
     pub settings: &'a Settings,
     /// The step (s).
@@ -148,7 +148,7 @@ pub(crate) fn solve(ctx: &mut StepContext, effort: &Effort) {
     let plan = Plan::new(ctx.settings, effort, ctx.dt);
     restart_motion(ctx.bodies, ctx.kinematic);
     prepare_contacts(ctx, &plan);
-    joint::prepare(ctx.joints, ctx.joint_selected, ctx.bodies, plan.joints);
+    prepare_joints(ctx, &plan);
     for _ in 0..plan.substeps {
         integrate_velocities(ctx.bodies, ctx.moving, plan.h, plan.limits);
         warm_start(ctx);
@@ -184,17 +184,26 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan) {
     });
 }
 
+/// Prepare the joints (`joint.rs`): masses, springs, caps, impulses per substep.
+fn prepare_joints(ctx: &mut StepContext, plan: &Plan) {
+    if !ctx.joints.is_empty() {
+        joint::prepare(ctx.joints, ctx.joint_selected, ctx.bodies, plan.joints);
+    }
+}
+
 /// Warm start: apply each joint's and contact's accumulated impulses (zero them with warm
 /// starting off).
 fn warm_start(ctx: &mut StepContext) {
-    joint::warm_start(ctx.joints, ctx.joint_selected, ctx.bodies);
+    if !ctx.joints.is_empty() {
+        joint::warm_start(ctx.joints, ctx.joint_selected, ctx.bodies);
+    }
     let warm_starting = ctx.settings.warm_starting;
     ctx.bundles.warm_start(ctx.bodies, warm_starting);
 }
 
 /// One solve pass of `kind` over the joints (but for a normal relax pass), then the contacts.
 fn solve_pass(ctx: &mut StepContext, plan: &Plan, kind: PassKind) {
-    if kind != PassKind::NormalRelax {
+    if kind != PassKind::NormalRelax && !ctx.joints.is_empty() {
         let biased = kind == PassKind::Biased;
         joint::solve(
             ctx.joints,
@@ -231,7 +240,9 @@ fn apply_restitution(ctx: &mut StepContext) {
 
 /// Store: each joint's and contact's impulses back into it, per step, and its load.
 fn store_impulses(ctx: &mut StepContext, plan: &Plan) {
-    joint::store(ctx.joints, ctx.joint_selected, ctx.bodies, plan.joints);
+    if !ctx.joints.is_empty() {
+        joint::store(ctx.joints, ctx.joint_selected, ctx.bodies, plan.joints);
+    }
     let (substeps, inv_dt) = (plan.substeps as Real, 1.0 / ctx.dt);
     ctx.bundles
         .store(ctx.contacts, |c, ends| finish(c, ends, substeps, inv_dt));

@@ -5,7 +5,7 @@ use super::snapshot::{JointSlotState, StateError};
 use super::*;
 use crate::physics::broad_phase::pair_key;
 use crate::physics::joint::{Joint, JointDef, JointId, JointImpulses, JointKind};
-use crate::physics::solver::joint::{Frame, JointConstraint};
+use crate::physics::solver::joint::{Frame, JointSet};
 use std::collections::HashMap;
 
 /// One entry of the joint array: a joint, or a free slot remembering its generation.
@@ -26,16 +26,21 @@ pub(super) struct Joints {
     /// Per pair key of bodies joined by joints that keep them from colliding: how many.
     no_collide: HashMap<u64, u32>,
     /// This step's constraints, for the joints with an awake body.
-    pub constraints: Vec<JointConstraint>,
+    pub constraints: JointSet,
     /// The joints that broke in the last step, in id order.
     pub broken: Vec<JointId>,
 }
 
 impl Joints {
+    /// Whether any joint keeps its bodies from colliding.
+    pub fn keeps_pairs_apart(&self) -> bool {
+        !self.no_collide.is_empty()
+    }
+
     /// Whether the bodies of pair `key` may collide: no joint between them says otherwise.
     #[inline]
     pub fn may_collide(&self, key: u64) -> bool {
-        self.no_collide.is_empty() || !self.no_collide.contains_key(&key)
+        !self.no_collide.contains_key(&key)
     }
 }
 
@@ -268,14 +273,14 @@ impl World {
                 solver_index(Some(d.body_b), fixed),
             );
             let stiffness = (d.constraint_hertz, d.constraint_damping_ratio);
-            constraints.push(JointConstraint::new(
+            constraints.push(
                 ends,
                 &d.kind,
                 rest_length(&d.kind),
                 frame(d, a, b),
                 &j.impulses,
                 stiffness,
-            ));
+            );
         }
         self.joints.constraints = constraints;
     }
@@ -285,10 +290,11 @@ impl World {
     /// order, and listed in [`World::broken_joints`].
     pub(super) fn finish_joints(&mut self) {
         self.joints.broken.clear();
-        for k in &self.joints.constraints {
+        let set = &self.joints.constraints;
+        for (index, k) in set.constraints.iter().enumerate() {
             let j = self.joints.slots[k.slot as usize].joint.as_mut();
             let j = j.expect("constraints are of live joints");
-            j.impulses = k.impulses();
+            j.impulses = set.impulses(index);
             (j.force, j.torque) = (k.force, k.torque);
             if j.overloaded() {
                 self.joints.broken.push(j.id);

@@ -165,7 +165,7 @@ impl World {
                 .copied()
                 .unwrap_or(Tier::Base)
         };
-        let constraints = &self.joints.constraints;
+        let constraints = &self.joints.constraints.constraints;
         list.extend(
             (0..constraints.len() as u32).filter(|&k| of(&constraints[k as usize]) == tier),
         );

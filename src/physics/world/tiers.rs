@@ -198,9 +198,12 @@ impl World {
     /// (`joint_needs`). A joint's load asks for nothing: the tiers' loads are contacts'.
     fn joint_needs(&mut self) -> Tier {
         self.tiers.joint_needs.clear();
+        if self.joints.constraints.is_empty() {
+            return Tier::Base;
+        }
         let extreme = self.settings.extreme_mass_ratio;
         let mut top = Tier::Base;
-        for k in &self.joints.constraints {
+        for k in &self.joints.constraints.constraints {
             let inv_mass = |i: u32| self.solver.bodies[i as usize].inv_mass;
             let (ma, mb) = (inv_mass(k.a), inv_mass(k.b));
             if ma == 0.0 || mb == 0.0 {

@@ -285,8 +285,7 @@ impl JointSet {
     pub fn push(
         &mut self,
         (slot, a, b): (u32, u32, u32),
-        kind: &JointKind,
-        length: Real,
+        (kind, length): (&JointKind, Real),
         frame: Frame,
         impulses: &JointImpulses,
         (hertz, zeta): (Real, Real),

@@ -275,8 +275,7 @@ impl World {
             let stiffness = (d.constraint_hertz, d.constraint_damping_ratio);
             constraints.push(
                 ends,
-                &d.kind,
-                rest_length(&d.kind),
+                (&d.kind, rest_length(&d.kind)),
                 frame(d, a, b),
                 &j.impulses,
                 stiffness,

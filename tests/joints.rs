@@ -761,3 +761,49 @@ fn a_checkpointed_swinging_chain_resumes_bit_identically() {
         }
     }
 }
+
+#[test]
+fn a_heavy_block_on_a_light_rope_hangs_within_the_soft_joints_closed_form_give() {
+    // The AVBD 2D demo's "heavy rope": 20 links of 1 m x 0.5 m (0.5 kg) hung from the world,
+    // a 30 m x 30 m block (900 kg, 1,800 times a link) on the end, laid out hanging straight.
+    // Joining masses 100:1 apart puts the island in the Extreme tier: 16 substeps, where the
+    // joints' 60 Hz stiffness is raised 4 times with the substep rate (as the contacts' is), to
+    // the cap of a quarter of it, 240 Hz. Each joint then opens by W / (m_eff omega^2): between
+    // two links (m_eff = m / 2 = 0.25 kg along the rope) carrying the block, 8,829 N /
+    // (0.25 (2 pi 240)^2) = 15.5 mm. Bounds: at rest after 10 s (block slower than 1 cm/s),
+    // widest gap within 5 % of that. At 60 Hz it would be 16 times as wide, 25 cm.
+    let mut w = world(SolverKind::SoftStep);
+    let mut last: Option<BodyId> = None;
+    for i in 0..20 {
+        let centre = vec2(0.0, -(i as Real + 0.5));
+        let link = BodyDef::dynamic(Shape::rect(1.0, 0.5), centre).with_angle(-PI / 2.0);
+        let b = w.add_body(&link).unwrap();
+        let anchor_a = if last.is_some() {
+            vec2(0.5, 0.0)
+        } else {
+            Vec2::ZERO
+        };
+        let def = JointDef::new(JointKind::Revolute(Revolute::free()), last, b)
+            .with_anchors(anchor_a, vec2(-0.5, 0.0));
+        w.add_joint(&def).unwrap();
+        last = Some(b);
+    }
+    let block = w
+        .add_body(
+            &BodyDef::dynamic(Shape::rect(30.0, 30.0), vec2(0.0, -35.0)).with_angle(-PI / 2.0),
+        )
+        .unwrap();
+    let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), last, block)
+        .with_anchors(vec2(0.5, 0.0), vec2(-15.0, 0.0));
+    w.add_joint(&hinge).unwrap();
+    for _ in 0..600 {
+        w.step(DT).unwrap();
+    }
+    let speed = w.body(block).unwrap().linear_velocity().length();
+    let gap = largest_gap(&w);
+    let omega = 2.0 * PI * 240.0;
+    let expected = 900.0 * G / (0.25 * omega * omega);
+    println!("heavy rope: widest gap {gap:.5} m against {expected:.5} m, block at {speed} m/s");
+    assert!(speed < 0.01, "not at rest: {speed} m/s");
+    assert!((gap - expected).abs() < 0.05 * expected, "gap {gap} m");
+}

@@ -352,6 +352,9 @@ pub(crate) struct JointStep {
     pub baumgarte: Real,
     /// Whether the joints start from last step's impulses.
     pub warm_starting: bool,
+    /// What the stiffness tier multiplies the joints' `constraint_hertz` by, as it does the
+    /// contacts' (1 at the base tier and in the sequential solver).
+    pub hertz_scale: Real,
 }
 
 /// Prepare: masses, springs and impulse caps for this solve; last step's impulses made per
@@ -375,7 +378,11 @@ pub(crate) fn prepare(
                 impulse_scale: 0.0,
             }
         } else {
-            Softness::new(j.hertz.min(0.25 / step.h), j.zeta, step.h)
+            Softness::new(
+                (step.hertz_scale * j.hertz).min(0.25 / step.h),
+                j.zeta,
+                step.h,
+            )
         };
         let scale = if step.warm_starting { per_substep } else { 0.0 };
         if let Some(p) = &mut j.point {

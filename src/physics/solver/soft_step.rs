@@ -137,6 +137,7 @@ impl Plan {
                 substeps,
                 baumgarte: 0.0,
                 warm_starting: settings.warm_starting,
+                hertz_scale: effort.contact_hertz / settings.contact_hertz,
             },
         }
     }

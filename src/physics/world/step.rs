@@ -71,6 +71,7 @@ impl World {
             substeps: 1,
             baumgarte: JOINT_BAUMGARTE,
             warm_starting: self.settings.warm_starting,
+            hertz_scale: 1.0,
         };
         joint::prepare(joints, Selected::All, bodies, step);
         joint::warm_start(joints, Selected::All, bodies);

@@ -93,15 +93,18 @@ pub struct Settings {
     /// Soft step: give each island the work its load calls for ("leave out what a scene does
     /// not need"). An island is loaded when a contact in it has carried at least
     /// `stiff_load_ratio` times the weight of the lighter body it touches for two steps
-    /// running, or joins bodies whose masses differ that much. A loaded island braced
+    /// running, or where a body carries the weight of one that much heavier (a quarter of it
+    /// or more, or lying under it as they first touch). Without gravity no contact asks for
+    /// anything. A loaded island braced
     /// sideways (a pyramid, a pile: less than twice as tall as wide, along gravity, with at
     /// least `stiff_load_ratio` bodies) keeps the base substeps with a relax pass, a normal
     /// relax pass and creeping springs, or twice the substeps and stiffness where it is 80
     /// bodies deep or more on average (a pyramid of base 159 and up). Any other loaded island (a stack) is solved with 1.5
     /// times the substeps and contact stiffness, and with 1.75 times from 2.25 times that load
     /// (a spring's compression goes as load / omega^2) or where masses differ by
-    /// `stiff_load_ratio`. An island joining masses `extreme_mass_ratio` apart gets four times
-    /// the substeps and stiffness and eight times the relax passes. Every other island keeps
+    /// `stiff_load_ratio`. An island where a body carries the weight of one
+    /// `extreme_mass_ratio` times its mass, or with a joint joining such masses, gets four
+    /// times the substeps and stiffness (joints' too) and eight times the relax passes. Every other island keeps
     /// the base settings and pays nothing. Default **on**: with it the defaults pass every
     /// case of the stiff suite (jittered 20- and 50-box stacks, 100:1 and 1000:1 mass ratios
     /// both ways, the symmetric pyramid of base 30), which fixed settings pass only at 2.2-2.5
@@ -111,8 +114,9 @@ pub struct Settings {
     /// weight, or the pair's mass ratio) from which an island gets more work. Default 12: a
     /// stack of 10 boxes stays on the base settings, a stack of 20 does not.
     pub stiff_load_ratio: Real,
-    /// Soft step, adaptive stiffness: the mass ratio across a contact from which an island
-    /// gets four times the work. Default 100 (a 1 kg box under 100 kg, or on it).
+    /// Soft step, adaptive stiffness: the mass ratio across a contact whose lighter body
+    /// carries the heavier one's weight, or across a joint, from which an island gets four
+    /// times the work. Default 100 (a 1 kg box under 100 kg).
     pub extreme_mass_ratio: Real,
     /// Soft step: ceiling for load-aware stiffening, as a fraction of the substep rate.
     /// Default 0.5 (a spring at half the substep rate still resolves within a substep).

@@ -807,3 +807,95 @@ fn a_heavy_block_on_a_light_rope_hangs_within_the_soft_joints_closed_form_give()
     assert!(speed < 0.01, "not at rest: {speed} m/s");
     assert!((gap - expected).abs() < 0.05 * expected, "gap {gap} m");
 }
+
+#[test]
+fn a_100_plank_bridge_hangs_as_a_catenary() {
+    const FRICTION: Real = 5.0;
+    // Box2D's bridge sample, slack: 100 planks of 1 m x 0.25 m (density 20: 5 kg each) hinged
+    // end to end, the ends hinged to the world 90 m apart. Laid out as a V, it swings down and
+    // settles. A hanging chain of weight w per metre is a catenary y = a cosh(x / a) whose
+    // horizontal tension is H = w a (the same at every point), so the end joints must carry
+    // H sideways and half the weight W = 4,905 N each upward, and the middle must hang
+    // a (cosh(S / 2a) - 1) below the ends with a = H / w. Bounds: the two ends' vertical
+    // forces sum to W within 1 % and their horizontal forces are equal and opposite within
+    // 1 % (momentum balance, averaged), and the sag is the catenary's for the measured H
+    // within 5 % (100 straight planks against the smooth curve, averaged over a swing that
+    // has not died out).
+    let mut w = World::new(Settings::default(), vec2(0.0, -G)).unwrap();
+    let (n, span) = (100usize, 90.0 as Real);
+    let half = 0.5 * n as Real;
+    let depth = (half * half - (0.5 * span) * (0.5 * span)).sqrt();
+    let slope = vec2(0.5 * span, -depth) / half;
+    // Joint friction as Box2D's sample has it (a motor held at speed 0 with a small torque):
+    // without it the bridge swings for minutes. FRICTION N m per hinge.
+    let hinge = || {
+        JointKind::Revolute(Revolute {
+            motor: Some(Motor {
+                speed: 0.0,
+                max: FRICTION,
+            }),
+            ..Revolute::free()
+        })
+    };
+    let mut previous: Option<BodyId> = None;
+    let mut ends = Vec::new();
+    for i in 0..n {
+        let (start, dir) = if i < n / 2 {
+            (vec2(-0.5 * span, 0.0) + i as Real * slope, slope)
+        } else {
+            let up = vec2(slope.x, -slope.y);
+            (vec2(0.0, -depth) + (i - n / 2) as Real * up, up)
+        };
+        let centre = start + 0.5 * dir;
+        let plank = BodyDef::dynamic(Shape::rect(1.0, 0.25), centre)
+            .with_density(20.0)
+            .with_angle(dir.y.atan2(dir.x));
+        let b = w.add_body(&plank).unwrap();
+        let anchor_a = match previous {
+            Some(_) => vec2(0.5, 0.0),
+            None => start,
+        };
+        let def = JointDef::new(hinge(), previous, b).with_anchors(anchor_a, vec2(-0.5, 0.0));
+        let id = w.add_joint(&def).unwrap();
+        if i == 0 {
+            ends.push(id);
+        }
+        previous = Some(b);
+    }
+    let last = JointDef::new(hinge(), None, previous.unwrap())
+        .with_anchors(vec2(0.5 * span, 0.0), vec2(0.5, 0.0));
+    ends.push(w.add_joint(&last).unwrap());
+    // It swings for a long time (joint friction is all that damps it), so the forces and
+    // the sag are averaged over the last 20 s of 60: the time average of the ends' forces
+    // is the weight whatever the swinging (the bridge's momentum comes back to itself).
+    let (n_avg, mut f0, mut f1, mut sag) = (1200, Vec2::ZERO, Vec2::ZERO, 0.0);
+    let middle = w.joints().nth(n / 2).unwrap().id();
+    for i in 0..3600 {
+        w.step(DT).unwrap();
+        if i >= 3600 - n_avg {
+            f0 += w.joint(ends[0]).unwrap().reaction_force() / n_avg as Real;
+            f1 += w.joint(ends[1]).unwrap().reaction_force() / n_avg as Real;
+            let m = w.joint(middle).unwrap().def();
+            let mid = w.body(m.body_b).unwrap().transform().apply(m.anchor_b);
+            sag -= mid.y / n_avg as Real;
+        }
+    }
+    // The reactions on the planks (each end joint's force on its plank).
+    let weight = n as Real * 5.0 * G;
+    let h = 0.5 * (f0.x.abs() + f1.x.abs());
+    let a = h / (weight / n as Real);
+    let expected_sag = a * ((0.5 * span / a).cosh() - 1.0);
+    println!(
+        "bridge: ends carry {f0} and {f1} N (weight {weight} N), H {h:.1} N, a {a:.3} m, \
+         sag {sag:.4} m against {expected_sag:.4} m"
+    );
+    assert!(
+        (f0.y + f1.y - weight).abs() < 0.01 * weight,
+        "vertical {f0} {f1}"
+    );
+    assert!((f0.x + f1.x).abs() < 0.01 * h, "horizontal {f0} {f1}");
+    assert!(
+        (sag - expected_sag).abs() < 0.05 * expected_sag,
+        "sag {sag}"
+    );
+}

@@ -201,6 +201,12 @@ pub(crate) fn lowest_static(defs: &[BodyDef]) -> f32 {
 }
 
 pub(crate) fn summarise(ys: impl Iterator<Item = (f32, bool)>, floor: f32) -> Sanity {
+    // A scene without static bodies (smash) has no floor to fall through.
+    let floor = if floor.is_finite() {
+        floor
+    } else {
+        f32::NEG_INFINITY
+    };
     let (mut top, mut sum, mut n, mut awake, mut lost) = (f32::NEG_INFINITY, 0.0f64, 0, 0, 0);
     for (y, is_awake) in ys {
         if !y.is_finite() || y < floor - 50.0 {

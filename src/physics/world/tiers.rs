@@ -247,7 +247,7 @@ impl World {
         } else {
             Vec2::ZERO
         };
-        for input in &self.tiers.inputs {
+        for (k, input) in self.tiers.inputs.iter().enumerate() {
             let [a, b] = input.bodies;
             let inv_mass = |i: u32| self.solver.bodies[i as usize].inv_mass;
             // Inverse masses: the lighter body has the larger one; static bodies have zero.
@@ -258,8 +258,20 @@ impl World {
             } else {
                 0.0
             };
-            let masses = if heavy_inv > 0.0 && carries_heavy(input, (ma, mb), up, g) {
+            let ratio = if heavy_inv > 0.0 {
                 light_inv / heavy_inv
+            } else {
+                0.0
+            };
+            // (The contact's normal is read only for such a pair: rare, and kept out of the
+            // 16 bytes read for every contact. None if the inputs no longer line up with the
+            // contacts.)
+            let normal = || match self.contacts.awake.get(k) {
+                Some(c) if [c.a, c.b] == input.bodies => c.normal,
+                _ => Vec2::ZERO,
+            };
+            let masses = if ratio >= stiff && carries_heavy(input, (ma, mb), (up, normal), g) {
+                ratio
             } else {
                 0.0
             };
@@ -383,7 +395,12 @@ impl World {
 /// gravity). Without gravity nothing carries anything's weight. A heavy body that strikes or
 /// pushes light ones (Box2D's `smash`: no gravity, an 8 m square driven at 40 m/s into 9,600
 /// boxes of 0.16 kg), or carries them (a drum full of boxes), asks for nothing by its mass.
-fn carries_heavy(input: &TierInput, (ma, mb): (Real, Real), up: Vec2, g: Real) -> bool {
+fn carries_heavy(
+    input: &TierInput,
+    (ma, mb): (Real, Real),
+    (up, normal): (Vec2, impl Fn() -> Vec2),
+    g: Real,
+) -> bool {
     if g <= 1e-3 {
         return false;
     }
@@ -392,7 +409,7 @@ fn carries_heavy(input: &TierInput, (ma, mb): (Real, Real), up: Vec2, g: Real) -
         return true;
     }
     // The normal points from A to B: B is above A where it points up.
-    let b_above = input.normal.dot(up);
+    let b_above = normal().dot(up);
     let heavy_above = if mb <= ma { b_above } else { -b_above };
     input.unmeasured && heavy_above > HEAVY_ABOVE
 }
@@ -406,14 +423,12 @@ const CARRIED_SHARE: Real = 0.25;
 /// carrying it before its load is measured.
 const HEAVY_ABOVE: Real = 0.5;
 
-/// What adaptive stiffness reads of a contact, taken as the contact is found: 24 bytes, so
+/// What adaptive stiffness reads of a contact, taken as the contact is found: 16 bytes, so
 /// that giving the contacts their tiers does not stream through the whole contacts.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct TierInput {
     /// Slots of bodies A and B.
     pub bodies: [u32; 2],
-    /// The contact normal, from A to B.
-    pub normal: Vec2,
     /// The contact's held load (N; `Contact::load`).
     pub load: Real,
     /// A contact that has just closed carries a load nobody has measured yet: while a stack
@@ -429,7 +444,6 @@ impl TierInput {
     pub fn of(c: &Contact, slop: Real) -> TierInput {
         TierInput {
             bodies: [c.a, c.b],
-            normal: c.normal,
             load: c.load,
             unmeasured: c.age < NEW_CONTACT_STEPS
                 && c.points[..c.count].iter().any(|p| p.separation <= slop),

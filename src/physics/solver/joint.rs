@@ -359,6 +359,7 @@ pub(crate) struct JointStep {
 
 /// Prepare: masses, springs and impulse caps for this solve; last step's impulses made per
 /// substep.
+#[inline(never)]
 pub(crate) fn prepare(
     set: &mut JointSet,
     selected: Selected,
@@ -419,6 +420,7 @@ fn pull_softness(pull: Pull, joint: Softness, h: Real) -> (Softness, bool) {
 }
 
 /// Warm start: apply each joint's accumulated impulses.
+#[inline(never)]
 pub(crate) fn warm_start(set: &JointSet, selected: Selected, bodies: &mut [SolverBody]) {
     selected.for_each_index(set.constraints.len(), |k| {
         let j = &set.constraints[k];
@@ -436,6 +438,7 @@ pub(crate) fn warm_start(set: &JointSet, selected: Selected, bodies: &mut [Solve
 
 /// One pass over the joints: `biased` (the soft bias) or a relax pass (rigid); `inv_h` is
 /// 1 / substep (1/s).
+#[inline(never)]
 pub(crate) fn solve(
     set: &mut JointSet,
     selected: Selected,
@@ -460,6 +463,7 @@ pub(crate) fn solve(
 
 /// Store: the impulses back to per step, and each joint's force and torque on B (N, N m)
 /// from its impulses over the substep.
+#[inline(never)]
 pub(crate) fn store(
     set: &mut JointSet,
     selected: Selected,

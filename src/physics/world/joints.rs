@@ -253,6 +253,7 @@ impl World {
 
     /// This step's constraints: one for each joint with an awake body, posed as the bodies
     /// are at the start of the step, carrying last step's impulses.
+    #[inline(never)]
     pub(super) fn build_joint_constraints(&mut self) {
         let fixed = self.solver.bodies.len() as u32 - 1;
         let mut constraints = std::mem::take(&mut self.joints.constraints);
@@ -287,6 +288,7 @@ impl World {
     /// After the solve: each solved joint's impulses and reaction back into it; then the
     /// joints whose force or torque passed their break force or torque are removed, in id
     /// order, and listed in [`World::broken_joints`].
+    #[inline(never)]
     pub(super) fn finish_joints(&mut self) {
         self.joints.broken.clear();
         let set = &self.joints.constraints;

@@ -18,7 +18,7 @@
 
 use super::softness::Softness;
 use super::{Selected, SolverBody};
-use crate::physics::joint::{JointImpulses, JointKind, Limit, Motor, Spring, MAX_ROWS};
+use crate::physics::joint::{JointImpulses, JointKind, Limit, Motor, Spring};
 use crate::physics::math::{cross, Real, Vec2};
 
 /// What a row measures.
@@ -76,11 +76,10 @@ struct Row {
     impulse: Real,
 }
 
-/// The point block of a joint.
+/// The point block of a joint, as the solve passes read it (its pull and largest force are
+/// in [`JointCold`]).
 #[derive(Clone, Copy, Debug)]
 struct PointBlock {
-    pull: Pull,
-    max: Real,
     soft: Softness,
     always: bool,
     max_impulse: Real,
@@ -104,21 +103,28 @@ pub(crate) struct Frame {
 /// A joint as one solve sees it.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct JointConstraint {
-    /// The joint's slot in the World, and its bodies' solver indices (a fixed body for the
-    /// world).
-    pub slot: u32,
+    /// Its bodies' solver indices (a fixed body for the world).
     pub a: u32,
     pub b: u32,
     frame: Frame,
     point: Option<PointBlock>,
     /// Its rows: `JointSet::rows[rows.0..rows.1]`.
     rows: (u32, u32),
-    /// The rigid rows' spring this solve (the joint's `constraint_hertz`).
-    soft: Softness,
+}
+
+/// What only prepare and store read of a joint, kept apart so that the solve passes stream
+/// less of each joint (the square root of the point block's cap, not its size, was what held
+/// joint_grid up).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointCold {
+    /// The joint's slot in the World.
+    pub slot: u32,
+    /// Its rigid rows' stiffness (Hz) and damping ratio, and their spring this solve.
     hertz: Real,
     zeta: Real,
-    /// Inverse masses and inertias of A and B.
-    masses: [Real; 4],
+    soft: Softness,
+    /// The point block's pull and largest force (N).
+    point: Option<(Pull, Real)>,
     /// The force (N) and torque (N m) on B at the end of the solve.
     pub force: Vec2,
     pub torque: Real,
@@ -158,25 +164,6 @@ impl Row {
     }
 }
 
-/// A joint's rows, in solve order.
-#[derive(Clone, Copy, Debug)]
-struct RowList {
-    rows: [Row; MAX_ROWS],
-    count: usize,
-}
-
-impl RowList {
-    const EMPTY: RowList = RowList {
-        rows: [Row::new(Measure::Angle, Role::Lower, 0.0, 0.0); MAX_ROWS],
-        count: 0,
-    };
-
-    fn push(&mut self, row: Row) {
-        self.rows[self.count] = row;
-        self.count += 1;
-    }
-}
-
 /// The rows a kind's coordinate gets from its spring, motor and limit, in Box2D's order
 /// (spring, motor, limits: the hard rows last, so they have the last word).
 fn coordinate_rows(
@@ -184,7 +171,7 @@ fn coordinate_rows(
     spring: Option<Spring>,
     motor: Option<Motor>,
     limit: Option<Limit>,
-    rows: &mut RowList,
+    rows: &mut Vec<Row>,
 ) {
     if let Some(s) = spring.filter(|s| s.hertz > 0.0) {
         rows.push(Row::new(
@@ -203,9 +190,10 @@ fn coordinate_rows(
     }
 }
 
-/// The kind's point block (with its pull and largest force) and rows, in solve order.
-fn parts(kind: &JointKind, length: Real) -> (Option<(Pull, Real)>, RowList) {
-    let mut rows = RowList::EMPTY;
+/// The kind's point block (with its pull and largest force); its rows, in solve order, pushed
+/// onto `rows`.
+fn parts(kind: &JointKind, length: Real, rows: &mut Vec<Row>) -> Option<(Pull, Real)> {
+    let first = rows.len();
     let hold = |measure, pull| Row::new(measure, Role::Hold(pull), 0.0, Real::INFINITY);
     let spring = |hertz, damping_ratio| Spring {
         hertz,
@@ -213,11 +201,11 @@ fn parts(kind: &JointKind, length: Real) -> (Option<(Pull, Real)>, RowList) {
     };
     let point = match kind {
         JointKind::Revolute(r) => {
-            coordinate_rows(Measure::Angle, r.spring, r.motor, r.limit, &mut rows);
+            coordinate_rows(Measure::Angle, r.spring, r.motor, r.limit, rows);
             Some((Pull::Joint, Real::INFINITY))
         }
         JointKind::Prismatic(p) => {
-            coordinate_rows(Measure::Along, p.spring, p.motor, p.limit, &mut rows);
+            coordinate_rows(Measure::Along, p.spring, p.motor, p.limit, rows);
             rows.push(hold(Measure::Across, Pull::Joint));
             rows.push(hold(Measure::Angle, Pull::Joint));
             None
@@ -226,10 +214,10 @@ fn parts(kind: &JointKind, length: Real) -> (Option<(Pull, Real)>, RowList) {
             // The spring's (or the rigid row's) target is the rest length; the limits are
             // lengths already.
             match d.spring.filter(|s| s.hertz > 0.0) {
-                Some(_) => coordinate_rows(Measure::Length, d.spring, None, d.limit, &mut rows),
+                Some(_) => coordinate_rows(Measure::Length, d.spring, None, d.limit, rows),
                 None => rows.push(hold(Measure::Length, Pull::Joint)),
             }
-            rows.rows[0].target = length;
+            rows[first].target = length;
             None
         }
         JointKind::Weld(w) => {
@@ -242,8 +230,8 @@ fn parts(kind: &JointKind, length: Real) -> (Option<(Pull, Real)>, RowList) {
             Some((pull(w.linear_hertz, w.linear_damping_ratio), Real::INFINITY))
         }
         JointKind::Wheel(w) => {
-            coordinate_rows(Measure::Along, w.spring, None, w.limit, &mut rows);
-            coordinate_rows(Measure::Angle, None, w.motor, None, &mut rows);
+            coordinate_rows(Measure::Along, w.spring, None, w.limit, rows);
+            coordinate_rows(Measure::Angle, None, w.motor, None, rows);
             rows.push(hold(Measure::Across, Pull::Joint));
             None
         }
@@ -256,7 +244,7 @@ fn parts(kind: &JointKind, length: Real) -> (Option<(Pull, Real)>, RowList) {
         }
         JointKind::Target(t) => Some((Pull::Spring(spring(t.hertz, t.damping_ratio)), t.max_force)),
     };
-    (point, rows)
+    point
 }
 
 /// This step's joints: their constraints, and their rows side by side (a joint with none,
@@ -264,6 +252,8 @@ fn parts(kind: &JointKind, length: Real) -> (Option<(Pull, Real)>, RowList) {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct JointSet {
     pub constraints: Vec<JointConstraint>,
+    /// Each constraint's cold part, indexed alike.
+    pub cold: Vec<JointCold>,
     rows: Vec<Row>,
 }
 
@@ -271,6 +261,7 @@ impl JointSet {
     /// No joints.
     pub fn clear(&mut self) {
         self.constraints.clear();
+        self.cold.clear();
         self.rows.clear();
     }
 
@@ -290,29 +281,30 @@ impl JointSet {
         impulses: &JointImpulses,
         (hertz, zeta): (Real, Real),
     ) {
-        let (point, list) = parts(kind, length);
-        let start = self.rows.len() as u32;
-        let rows = list.rows[..list.count].iter().zip(&impulses.rows);
-        self.rows
-            .extend(rows.map(|(row, &impulse)| Row { impulse, ..*row }));
+        let start = self.rows.len();
+        let point = parts(kind, length, &mut self.rows);
+        for (row, &impulse) in self.rows[start..].iter_mut().zip(&impulses.rows) {
+            row.impulse = impulse;
+        }
+        let (start, end) = (start as u32, self.rows.len() as u32);
         self.constraints.push(JointConstraint {
-            slot,
             a,
             b,
             frame,
-            point: point.map(|(pull, max)| PointBlock {
-                pull,
-                max,
+            point: point.map(|_| PointBlock {
                 soft: Softness::RIGID,
                 always: false,
                 max_impulse: Real::INFINITY,
                 impulse: Vec2::from(impulses.point),
             }),
-            rows: (start, start + list.count as u32),
-            soft: Softness::RIGID,
+            rows: (start, end),
+        });
+        self.cold.push(JointCold {
+            slot,
             hertz,
             zeta,
-            masses: [0.0; 4],
+            soft: Softness::RIGID,
+            point,
             force: Vec2::ZERO,
             torque: 0.0,
         });
@@ -357,22 +349,18 @@ pub(crate) struct JointStep {
     pub hertz_scale: Real,
 }
 
-/// Prepare: masses, springs and impulse caps for this solve; last step's impulses made per
-/// substep.
+/// Prepare: springs and impulse caps for this solve; last step's impulses made per substep.
 #[inline(never)]
-pub(crate) fn prepare(
-    set: &mut JointSet,
-    selected: Selected,
-    bodies: &[SolverBody],
-    step: JointStep,
-) {
+pub(crate) fn prepare(set: &mut JointSet, selected: Selected, step: JointStep) {
     let per_substep = 1.0 / step.substeps as Real;
-    let JointSet { constraints, rows } = set;
+    let JointSet {
+        constraints,
+        cold,
+        rows,
+    } = set;
     selected.for_each_index(constraints.len(), |k| {
-        let j = &mut constraints[k];
-        let (a, b) = (&bodies[j.a as usize], &bodies[j.b as usize]);
-        j.masses = [a.inv_mass, a.inv_inertia, b.inv_mass, b.inv_inertia];
-        j.soft = if step.baumgarte > 0.0 {
+        let (j, c) = (&mut constraints[k], &mut cold[k]);
+        c.soft = if step.baumgarte > 0.0 {
             Softness {
                 bias_rate: step.baumgarte / step.h,
                 mass_scale: 1.0,
@@ -380,18 +368,18 @@ pub(crate) fn prepare(
             }
         } else {
             Softness::new(
-                (step.hertz_scale * j.hertz).min(0.25 / step.h),
-                j.zeta,
+                (step.hertz_scale * c.hertz).min(0.25 / step.h),
+                c.zeta,
                 step.h,
             )
         };
         let scale = if step.warm_starting { per_substep } else { 0.0 };
-        if let Some(p) = &mut j.point {
-            (p.soft, p.always) = pull_softness(p.pull, j.soft, step.h);
-            p.max_impulse = p.max * step.h;
+        if let (Some(p), Some((pull, max))) = (&mut j.point, c.point) {
+            (p.soft, p.always) = pull_softness(pull, c.soft, step.h);
+            p.max_impulse = max * step.h;
             p.impulse *= scale;
         }
-        let soft = j.soft;
+        let soft = c.soft;
         for row in &mut rows[j.row_range()] {
             (row.soft, row.always) = match row.role {
                 Role::Hold(pull) => pull_softness(pull, soft, step.h),
@@ -446,13 +434,15 @@ pub(crate) fn solve(
     biased: bool,
     inv_h: Real,
 ) {
-    let JointSet { constraints, rows } = set;
+    let JointSet {
+        constraints, rows, ..
+    } = set;
     selected.for_each_index(constraints.len(), |k| {
         let j = &mut constraints[k];
         let (a, b) = two_mut(bodies, j.a, j.b);
         for row in &mut rows[j.row_range()] {
             let pose = j.pose(a, b);
-            solve_row(row, j.masses, (a, b), &pose, (biased, inv_h));
+            solve_row(row, masses(a, b), (a, b), &pose, (biased, inv_h));
         }
         if j.point.is_some() {
             let pose = j.pose(a, b);
@@ -471,7 +461,11 @@ pub(crate) fn store(
     step: JointStep,
 ) {
     let (substeps, inv_h) = (step.substeps as Real, 1.0 / step.h);
-    let JointSet { constraints, rows } = set;
+    let JointSet {
+        constraints,
+        cold,
+        rows,
+    } = set;
     selected.for_each_index(constraints.len(), |k| {
         let j = &mut constraints[k];
         let pose = j.pose(&bodies[j.a as usize], &bodies[j.b as usize]);
@@ -489,7 +483,7 @@ pub(crate) fn store(
             }
             row.impulse *= substeps;
         }
-        (j.force, j.torque) = (force, torque);
+        (cold[k].force, cold[k].torque) = (force, torque);
     });
 }
 
@@ -527,7 +521,7 @@ impl JointConstraint {
         pose: &Pose,
         biased: bool,
     ) {
-        let [ma, ia, mb, ib] = self.masses;
+        let [ma, ia, mb, ib] = masses(a, b);
         let Some(p) = &mut self.point else { return };
         let (ra, rb) = (pose.ra, pose.rb);
         let cdot = (b.v + cross_w(b.w, rb)) - (a.v + cross_w(a.w, ra));
@@ -542,9 +536,10 @@ impl JointConstraint {
         };
         let old = p.impulse;
         let mut new = old - s.mass_scale * solved - s.impulse_scale * old;
-        let len = new.length();
-        if len > p.max_impulse {
-            new *= p.max_impulse / len;
+        // (Squared: a rigid joint's cap is infinite, and the square root's latency held up
+        // every joint of joint_grid.)
+        if new.length_squared() > p.max_impulse * p.max_impulse {
+            new *= p.max_impulse / new.length();
         }
         p.impulse = new;
         self.apply_point(a, b, pose, new - old);
@@ -553,7 +548,7 @@ impl JointConstraint {
     /// Apply impulse `p` (N s) at the anchors: -p on A, +p on B.
     #[inline]
     fn apply_point(&self, a: &mut SolverBody, b: &mut SolverBody, pose: &Pose, p: Vec2) {
-        let [ma, ia, mb, ib] = self.masses;
+        let [ma, ia, mb, ib] = masses(a, b);
         a.v -= ma * p;
         a.w -= ia * cross(pose.ra, p);
         b.v += mb * p;
@@ -563,7 +558,7 @@ impl JointConstraint {
     /// Apply impulse `lambda` along a row's Jacobian.
     #[inline]
     fn apply_row(&self, a: &mut SolverBody, b: &mut SolverBody, jac: &Jacobian, lambda: Real) {
-        apply_row(self.masses, a, b, jac, lambda);
+        apply_row(masses(a, b), a, b, jac, lambda);
     }
 }
 
@@ -645,6 +640,12 @@ fn apply_row(
     a.w -= ia * lambda * jac.ka;
     b.v += mb * lambda * jac.u;
     b.w += ib * lambda * jac.kb;
+}
+
+/// Inverse masses and inertias of bodies `a` and `b`: `[mA, iA, mB, iB]`.
+#[inline(always)]
+fn masses(a: &SolverBody, b: &SolverBody) -> [Real; 4] {
+    [a.inv_mass, a.inv_inertia, b.inv_mass, b.inv_inertia]
 }
 
 /// w x r.

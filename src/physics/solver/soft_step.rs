@@ -185,10 +185,10 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan) {
     });
 }
 
-/// Prepare the joints (`joint.rs`): masses, springs, caps, impulses per substep.
+/// Prepare the joints (`joint.rs`): springs, caps, impulses per substep.
 fn prepare_joints(ctx: &mut StepContext, plan: &Plan) {
     if !ctx.joints.is_empty() {
-        joint::prepare(ctx.joints, ctx.joint_selected, ctx.bodies, plan.joints);
+        joint::prepare(ctx.joints, ctx.joint_selected, plan.joints);
     }
 }
 

@@ -292,7 +292,7 @@ impl World {
     pub(super) fn finish_joints(&mut self) {
         self.joints.broken.clear();
         let set = &self.joints.constraints;
-        for (index, k) in set.constraints.iter().enumerate() {
+        for (index, k) in set.cold.iter().enumerate() {
             let j = self.joints.slots[k.slot as usize].joint.as_mut();
             let j = j.expect("constraints are of live joints");
             j.impulses = set.impulses(index);

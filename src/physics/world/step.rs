@@ -73,7 +73,7 @@ impl World {
             warm_starting: self.settings.warm_starting,
             hertz_scale: 1.0,
         };
-        joint::prepare(joints, Selected::All, bodies, step);
+        joint::prepare(joints, Selected::All, step);
         joint::warm_start(joints, Selected::All, bodies);
         let inv_dt = 1.0 / dt;
         let solve_joints = |bodies: &mut [SolverBody]| {

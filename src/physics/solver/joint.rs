@@ -199,7 +199,7 @@ fn parts(kind: &JointKind, length: Real, rows: &mut Vec<Row>) -> Option<(Pull, R
         hertz,
         damping_ratio,
     };
-    let point = match kind {
+    match kind {
         JointKind::Revolute(r) => {
             coordinate_rows(Measure::Angle, r.spring, r.motor, r.limit, rows);
             Some((Pull::Joint, Real::INFINITY))
@@ -243,8 +243,7 @@ fn parts(kind: &JointKind, length: Real, rows: &mut Vec<Row>) -> Option<(Pull, R
             Some((Pull::Correct(m.correction_factor), m.max_force))
         }
         JointKind::Target(t) => Some((Pull::Spring(spring(t.hertz, t.damping_ratio)), t.max_force)),
-    };
-    point
+    }
 }
 
 /// This step's joints: their constraints, and their rows side by side (a joint with none,

@@ -189,7 +189,8 @@ fn assert_settles_inside_the_box(scene: Scene) {
 #[test]
 fn the_example_in_docs_scenes_md_loads() {
     let doc = common::read_repo_file("docs/scenes.md");
-    let start = doc.find("```toml\n").expect("a toml example") + "```toml\n".len();
+    let at = doc.find("\n## Example\n").expect("the section");
+    let start = at + doc[at..].find("```toml\n").expect("a toml example") + "```toml\n".len();
     let end = start + doc[start..].find("```").unwrap();
     let scene = Scene::from_toml_str(&doc[start..end]).unwrap();
     assert_eq!(scene.name, "Bricks on a shelf");

@@ -203,3 +203,18 @@ fn a_dropped_disc_rebounds_at_the_mixed_restitution_times_its_impact_speed() {
 fn a_kinematic_wall_pushes_64_boxes_within_the_slop() {
     check(extreme::kinematic_pusher);
 }
+
+#[test]
+fn a_hanging_50_link_chain_opens_by_its_joints_closed_form_give() {
+    check(extreme::hanging_chain);
+}
+
+#[test]
+fn a_heavy_block_on_a_light_rope_rests_within_its_joints_closed_form_give() {
+    check(extreme::heavy_rope);
+}
+
+#[test]
+fn a_slack_bridge_carries_its_weight_and_hangs_as_a_catenary() {
+    check(extreme::bridge);
+}

@@ -8,9 +8,11 @@
 //!   a pile of mixed shapes;
 //! - `limits.rs`: tiny and large bodies, gravity flips, a huge step, non-finite input;
 //! - `terrain.rs`: sliding across a tiled floor, as boxes and as a chain; rolling down a chain;
-//! - `motion.rs`: contacts that move: kinematic carriers and pushers, rolling, bouncing.
+//! - `motion.rs`: contacts that move: kinematic carriers and pushers, rolling, bouncing;
+//! - `joints.rs`: a hanging chain, a heavy block on a light rope, a slack bridge.
 
 mod contacts;
+mod joints;
 mod limits;
 mod motion;
 mod stacks;
@@ -20,6 +22,7 @@ pub use contacts::{
     box_pile, bullet, deep_overlap, fast_spinners, mass_ratio_100, mass_ratio_1000, mixed_pile,
     overlap_recovery,
 };
+pub use joints::{bridge, hanging_chain, heavy_rope};
 pub use limits::{gravity_flip, huge_dt, large_bodies, non_finite_refused, tiny_bodies};
 pub use motion::{kinematic_carrier, kinematic_pusher, restitution_drop, rolling_disc};
 pub use stacks::{
@@ -68,7 +71,7 @@ const fn report_case(name: &'static str, title: &'static str, run: Runner) -> Ex
 /// Every case, in report order (the report-only cases last). One row a case, kept as a
 /// table.
 #[rustfmt::skip]
-const CASES: [ExtremeCase; 29] = [
+const CASES: [ExtremeCase; 32] = [
     case("stack_20", "Stack of 20, 30 s", stack_20),
     case("stack_50", "Stack of 50, 10 s", stack_50),
     case("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
@@ -96,6 +99,9 @@ const CASES: [ExtremeCase; 29] = [
     case("fast_spinners", "Skinny bodies at 100 m/s, spinning, onto thin statics", fast_spinners),
     case("chain_slope", "A disc rolling down a slope of chain pieces", chain_slope),
     case("pyramid_200", "Pyramid base 200 (20,100 boxes) holds its top", pyramid_200),
+    case("hanging_chain", "A 50-link chain hangs by its joints' give", hanging_chain),
+    case("heavy_rope", "A 900 kg block on 0.5 kg links (1,800:1)", heavy_rope),
+    case("bridge", "A slack 100-plank bridge hangs as a catenary", bridge),
     report_case("pyramid_134", "Pyramid base 134 (9,045 boxes) stands", pyramid_134),
     report_case("pyramid_100", "Pyramid base 100 (5,050 boxes)", pyramid_100),
 ];

@@ -107,18 +107,33 @@ pub(crate) fn finite_vec(fields: [&'static str; 2], v: Vec2) -> Result<Vec2, Phy
     Ok(v)
 }
 
-/// Check that `value` is finite and strictly positive.
-pub(crate) fn positive(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
-    finite(field, value)?;
-    if value > 0.0 {
+/// `value` if `ok`, else an [`PhysicsError::OutOfRange`] naming `field` and `expected`.
+fn within(
+    field: &'static str,
+    value: Real,
+    ok: bool,
+    expected: &'static str,
+) -> Result<Real, PhysicsError> {
+    if ok {
         Ok(value)
     } else {
         Err(PhysicsError::OutOfRange {
             field,
             value,
-            expected: "must be > 0",
+            expected,
         })
     }
+}
+
+/// Check that `value` is finite and strictly positive.
+pub(crate) fn positive(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
+    finite(field, value)?;
+    within(field, value, value > 0.0, "must be > 0")
+}
+
+/// Check that `value` is strictly positive, infinity allowed ("never"), NaN not.
+pub(crate) fn positive_or_infinite(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
+    within(field, value, value > 0.0, "must be > 0 (infinity: never)")
 }
 
 /// Check that `value` is not NaN and not negative (infinity allowed: "no limit").
@@ -126,41 +141,27 @@ pub(crate) fn non_negative_or_infinite(
     field: &'static str,
     value: Real,
 ) -> Result<Real, PhysicsError> {
-    if value >= 0.0 {
-        Ok(value)
-    } else {
-        Err(PhysicsError::OutOfRange {
-            field,
-            value,
-            expected: "must be >= 0 (infinity for no limit)",
-        })
-    }
+    within(
+        field,
+        value,
+        value >= 0.0,
+        "must be >= 0 (infinity for no limit)",
+    )
 }
 
 /// Check that `value` is finite and not negative.
 pub(crate) fn non_negative(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
     finite(field, value)?;
-    if value >= 0.0 {
-        Ok(value)
-    } else {
-        Err(PhysicsError::OutOfRange {
-            field,
-            value,
-            expected: "must be >= 0",
-        })
-    }
+    within(field, value, value >= 0.0, "must be >= 0")
 }
 
 /// Check that `value` is finite and within `[0, 1]`.
 pub(crate) fn unit_interval(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
     finite(field, value)?;
-    if (0.0..=1.0).contains(&value) {
-        Ok(value)
-    } else {
-        Err(PhysicsError::OutOfRange {
-            field,
-            value,
-            expected: "must be within [0, 1]",
-        })
-    }
+    within(
+        field,
+        value,
+        (0.0..=1.0).contains(&value),
+        "must be within [0, 1]",
+    )
 }

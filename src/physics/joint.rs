@@ -9,7 +9,8 @@
 //! Baumgarte bias.
 
 use super::error::{
-    finite, finite_vec, non_negative, non_negative_or_infinite, positive, PhysicsError,
+    finite, finite_vec, non_negative, non_negative_or_infinite, positive, positive_or_infinite,
+    unit_interval, PhysicsError,
 };
 use super::math::{Real, Vec2};
 use serde::{Deserialize, Serialize};
@@ -299,7 +300,7 @@ impl JointKind {
                 finite("angular_offset", m.angular_offset)?;
                 non_negative_or_infinite("max_force", m.max_force)?;
                 non_negative_or_infinite("max_torque", m.max_torque)?;
-                fraction("correction_factor", m.correction_factor)
+                unit_interval("correction_factor", m.correction_factor).map(drop)
             }
             JointKind::Target(t) => {
                 positive("hertz", t.hertz)?;
@@ -364,31 +365,6 @@ fn option(
     value: Option<Real>,
 ) -> Result<(), PhysicsError> {
     value.map_or(Ok(()), |v| check(field, v).map(drop))
-}
-
-fn positive_or_infinite(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
-    if value > 0.0 {
-        Ok(value)
-    } else {
-        Err(PhysicsError::OutOfRange {
-            field,
-            value,
-            expected: "must be > 0 (infinity: never)",
-        })
-    }
-}
-
-fn fraction(field: &'static str, value: Real) -> Result<(), PhysicsError> {
-    finite(field, value)?;
-    if (0.0..=1.0).contains(&value) {
-        Ok(())
-    } else {
-        Err(PhysicsError::OutOfRange {
-            field,
-            value,
-            expected: "must be within [0, 1]",
-        })
-    }
 }
 
 fn axis(axis: Vec2) -> Result<(), PhysicsError> {

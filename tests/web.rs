@@ -320,18 +320,24 @@ impl Watch {
     /// 100 simulated histories of this test's tilts and clicks, 3 to 9 took over 13 s to
     /// sleep and a few never did, with adaptive stiffness on or off), which moves a body's
     /// centre by about a millimetre a frame.
-    async fn settled(&mut self, n: usize, secs: u64) {
+    async fn settled(&mut self, n: usize, secs: u64) -> Result<(), String> {
         let end = Instant::now() + Duration::from_secs(secs);
         let mut last: std::collections::HashMap<BodyRef, (f32, f32, f32)> =
             std::collections::HashMap::new();
         let mut quiet = 0;
+        let mut fastest = (0.0f32, None);
         while quiet < n {
             let left = end.saturating_duration_since(Instant::now());
-            let s = tokio::time::timeout(left, self.snaps.recv())
-                .await
-                .expect("the world never came to rest")
-                .unwrap();
+            let Ok(s) = tokio::time::timeout(left, self.snaps.recv()).await else {
+                return Err(format!(
+                    "not still after {secs} s: body {:?} moved {:.1} mm in one snapshot",
+                    fastest.1,
+                    fastest.0 * 1000.0
+                ));
+            };
+            let s = s.unwrap();
             let mut still = true;
+            fastest = (0.0, None);
             for p in &s.poses {
                 // Angles are sent within [-pi, pi): a turn across the cut is not a jump.
                 let moved = last.insert(p.id, (p.x, p.y, p.angle)).map(|(x, y, a)| {
@@ -339,12 +345,18 @@ impl Watch {
                     let turn = (p.angle - a + pi).rem_euclid(2.0 * pi) - pi;
                     (p.x - x).hypot(p.y - y) + 0.5 * turn.abs()
                 });
+                if let Some(d) = moved {
+                    if d > fastest.0 {
+                        fastest = (d, Some(p.id));
+                    }
+                }
                 if !matches!(moved, Some(d) if d <= STILL) {
                     still = false;
                 }
             }
             quiet = if still { quiet + 1 } else { 0 };
         }
+        Ok(())
     }
 }
 
@@ -389,8 +401,13 @@ fn fit(scene: &SceneState, w: f64, h: f64) -> impl Fn(f32, f32) -> (f64, f64) {
 }
 
 /// Each dynamic body of the daemon's current scene is drawn in its colour at its centre of
-/// mass (the canvas read back in the page); returns the scene and how many were checked.
-async fn check_pixels(page: &mut Cdp, s: &zenoh::Session, keys: &Keys) -> (SceneState, usize) {
+/// mass (the canvas read back in the page); returns the scene and how many were checked, or
+/// the first body whose pixel is wrong.
+async fn check_pixels(
+    page: &mut Cdp,
+    s: &zenoh::Session,
+    keys: &Keys,
+) -> Result<(SceneState, usize), String> {
     let sc = scene(s, keys).await;
     let size = page
         .eval("[document.getElementById('world').clientWidth, document.getElementById('world').clientHeight]")
@@ -400,19 +417,41 @@ async fn check_pixels(page: &mut Cdp, s: &zenoh::Session, keys: &Keys) -> (Scene
     for b in sc.bodies.iter().filter(|b| !b.is_static) {
         let (px, py) = to_px(b.position.x, b.position.y);
         let got = page.eval(&format!("tiltbox.pixel({px}, {py})")).await;
-        assert!(
-            close(&got, b.colour),
-            "{} {} ({:?}) at ({}, {}) -> pixel ({px:.0}, {py:.0}) is {got}, expected {:?}",
-            b.id,
-            b.name,
-            b.shape,
-            b.position.x,
-            b.position.y,
-            b.colour
-        );
+        if !close(&got, b.colour) {
+            return Err(format!(
+                "{} {} ({:?}) at ({}, {}) -> pixel ({px:.0}, {py:.0}) is {got}, expected {:?}",
+                b.id, b.name, b.shape, b.position.x, b.position.y, b.colour
+            ));
+        }
         checked += 1;
     }
-    (sc, checked)
+    Ok((sc, checked))
+}
+
+/// Once the world is still, every dynamic body is drawn in its colour at its pose. Some
+/// tilt histories leave a stack rocking or a body rolling past the 15 s wait (CI at 7acc6e3
+/// timed out on one; locally 8 runs of 8 settled in 10-13 s), so the wait and the check are
+/// tried three times; the check itself stays exact, and a page that does not draw fails
+/// every try.
+async fn pixels_once_still(
+    page: &mut Cdp,
+    w: &mut Watch,
+    s: &zenoh::Session,
+    keys: &Keys,
+) -> (SceneState, usize) {
+    let mut failures = Vec::new();
+    for _ in 0..3 {
+        if let Err(e) = w.settled(30, 15).await {
+            println!("{e}");
+            failures.push(e);
+        }
+        tokio::time::sleep(Duration::from_millis(300)).await;
+        match check_pixels(page, s, keys).await {
+            Ok(done) => return done,
+            Err(e) => failures.push(e),
+        }
+    }
+    panic!("the page's pixels never matched the world: {failures:#?}")
 }
 
 fn close(a: &Value, c: Colour) -> bool {
@@ -522,9 +561,7 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
     .await;
 
     // 1. pixels: once the bricks rest, each is drawn in its colour at its pose
-    w.settled(30, 15).await;
-    tokio::time::sleep(Duration::from_millis(300)).await;
-    let (sc, checked) = check_pixels(&mut page, &s, &keys).await;
+    let (sc, checked) = pixels_once_still(&mut page, &mut w, &s, &keys).await;
     assert!(checked >= 6, "{checked} bricks checked");
     let size = page
         .eval("[document.getElementById('world').clientWidth, document.getElementById('world').clientHeight]")
@@ -685,9 +722,7 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
     }
 
     // 5. every kind drawn in its colour where it came to rest; the screenshot for the README
-    w.settled(30, 15).await;
-    tokio::time::sleep(Duration::from_millis(300)).await;
-    let (_, checked) = check_pixels(&mut page, &s, &keys).await;
+    let (_, checked) = pixels_once_still(&mut page, &mut w, &s, &keys).await;
     assert_eq!(checked, 10, "6 bricks and 4 spawned bodies");
     let shot = page
         .call("Page.captureScreenshot", json!({"format": "png"}))

@@ -3,6 +3,7 @@
 use super::error::{finite, finite_vec, non_negative, positive, unit_interval, PhysicsError};
 use super::filter::Filter;
 use super::math::{is_finite_vec, Real, Rot, Transform, Vec2};
+use super::part::{mass_data, placed, Part, PartDef, Parts, MAX_SHAPES};
 use super::shape::Shape;
 use serde::{Deserialize, Serialize};
 
@@ -28,9 +29,10 @@ pub enum MassSpec {
 /// Everything needed to create a body. Validated by [`BodyDef::validate`] before it reaches a World.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BodyDef {
-    /// Collision shape, in body coordinates.
+    /// Collision shape, centred on the body's origin.
     pub shape: Shape,
-    /// Centre of mass in world coordinates, metres.
+    /// The body's origin in world coordinates, metres: its centre of mass unless it has
+    /// `parts`.
     pub position: Vec2,
     /// Orientation in radians, counter-clockwise.
     pub angle: Real,
@@ -47,6 +49,12 @@ pub struct BodyDef {
     /// Which other bodies it collides with (default: all).
     #[serde(default)]
     pub filter: Filter,
+    /// Further shapes, placed from the origin in the body's frame, each with its own material
+    /// (none by default). Mass, centre of mass and inertia come from all the shapes: with
+    /// [`MassSpec::Density`] each part has its own density; with [`MassSpec::Mass`] the total
+    /// is shared in proportion to area x density, the body's own shape at density 1.
+    #[serde(default)]
+    pub parts: Vec<PartDef>,
 }
 
 /// `BodyDef`'s builder methods: each takes the definition, sets one field and hands it back.
@@ -75,6 +83,7 @@ impl BodyDef {
             friction: 0.6,
             restitution: 0.0,
             filter: Filter::DEFAULT,
+            parts: Vec::new(),
         }
     }
 
@@ -133,6 +142,12 @@ impl BodyDef {
         with_filter(filter: Filter) => filter = filter;
     }
 
+    /// Add a further shape (see [`BodyDef::parts`]).
+    pub fn with_part(mut self, part: PartDef) -> Self {
+        self.parts.push(part);
+        self
+    }
+
     /// A chain as static bodies, one segment each (friction 0.6, restitution 0; change them
     /// on the definitions). See [`super::segment::chain`] for the points and the refusals.
     pub fn chain(
@@ -153,9 +168,10 @@ impl BodyDef {
         finite("angle", self.angle)?;
         finite_vec(["velocity.x", "velocity.y"], self.linear_velocity)?;
         finite("angular_velocity", self.angular_velocity)?;
-        if matches!(self.shape, Shape::Segment(_))
-            && matches!(self.mass, MassSpec::Density(_) | MassSpec::Mass(_))
-        {
+        self.validate_parts()?;
+        let moves = matches!(self.mass, MassSpec::Density(_) | MassSpec::Mass(_));
+        let shapes = std::iter::once(&self.shape).chain(self.parts.iter().map(|p| &p.shape));
+        if moves && shapes.clone().any(|s| matches!(s, Shape::Segment(_))) {
             return Err(PhysicsError::InvalidShape {
                 field: "mass".into(),
                 reason: "must be static or kinematic for a segment (segments and chains are \
@@ -163,30 +179,60 @@ impl BodyDef {
                     .into(),
             });
         }
-        let mass = match self.mass {
+        if let Some((field, m, i)) = match self.mass {
             MassSpec::Static | MassSpec::Kinematic => None,
             MassSpec::Density(d) => {
                 positive("density", d)?;
-                Some(("mass (density x area)", d * self.shape.area()))
+                let data = mass_data(placed(&self.shape, d, &self.parts), None);
+                Some(("mass (density x area)", data.mass, data.inertia))
             }
-            MassSpec::Mass(m) => Some(("mass", positive("mass", m)?)),
-        };
-        if let Some((field, m)) = mass {
+            MassSpec::Mass(m) => {
+                positive("mass", m)?;
+                let data = mass_data(placed(&self.shape, 1.0, &self.parts), Some(m));
+                Some(("mass", m, data.inertia))
+            }
+        } {
             // Mass and inertia must stay usable: finite, with finite inverses.
             usable(field, m)?;
-            usable("inertia (from mass and shape)", self.shape.inertia(m))?;
+            usable("inertia (from mass and shape)", i)?;
         }
-        non_negative("friction", self.friction)?;
-        if self.friction > MAX_FRICTION {
-            return Err(PhysicsError::OutOfRange {
-                field: "friction",
-                value: self.friction,
-                expected: "must be within [0, 1000]",
+        check_material(self.friction, self.restitution)
+    }
+
+    /// Each part valid, its errors named `parts[i].field`, and not too many.
+    fn validate_parts(&self) -> Result<(), PhysicsError> {
+        if self.parts.len() >= MAX_SHAPES {
+            return Err(PhysicsError::InvalidShape {
+                field: "parts".into(),
+                reason: format!(
+                    "has {} shapes: a body may have at most {} besides its own",
+                    self.parts.len(),
+                    MAX_SHAPES - 1
+                ),
             });
         }
-        unit_interval("restitution", self.restitution)?;
+        for (index, part) in self.parts.iter().enumerate() {
+            part.validate().map_err(|e| PhysicsError::InPart {
+                index,
+                source: Box::new(e),
+            })?;
+        }
         Ok(())
     }
+}
+
+/// Refuse a friction outside [0, [`MAX_FRICTION`]] or a restitution outside [0, 1].
+pub(crate) fn check_material(friction: Real, restitution: Real) -> Result<(), PhysicsError> {
+    non_negative("friction", friction)?;
+    if friction > MAX_FRICTION {
+        return Err(PhysicsError::OutOfRange {
+            field: "friction",
+            value: friction,
+            expected: "must be within [0, 1000]",
+        });
+    }
+    unit_interval("restitution", restitution)?;
+    Ok(())
 }
 
 /// The largest friction coefficient accepted. Real materials stay below about 2; anything near
@@ -210,13 +256,19 @@ fn usable(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
 #[derive(Clone, Debug)]
 pub struct Body {
     pub(crate) id: BodyId,
+    /// The body's own shape, centred on its origin (and on its centre of mass unless it has
+    /// parts).
     pub(crate) shape: Shape,
+    /// A body of several shapes: all of them, in the centre-of-mass frame. None for a body of
+    /// one shape, whose centre of mass is its origin.
+    pub(crate) parts: Option<Box<Parts>>,
     /// `shape.bounding_radius()` (m), kept: the narrow phase and the sleep test read it for
     /// every pair and body each step (a square root for a box, a load from the heap for a
     /// polygon).
     pub(crate) bounding_radius: Real,
     /// `shape.min_extent()` (m), kept for the continuous collision test each step.
     pub(crate) min_extent: Real,
+    /// The centre of mass (m), what the solver moves.
     pub(crate) position: Vec2,
     pub(crate) angle: Real,
     pub(crate) rot: Rot,
@@ -244,28 +296,42 @@ pub struct Body {
 impl Body {
     /// Build a body from a definition that has passed [`BodyDef::validate`].
     pub(crate) fn from_def(id: BodyId, def: &BodyDef) -> Body {
-        let (mass, inv_mass, inertia, inv_inertia) = match def.mass {
-            MassSpec::Static | MassSpec::Kinematic => (Real::INFINITY, 0.0, Real::INFINITY, 0.0),
-            MassSpec::Density(d) => {
-                let m = d * def.shape.area();
-                let i = def.shape.inertia(m);
-                (m, 1.0 / m, i, 1.0 / i)
-            }
+        let (data, own_density) = match def.mass {
+            MassSpec::Static | MassSpec::Kinematic => (None, 1.0),
+            MassSpec::Density(d) => (Some(mass_data(placed(&def.shape, d, &def.parts), None)), d),
             MassSpec::Mass(m) => {
-                let i = def.shape.inertia(m);
-                (m, 1.0 / m, i, 1.0 / i)
+                let data = mass_data(placed(&def.shape, 1.0, &def.parts), Some(m));
+                (
+                    Some(data),
+                    m / mass_data(placed(&def.shape, 1.0, &def.parts), None).mass,
+                )
             }
         };
+        let (mass, inv_mass, inertia, inv_inertia) = match data {
+            None => (Real::INFINITY, 0.0, Real::INFINITY, 0.0),
+            Some(d) => (d.mass, 1.0 / d.mass, d.inertia, 1.0 / d.inertia),
+        };
+        let parts =
+            (!def.parts.is_empty()).then(|| Box::new(Body::parts_of(def, data, own_density)));
+        let rot = Rot::from_angle(def.angle);
         let kinematic = def.mass == MassSpec::Kinematic;
         let is_static = inv_mass == 0.0 && !kinematic;
         Body {
             id,
             shape: def.shape.clone(),
-            bounding_radius: def.shape.bounding_radius(),
-            min_extent: def.shape.min_extent(),
-            position: def.position,
+            bounding_radius: parts
+                .as_ref()
+                .map_or_else(|| def.shape.bounding_radius(), |p| p.bounding_radius()),
+            min_extent: parts
+                .as_ref()
+                .map_or_else(|| def.shape.min_extent(), |p| p.min_extent()),
+            position: match &parts {
+                None => def.position,
+                Some(p) => def.position + rot.rotate(p.local_center),
+            },
+            parts,
             angle: def.angle,
-            rot: Rot::from_angle(def.angle),
+            rot,
             linear_velocity: if is_static {
                 Vec2::ZERO
             } else {
@@ -288,17 +354,66 @@ impl Body {
         }
     }
 
+    /// The shapes of `def`, a body of several, around its centre of mass (`data`; a static or
+    /// kinematic body turns about its origin). The parts keep their share of a body given by
+    /// mass as their density (the own shape's is `own_density`), so that `to_def` gives the
+    /// same body back.
+    fn parts_of(def: &BodyDef, data: Option<super::part::MassData>, own_density: Real) -> Parts {
+        let own = Part {
+            shape: def.shape.clone(),
+            pose: Transform {
+                p: Vec2::ZERO,
+                q: Rot::IDENTITY,
+            },
+            friction: def.friction,
+            restitution: def.restitution,
+            filter: def.filter,
+        };
+        let scale = own_density
+            / match def.mass {
+                MassSpec::Mass(_) => 1.0,
+                _ => own_density,
+            };
+        let defs: Vec<PartDef> = def
+            .parts
+            .iter()
+            .map(|p| PartDef {
+                density: p.density * scale,
+                ..p.clone()
+            })
+            .collect();
+        let mut parts = Parts::new(own, &defs, data.map_or(Vec2::ZERO, |d| d.center));
+        parts.own_density = own_density;
+        parts
+    }
+
     /// This body's id.
     pub fn id(&self) -> BodyId {
         self.id
     }
-    /// Collision shape, body coordinates.
+    /// The body's own shape, centred on its origin.
     pub fn shape(&self) -> &Shape {
         &self.shape
     }
-    /// Centre of mass, world coordinates (m).
+    /// The body's further shapes, placed from its origin (empty for a body of one shape).
+    pub fn parts(&self) -> &[PartDef] {
+        self.parts.as_ref().map_or(&[], |p| &p.defs)
+    }
+    /// The body's origin, world coordinates (m): where its own shape is centred, the centre
+    /// of mass unless it has parts.
     pub fn position(&self) -> Vec2 {
+        match &self.parts {
+            None => self.position,
+            Some(p) => self.position - self.rot.rotate(p.local_center),
+        }
+    }
+    /// The centre of mass, world coordinates (m).
+    pub fn center_of_mass(&self) -> Vec2 {
         self.position
+    }
+    /// The centre of mass in the body's frame, from its origin (m; zero with no parts).
+    pub fn local_center(&self) -> Vec2 {
+        self.parts.as_ref().map_or(Vec2::ZERO, |p| p.local_center)
     }
     /// Orientation (rad), accumulated: not wrapped to (-pi, pi].
     pub fn angle(&self) -> Real {
@@ -312,8 +427,33 @@ impl Body {
     pub fn rotation(&self) -> Rot {
         self.rot
     }
-    /// Body-to-world transform.
+    /// Body-to-world transform, from the body's origin.
     pub fn transform(&self) -> Transform {
+        Transform {
+            p: self.position(),
+            q: self.rot,
+        }
+    }
+    /// Each of the body's shapes with its pose in the centre-of-mass frame.
+    pub(crate) fn shapes(&self) -> impl Iterator<Item = (&Shape, Transform)> + Clone {
+        let own = self
+            .parts
+            .is_none()
+            .then_some((&self.shape, Transform::IDENTITY));
+        let parts = self.parts.iter().flat_map(|p| p.all.iter());
+        own.into_iter().chain(parts.map(|p| (&p.shape, p.pose)))
+    }
+    /// The box around all the body's shapes as it is now.
+    #[inline]
+    pub(crate) fn aabb(&self) -> super::shape::Aabb {
+        match &self.parts {
+            None => self.shape.aabb(self.frame()),
+            Some(parts) => parts.aabb(self.frame()),
+        }
+    }
+    /// The transform from the centre-of-mass frame, in which the World keeps the shapes.
+    #[inline]
+    pub(crate) fn frame(&self) -> Transform {
         Transform {
             p: self.position,
             q: self.rot,
@@ -383,11 +523,12 @@ impl Body {
         0.5 * self.mass * self.linear_velocity.length_squared()
             + 0.5 * self.inertia * self.angular_velocity * self.angular_velocity
     }
-    /// The definition that would recreate this body in its current state.
+    /// The definition that would recreate this body in its current state (a body of several
+    /// shapes by its densities, the rest by their mass).
     pub fn to_def(&self) -> BodyDef {
         BodyDef {
             shape: self.shape.clone(),
-            position: self.position,
+            position: self.position(),
             angle: self.angle,
             linear_velocity: self.linear_velocity,
             angular_velocity: self.angular_velocity,
@@ -395,12 +536,15 @@ impl Body {
                 MassSpec::Kinematic
             } else if self.is_static() {
                 MassSpec::Static
+            } else if let Some(p) = &self.parts {
+                MassSpec::Density(p.own_density)
             } else {
                 MassSpec::Mass(self.mass)
             },
             friction: self.friction,
             restitution: self.restitution,
             filter: self.filter,
+            parts: self.parts().to_vec(),
         }
     }
     /// True when every number in the body's state is finite.

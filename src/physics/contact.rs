@@ -49,6 +49,10 @@ pub(crate) struct Contact {
     pub a: u32,
     /// Slot index of body B.
     pub b: u32,
+    /// Which of the bodies' shapes touch, for bodies of several: A's shape index in the high
+    /// 16 bits, B's in the low 16 (0 for bodies of one shape). Contacts with the same key are
+    /// kept sorted by it.
+    pub shapes: u32,
     /// Unit normal from A to B.
     pub normal: Vec2,
     /// Mixed friction coefficient.
@@ -85,6 +89,12 @@ pub(crate) struct Contact {
 }
 
 impl Contact {
+    /// The order contacts are kept in: by pair key, then by shapes.
+    #[inline]
+    pub fn order(&self) -> (u64, u32) {
+        (self.key, self.shapes)
+    }
+
     /// The tangent direction: the normal turned clockwise, t = n x z (appendix, step 2).
     #[inline]
     pub fn tangent(&self) -> Vec2 {
@@ -112,6 +122,10 @@ pub struct ContactInfo {
     pub body_a: BodyId,
     /// Body B.
     pub body_b: BodyId,
+    /// Which of A's shapes touches: 0 its own, i its part i - 1.
+    pub shape_a: usize,
+    /// Which of B's shapes touches.
+    pub shape_b: usize,
     /// Unit normal from A to B.
     pub normal: Vec2,
     /// Up to two points; the first `count` are live.

@@ -62,6 +62,14 @@ pub enum PhysicsError {
     /// A joint that names the same body as both of its ends.
     #[error("body_a and body_b are both body {0}: a joint joins two different bodies")]
     SameBody(BodyId),
+    /// A body's part (one of its further shapes) refused, with why.
+    #[error("parts[{index}].{source}")]
+    InPart {
+        /// The part's place in `BodyDef::parts`.
+        index: usize,
+        /// What is wrong with it.
+        source: Box<PhysicsError>,
+    },
     /// A joint neither of whose ends a force can move (static or kinematic bodies, or the
     /// world).
     #[error("{0}: a joint needs at least one dynamic body")]

@@ -24,10 +24,11 @@ pub struct JointDef {
     pub body_a: Option<BodyId>,
     /// Body B.
     pub body_b: BodyId,
-    /// The anchor on A, in A's frame (m from its centre of mass; world coordinates when A is
-    /// the world). A target joint's target.
+    /// The anchor on A, in A's frame (m from its origin, [`super::Body::position`], which is
+    /// its centre of mass unless it has parts; world coordinates when A is the world). A
+    /// target joint's target.
     pub anchor_a: Vec2,
-    /// The anchor on B, in B's frame (m from its centre of mass).
+    /// The anchor on B, in B's frame (m from its origin).
     pub anchor_b: Vec2,
     /// What the joint holds.
     pub kind: JointKind,
@@ -206,7 +207,7 @@ pub struct Target {
 }
 
 impl JointDef {
-    /// A joint of `kind` between `body_a` (None: the world) and `body_b` at their centres,
+    /// A joint of `kind` between `body_a` (None: the world) and `body_b` at their origins,
     /// with Box2D's defaults: bodies do not collide, never breaks, 60 Hz, damping ratio 2.
     pub fn new(kind: JointKind, body_a: Option<BodyId>, body_b: BodyId) -> JointDef {
         JointDef {

@@ -120,6 +120,12 @@ pub struct Transform {
 }
 
 impl Transform {
+    /// No move, no turn.
+    pub const IDENTITY: Transform = Transform {
+        p: Vec2::ZERO,
+        q: Rot::IDENTITY,
+    };
+
     /// A local point expressed in the world frame.
     #[inline]
     pub fn apply(self, local: Vec2) -> Vec2 {
@@ -130,6 +136,19 @@ impl Transform {
     #[inline]
     pub fn apply_inv(self, world: Vec2) -> Vec2 {
         self.q.inv_rotate(world - self.p)
+    }
+
+    /// `inner` placed in this frame: the transform from `inner`'s frame to this one's
+    /// parent (a body's part placed by the body's pose).
+    #[inline]
+    pub fn then(self, inner: Transform) -> Transform {
+        Transform {
+            p: self.apply(inner.p),
+            q: Rot {
+                c: self.q.c * inner.q.c - self.q.s * inner.q.s,
+                s: self.q.s * inner.q.c + self.q.c * inner.q.s,
+            },
+        }
     }
 }
 

@@ -18,6 +18,7 @@ pub(crate) mod hash;
 pub mod id;
 pub mod joint;
 pub mod math;
+pub mod part;
 pub mod segment;
 pub mod settings;
 pub mod shape;
@@ -34,6 +35,7 @@ pub use joint::{
     Spring, Target, Weld, Wheel,
 };
 pub use math::{vec2, Real, Rot, Transform, Vec2};
+pub use part::PartDef;
 pub use segment::Segment;
 pub use settings::{Mixing, Settings, SolverKind};
 pub use shape::{Aabb, Shape};

@@ -55,6 +55,24 @@ fn value_suffix(value: &Option<String>) -> String {
 }
 
 impl SceneError {
+    /// The same error about the body's part `index`: its field named `parts[index].field`.
+    pub(crate) fn in_part(self, index: usize) -> SceneError {
+        match self {
+            SceneError::Invalid {
+                body,
+                field,
+                value,
+                message,
+            } => SceneError::Invalid {
+                body,
+                field: format!("parts[{index}].{field}"),
+                value,
+                message,
+            },
+            other => other,
+        }
+    }
+
     /// An [`SceneError::Invalid`] for `body`.
     pub(crate) fn invalid(
         body: impl Into<String>,
@@ -93,6 +111,9 @@ impl SceneError {
             PhysicsError::InvalidShape { field, reason } => {
                 let (value, message) = split_value(&reason);
                 return SceneError::invalid(body, field, value, message);
+            }
+            PhysicsError::InPart { index, source } => {
+                return SceneError::physics(body, *source).in_part(index);
             }
             other => {
                 return SceneError::invalid(body, "body", None, other.to_string());

@@ -12,7 +12,8 @@ use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
 use crate::physics::error::{finite, non_negative, positive, unit_interval};
 use crate::physics::segment::chain;
 use crate::physics::{
-    BodyDef, Filter, MassSpec, PhysicsError, Polygon, Real, Rot, Segment, Settings, Shape, Vec2,
+    BodyDef, Filter, MassSpec, PartDef, PhysicsError, Polygon, Real, Rot, Segment, Settings, Shape,
+    Vec2,
 };
 use serde::Deserialize;
 use toml::{Spanned, Table};
@@ -231,7 +232,26 @@ entry_table! {
         #[serde(default)]
         kinematic: bool,
         filter: Option<FilterEntry>,
+        #[serde(default)]
+        parts: Vec<PartEntry>,
     }
+}
+
+/// One of a `[[body]]`'s further shapes: `{ shape = {...}, offset = [x, y], angle = A }`
+/// placed from the body's `position` in its (turned) frame, with `density`, `friction`,
+/// `restitution` and `filter` the body's unless given.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PartEntry {
+    shape: ShapeEntry,
+    #[serde(default)]
+    offset: [Real; 2],
+    #[serde(default)]
+    angle: Real,
+    density: Option<Real>,
+    friction: Option<Real>,
+    restitution: Option<Real>,
+    filter: Option<FilterEntry>,
 }
 
 /// A `filter` inline table: `category` and `mask` as integers (bits 0 to 62) or hex strings
@@ -606,6 +626,33 @@ impl BodyEntry {
             .map_or(Ok(Filter::DEFAULT), |f| f.to_filter(at))
     }
 
+    /// The body's parts as the engine places them: from the body's origin, which is the
+    /// centroid `own_centroid` of a polygon's vertices (given around `position`), and at their
+    /// own centroids.
+    fn parts(&self, at: &str, own_centroid: Vec2) -> Result<Vec<PartDef>, SceneError> {
+        let filter = self.filter(at)?;
+        let mut parts = Vec::with_capacity(self.parts.len());
+        for (i, p) in self.parts.iter().enumerate() {
+            let (shape, centroid) = p.shape.to_shape(at).map_err(|e| e.in_part(i))?;
+            let offset = Vec2::new(p.offset[0], p.offset[1]);
+            let turned = crate::physics::Rot::from_angle(p.angle).rotate(centroid);
+            let filter = match &p.filter {
+                Some(f) => f.to_filter(at).map_err(|e| e.in_part(i))?,
+                None => filter,
+            };
+            parts.push(PartDef {
+                shape,
+                offset: offset + turned - own_centroid,
+                angle: p.angle,
+                density: p.density.or(self.density).unwrap_or(1.0),
+                friction: p.friction.unwrap_or(self.friction),
+                restitution: p.restitution.unwrap_or(self.restitution),
+                filter,
+            });
+        }
+        Ok(parts)
+    }
+
     fn into_body(self, index: usize) -> Result<SceneBody, SceneError> {
         let at = body_label(self.name.as_deref(), index);
         let value = |v: Real| Some(v.to_string());
@@ -702,6 +749,7 @@ impl BodyEntry {
         } else {
             BodyDef::dynamic(shape, position).with_angle(self.angle)
         };
+        let parts = self.parts(&at, centroid)?;
         let def = BodyDef {
             linear_velocity: Vec2::new(self.velocity[0], self.velocity[1]),
             angular_velocity: self.angular_velocity,
@@ -709,6 +757,7 @@ impl BodyEntry {
             friction: self.friction,
             restitution: self.restitution,
             filter: self.filter(&at)?,
+            parts,
             ..placed
         };
         def.validate()

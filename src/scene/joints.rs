@@ -10,7 +10,7 @@ use crate::physics::{BodyDef, Real, Rot, Shape, Vec2};
 use serde::{Deserialize, Serialize};
 
 /// A joint of a scene: its bodies by index into [`super::Scene::bodies`] (`a` None: the
-/// world), its anchors in each body's frame (m from its centre of mass), and its kind.
+/// world), its anchors in each body's frame (m from its origin), and its kind.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SceneJoint {
     /// The name from the file, or `joint INDEX` / `NAME[i]` for a rope's.
@@ -167,7 +167,7 @@ impl JointEntry {
     }
 
     /// The anchors as world points: `anchor` for both, or `anchor_a` and `anchor_b`
-    /// (defaulting to the bodies' centres: the world's origin for the world).
+    /// (defaulting to the bodies' origins: the world's origin for the world).
     fn anchors(
         &self,
         at: &str,

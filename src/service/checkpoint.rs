@@ -32,7 +32,9 @@ use std::thread::JoinHandle;
 /// 9: the solver's history (contacts, now with their colours in the constraint graph) is one
 /// record with a version of its own (`physics::world::snapshot::SolverHistory`).
 /// 10: the World carries its joints (definitions and impulses) and their free list.
-pub const FORMAT_VERSION: u32 = 10;
+/// 11: bodies carry their parts (further shapes) and centre of mass, contacts which shapes
+/// touch (solver history version 2).
+pub const FORMAT_VERSION: u32 = 11;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

@@ -91,6 +91,7 @@ mod compact_def {
             friction: c.friction,
             restitution: c.restitution,
             filter: Default::default(),
+            parts: Vec::new(),
         })
     }
 }

@@ -21,22 +21,25 @@ use crate::physics::shape::Shape;
 /// moment it returns is earlier than the true one, never later).
 const MAX_ITERATIONS: usize = 32;
 
-/// A body's motion over a step (it turns about its position, its centre of mass): where it
-/// starts and ends (m) and its angle at each end (rad).
+/// A shape's motion over a step with its body (which turns about its position, its centre of
+/// mass): where the body starts and ends (m), its angle at each end (rad), and the shape's
+/// pose in the body's centre-of-mass frame.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Sweep {
     pub start: (Vec2, Real),
     pub end: (Vec2, Real),
+    pub local: Transform,
 }
 
 impl Sweep {
-    /// The body's transform a fraction `t` (0 to 1) of the way along the motion.
+    /// The shape's transform a fraction `t` (0 to 1) of the way along the motion.
     pub fn at(&self, t: Real) -> Transform {
         let ((p0, a0), (p1, a1)) = (self.start, self.end);
-        Transform {
+        let body = Transform {
             p: p0 + t * (p1 - p0),
             q: Rot::from_angle(a0 + t * (a1 - a0)),
-        }
+        };
+        body.then(self.local)
     }
 }
 
@@ -53,8 +56,9 @@ pub(crate) fn time_of_impact(
     let (core_f, radius_f) = core(fixed);
     let (core_m, radius_m) = core(moving);
     let travel = sweep.end.0 - sweep.start.0;
-    // Turning moves the core's points at most its reach from the centre (a disc's not at all).
-    let core_reach = moving.bounding_radius() - moving.rounding();
+    // Turning moves the core's points at most its reach from the centre (a disc's not at
+    // all, unless it sits off the body's centre).
+    let core_reach = moving.bounding_radius() - moving.rounding() + sweep.local.p.length();
     let turn = (sweep.end.1 - sweep.start.1).abs() * core_reach;
     let tolerance = 0.25 * target;
     let mut t = 0.0;
@@ -176,6 +180,7 @@ mod tests {
         let sweep = Sweep {
             start: (vec2(0.0, 10.5), 0.0),
             end: (vec2(0.0, 0.5), 0.0),
+            local: Transform::IDENTITY,
         };
         let t = time_of_impact(floor, &Shape::rect(1.0, 1.0), &sweep, 0.01).unwrap();
         let bottom = sweep.at(t).p.y - 0.5;
@@ -195,6 +200,7 @@ mod tests {
         let sweep = Sweep {
             start: (vec2(-2.0, 1.0), 0.0),
             end: (vec2(2.0, 1.0), std::f32::consts::PI as Real),
+            local: Transform::IDENTITY,
         };
         let t = time_of_impact(post, &plank, &sweep, 0.01).expect("the plank's end meets the post");
         // At the moment found, the plank is still clear of the post by the target, give or
@@ -217,6 +223,7 @@ mod tests {
         let sweep = Sweep {
             start: (vec2(0.0, 0.52), 0.0),
             end: (vec2(5.0, 0.52), 0.0),
+            local: Transform::IDENTITY,
         };
         assert_eq!(
             time_of_impact(floor, &Shape::rect(1.0, 1.0), &sweep, 0.01),
@@ -235,6 +242,7 @@ mod tests {
         let sweep = Sweep {
             start: (off - along, 0.0),
             end: (off + along, 0.0),
+            local: Transform::IDENTITY,
         };
         assert_eq!(
             time_of_impact(block, &Shape::circle(0.5), &sweep, 0.01),

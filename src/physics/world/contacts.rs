@@ -14,6 +14,7 @@ use super::tiers::TierInput;
 use super::*;
 use crate::physics::collide::{Manifold, ManifoldPoint};
 use crate::physics::math::Transform;
+use crate::physics::shape::Shape;
 use crate::physics::solver::graph::UNCOLOURED;
 
 impl World {
@@ -45,7 +46,7 @@ impl World {
                     0.0
                 };
                 Proxy {
-                    aabb: b.shape.aabb(b.transform()).inflated(margin + reach),
+                    aabb: b.aabb().inflated(margin + reach),
                 }
             }
             None => Proxy {
@@ -86,11 +87,65 @@ impl World {
             if sorting && !(joints.may_collide(key) && filters_allow(key, bodies)) {
                 continue;
             }
-            if let Some(input) = pairs.update(key, &mut merge, contacts, &mut islands.wake_queue) {
-                tiers.inputs.push(input);
+            let Some((a, b)) = pairs.bodies(key) else {
+                continue;
+            };
+            let wake = &mut islands.wake_queue;
+            if a.parts.is_none() && b.parts.is_none() {
+                let sides = (Side::whole(a), Side::whole(b));
+                if let Some(input) = pairs.update((key, 0), sides, &mut merge, contacts, wake) {
+                    tiers.inputs.push(input);
+                }
+            } else {
+                let out = (wake, &mut tiers.inputs);
+                pairs.update_parts(key, (a, b), &mut merge, contacts, out);
             }
         }
         merge.end(contacts);
+    }
+}
+
+/// One side of a pair: a body, and the shape of it that touches (its own, or one of several)
+/// with that shape's pose in the world and its material.
+#[derive(Clone, Copy)]
+struct Side<'a> {
+    body: &'a Body,
+    shape: &'a Shape,
+    pose: Transform,
+    friction: Real,
+    restitution: Real,
+}
+
+impl<'a> Side<'a> {
+    /// A body of one shape.
+    #[inline(always)]
+    fn whole(body: &'a Body) -> Side<'a> {
+        Side {
+            body,
+            shape: &body.shape,
+            pose: body.frame(),
+            friction: body.friction,
+            restitution: body.restitution,
+        }
+    }
+
+    /// Each shape of `body`, with its index.
+    fn each(body: &'a Body) -> impl Iterator<Item = (u32, Side<'a>, Filter)> + Clone + 'a {
+        let frame = body.frame();
+        let whole = std::iter::once((0, Side::whole(body), body.filter));
+        let parts = body.parts.iter().flat_map(move |p| {
+            p.all.iter().enumerate().map(move |(i, part)| {
+                let side = Side {
+                    body,
+                    shape: &part.shape,
+                    pose: frame.then(part.pose),
+                    friction: part.friction,
+                    restitution: part.restitution,
+                };
+                (i as u32, side, part.filter)
+            })
+        });
+        whole.filter(move |_| body.parts.is_none()).chain(parts)
     }
 }
 
@@ -100,7 +155,11 @@ fn filters_allow(key: u64, bodies: &Bodies) -> bool {
         return true;
     }
     let (a, b) = pair_of(key);
-    let filter = |i: u32| bodies.slots[i as usize].body.as_ref().map(|b| b.filter);
+    // A body of several shapes has a filter per shape, tested shape by shape.
+    let filter = |i: u32| {
+        let body = bodies.slots[i as usize].body.as_ref()?;
+        body.parts.is_none().then_some(body.filter)
+    };
     match (filter(a), filter(b)) {
         (Some(fa), Some(fb)) => fa.should_collide(&fb),
         _ => true,
@@ -147,12 +206,12 @@ impl Merge {
 
     /// Move to `key` among last step's contacts, ending those passed over; whether last step
     /// had a contact for `key` ([`Merge::last`]).
-    fn seek(&mut self, contacts: &mut Contacts, key: u64) -> bool {
+    fn seek(&mut self, contacts: &mut Contacts, order: (u64, u32)) -> bool {
         if self.in_place
             && contacts
                 .awake
                 .get(self.written)
-                .is_some_and(|c| c.key < key)
+                .is_some_and(|c| c.order() < order)
         {
             self.copy_from_here(contacts);
         }
@@ -160,16 +219,20 @@ impl Merge {
             return contacts
                 .awake
                 .get(self.written)
-                .is_some_and(|c| c.key == key);
+                .is_some_and(|c| c.order() == order);
         }
-        while let Some(gone) = contacts.previous.get(self.read).filter(|c| c.key < key) {
+        while let Some(gone) = contacts
+            .previous
+            .get(self.read)
+            .filter(|c| c.order() < order)
+        {
             contacts.graph.remove(gone.colour, [gone.a, gone.b]);
             self.read += 1;
         }
         contacts
             .previous
             .get(self.read)
-            .is_some_and(|c| c.key == key)
+            .is_some_and(|c| c.order() == order)
     }
 
     /// Last step's contact for the key just sought (only after [`Merge::seek`] said there is
@@ -243,40 +306,73 @@ struct PairInput<'a> {
     dt: Real,
 }
 
-impl PairInput<'_> {
-    /// The pair `key`'s contact this step: last step's with its manifold recycled, or the pair
-    /// collided afresh (waking sleepers it is about to touch), or none. Returns what adaptive
-    /// stiffness reads of the contact written.
+impl<'a> PairInput<'a> {
+    /// The live bodies of pair `key`, unless neither can move (a kinematic body meets static
+    /// and kinematic ones without a contact).
     #[inline(always)]
-    fn update(
-        &self,
-        key: u64,
-        merge: &mut Merge,
-        contacts: &mut Contacts,
-        wake_queue: &mut Vec<u32>,
-    ) -> Option<TierInput> {
+    fn bodies(&self, key: u64) -> Option<(&'a Body, &'a Body)> {
         let (ia, ib) = pair_of(key);
         let (Some(a), Some(b)) = (&self.slots[ia as usize].body, &self.slots[ib as usize].body)
         else {
             return None;
         };
-        if a.inv_mass == 0.0 && b.inv_mass == 0.0 {
-            // A kinematic body meets static and kinematic ones without a contact.
-            return None;
+        (a.inv_mass > 0.0 || b.inv_mass > 0.0).then_some((a, b))
+    }
+
+    /// The contacts of a pair of which one body or both have several shapes: each pair of
+    /// shapes whose boxes meet (grown as the bodies' proxies are) and whose filters allow it,
+    /// in shape order.
+    fn update_parts(
+        &self,
+        key: u64,
+        (a, b): (&Body, &Body),
+        merge: &mut Merge,
+        contacts: &mut Contacts,
+        (wake, inputs): (&mut Vec<u32>, &mut Vec<TierInput>),
+    ) {
+        let margin =
+            self.settings.speculative_distance + closing_reach(a, b, self.gravity, self.dt);
+        for (i, sa, fa) in Side::each(a) {
+            let box_a = sa.shape.aabb(sa.pose).inflated(margin);
+            for (j, sb, fb) in Side::each(b) {
+                if !(fa.should_collide(&fb) && box_a.overlaps(&sb.shape.aabb(sb.pose))) {
+                    continue;
+                }
+                if let Some(input) =
+                    self.update((key, i << 16 | j), (sa, sb), merge, contacts, wake)
+                {
+                    inputs.push(input);
+                }
+            }
         }
-        let continued = merge.seek(contacts, key);
+    }
+
+    /// The contact of shapes `sides` (`order`: their pair key and shapes) this step: last
+    /// step's with its manifold recycled, or the pair collided afresh (waking sleepers it is
+    /// about to touch), or none. Returns what adaptive stiffness reads of the contact written.
+    #[inline(always)]
+    fn update(
+        &self,
+        order: (u64, u32),
+        (sa, sb): (Side, Side),
+        merge: &mut Merge,
+        contacts: &mut Contacts,
+        wake_queue: &mut Vec<u32>,
+    ) -> Option<TierInput> {
+        let (a, b) = (sa.body, sb.body);
+        let continued = merge.seek(contacts, order);
         let slop = self.settings.linear_slop;
         if continued {
             if let Some(manifold) = self.recycled(merge.last(contacts), a, b) {
                 let contact = merge.keep(contacts);
-                self.set_geometry(contact, &manifold, (a, b));
+                self.set_geometry(contact, &manifold, (sa, sb));
                 return Some(TierInput::of(contact, slop));
             }
         }
-        let manifold = self.collide(a, b, [ia, ib], wake_queue)?;
+        let manifold = self.collide((sa, sb), pair_of(order.0), wake_queue)?;
         // (A copy: the graph beside it changes.)
         let previous = continued.then(|| *merge.last(contacts));
-        let contact = self.fresh_contact(key, &manifold, (a, b), previous.as_ref());
+        let contact = self.fresh_contact(order, &manifold, (sa, sb), previous.as_ref());
         let input = TierInput::of(&contact, slop);
         let begins = (!continued).then_some([a.inv_mass > 0.0, b.inv_mass > 0.0]);
         merge.write(contacts, contact, begins);
@@ -294,20 +390,21 @@ impl PairInput<'_> {
         }
         let size = a.bounding_radius.min(b.bounding_radius);
         let max_drift = RECYCLE_DRIFT.min(RECYCLE_SIZE * size);
-        recycle(c, a.transform(), b.transform(), max_drift)
+        recycle(c, a.frame(), b.frame(), max_drift)
     }
 
     /// A recycled contact's new geometry: the same points, moved (everything else in it is
     /// worked out again by the solver's prepare stage).
     #[inline(always)]
-    fn set_geometry(&self, contact: &mut Contact, manifold: &Manifold, (a, b): (&Body, &Body)) {
+    fn set_geometry(&self, contact: &mut Contact, manifold: &Manifold, (sa, sb): (Side, Side)) {
         let mixing = (
             self.settings.friction_mixing,
             self.settings.restitution_mixing,
         );
+        let (a, b) = (sa.body, sb.body);
         contact.normal = manifold.normal;
-        contact.friction = mixing.0.mix(a.friction, b.friction);
-        contact.restitution = mixing.1.mix(a.restitution, b.restitution);
+        contact.friction = mixing.0.mix(sa.friction, sb.friction);
+        contact.restitution = mixing.1.mix(sa.restitution, sb.restitution);
         contact.age = contact.age.saturating_add(1);
         for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {
             cp.point = mp.point;
@@ -323,15 +420,15 @@ impl PairInput<'_> {
     /// neighbour sleep and wake every 0.5 s forever). A kinematic body at rest wakes nothing.
     fn collide(
         &self,
-        a: &Body,
-        b: &Body,
-        slots: [u32; 2],
+        (sa, sb): (Side, Side),
+        (ia, ib): (u32, u32),
         wake_queue: &mut Vec<u32>,
     ) -> Option<Manifold> {
+        let (a, b) = (sa.body, sb.body);
         let (g, dt) = (self.gravity, self.dt);
         let reach = closing_reach(a, b, g, dt);
         let margin = self.settings.speculative_distance + reach;
-        let manifold = collide(&a.shape, a.transform(), &b.shape, b.transform(), margin);
+        let manifold = collide(sa.shape, sa.pose, sb.shape, sb.pose, margin);
         if manifold.count == 0 {
             return None;
         }
@@ -346,7 +443,7 @@ impl PairInput<'_> {
             && !resting_kinematic(a)
             && !resting_kinematic(b)
         {
-            for (i, body) in slots.into_iter().zip([a, b]) {
+            for (i, body) in [ia, ib].into_iter().zip([a, b]) {
                 if !body.awake {
                     wake_queue.push(i);
                     woken = true;
@@ -362,23 +459,25 @@ impl PairInput<'_> {
     /// the points with the same feature ids), or begins (uncoloured, until the merge writes it).
     fn fresh_contact(
         &self,
-        key: u64,
+        (key, shapes): (u64, u32),
         manifold: &Manifold,
-        (a, b): (&Body, &Body),
+        (sa, sb): (Side, Side),
         previous: Option<&Contact>,
     ) -> Contact {
         let (ia, ib) = pair_of(key);
-        let (xf_a, xf_b) = (a.transform(), b.transform());
+        let (a, b) = (sa.body, sb.body);
+        let (xf_a, xf_b) = (a.frame(), b.frame());
         let colour = previous.map_or(UNCOLOURED, |c| c.colour);
         let mut contact = Contact {
             key,
             a: ia,
             b: ib,
+            shapes,
             normal: manifold.normal,
             friction: 0.0,
             restitution: 0.0,
             touches_static: a.inv_mass == 0.0 || b.inv_mass == 0.0,
-            rounding: [a.shape.rounding(), b.shape.rounding()],
+            rounding: [sa.shape.rounding(), sb.shape.rounding()],
             points: [ContactPoint::default(); 2],
             count: manifold.count,
             hertz: previous.map_or(0.0, |c| c.hertz),
@@ -390,7 +489,7 @@ impl PairInput<'_> {
             base_rotation: relative_rotation(xf_a.q, xf_b.q),
         };
         // Geometry as a recycled contact's (which also ages it a step)...
-        self.set_geometry(&mut contact, manifold, (a, b));
+        self.set_geometry(&mut contact, manifold, (sa, sb));
         if previous.is_none() {
             contact.age = 0;
         }

@@ -19,7 +19,7 @@
 use super::{Slot, World};
 use crate::physics::broad_phase::pair_of;
 use crate::physics::collide::toi::{lies_along_a_face, time_of_impact, Sweep};
-use crate::physics::math::{Real, Rot, Vec2};
+use crate::physics::math::{Real, Rot, Transform, Vec2};
 use crate::physics::shape::{Aabb, Shape};
 
 /// A body is fast when it moved more than this fraction of its shortest extent in a step
@@ -89,7 +89,7 @@ impl World {
                 continue;
             };
             let paired_by = &self.broad_phase.proxies[slot as usize].aabb;
-            if paired_by.contains(&body.shape.aabb(body.transform())) {
+            if paired_by.contains(&body.aabb()) {
                 continue;
             }
             if !listed {
@@ -119,41 +119,53 @@ impl World {
             return 1.0;
         }
         let sb = &self.solver.bodies[moving as usize];
-        let sweep = Sweep {
-            start: (body.position - sb.dp, body.angle - sb.dtheta),
-            end: (body.position, body.angle),
-        };
-        let xf_fixed = fixed.transform();
-        // The swept shape stays within its bounding radius of its centre's path: where that
-        // box misses the static's (its proxy's: a box falling past a wall), nothing is swept.
+        let (start, end) = (
+            (body.position - sb.dp, body.angle - sb.dtheta),
+            (body.position, body.angle),
+        );
+        // The swept shapes stay within the body's bounding radius of its centre's path: where
+        // that box misses the static's (its proxy's: a box falling past a wall), nothing is
+        // swept.
         let reach = Vec2::splat(body.bounding_radius + self.settings.linear_slop);
-        let (p0, p1) = (sweep.start.0, sweep.end.0);
         let swept = Aabb {
-            min: p0.min(p1) - reach,
-            max: p0.max(p1) + reach,
+            min: start.0.min(end.0) - reach,
+            max: start.0.max(end.0) + reach,
         };
         if !swept.overlaps(&self.broad_phase.proxies[other as usize].aabb) {
             return 1.0;
         }
-        if let Shape::Segment(s) = &fixed.shape {
-            let (a, left) = (xf_fixed.apply(s.a), xf_fixed.q.rotate(s.left_normal()));
-            if s.one_sided && (sweep.start.0 - a).dot(left) < 0.0 {
+        let mut first: Real = 1.0;
+        for (shape, local) in body.shapes() {
+            let sweep = Sweep { start, end, local };
+            for (fixed_shape, pose) in fixed.shapes() {
+                let xf = fixed.frame().then(pose);
+                first = first.min(self.shape_impact((fixed_shape, xf), shape, &sweep));
+            }
+        }
+        first
+    }
+
+    /// The fraction of `sweep` at which shape `moving` first comes within the slop of the
+    /// static shape `fixed`; 1 if never.
+    fn shape_impact(&self, fixed: (&Shape, Transform), moving: &Shape, sweep: &Sweep) -> Real {
+        if let Shape::Segment(s) = fixed.0 {
+            let (a, left) = (fixed.1.apply(s.a), fixed.1.q.rotate(s.left_normal()));
+            if s.one_sided && (sweep.at(0.0).p - a).dot(left) < 0.0 {
                 return 1.0;
             }
         }
         let target = self.settings.linear_slop;
-        let fixed = (&fixed.shape, xf_fixed);
-        let whole = if lies_along_a_face(fixed, &body.shape, sweep.at(0.0), target) {
+        let whole = if lies_along_a_face(fixed, moving, sweep.at(0.0), target) {
             Some(0.0)
         } else {
-            time_of_impact(fixed, &body.shape, &sweep, target)
+            time_of_impact(fixed, moving, sweep, target)
         };
         match whole {
             Some(t) if t > 0.0 => t,
             None => 1.0,
             Some(_) => {
-                let core = Shape::circle(CORE_FRACTION * body.min_extent);
-                match time_of_impact(fixed, &core, &sweep, target) {
+                let core = Shape::circle(CORE_FRACTION * moving.min_extent());
+                match time_of_impact(fixed, &core, sweep, target) {
                     Some(t) if t > 0.0 => t,
                     _ => 1.0,
                 }

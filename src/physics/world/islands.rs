@@ -184,7 +184,7 @@ impl World {
             }
         }
         if self.contacts.awake.len() != before {
-            self.contacts.awake.sort_unstable_by_key(|c| c.key);
+            self.contacts.awake.sort_unstable_by_key(Contact::order);
             // The woken contacts rejoin the graph, in key order.
             let (slots, contacts) = (&self.bodies.slots, &mut self.contacts);
             let dynamic = |i: u32| {

@@ -362,12 +362,13 @@ fn local_axis(kind: &JointKind) -> Vec2 {
 
 /// Where joint `d`'s anchors and axis are with its bodies posed as now (`a` None: the world).
 fn frame(d: &JointDef, a: Option<&Body>, b: &Body) -> Frame {
-    let (ca, qa, angle_a) = a.map_or((Vec2::ZERO, Rot::IDENTITY, 0.0), |a| {
-        (a.position, a.rot, a.angle)
+    // Anchors are given from the bodies' origins; the arms reach from their centres of mass.
+    let (ca, qa, angle_a, center_a) = a.map_or((Vec2::ZERO, Rot::IDENTITY, 0.0, Vec2::ZERO), |a| {
+        (a.position, a.rot, a.angle, a.local_center())
     });
     Frame {
-        ra: qa.rotate(d.anchor_a),
-        rb: b.rot.rotate(d.anchor_b),
+        ra: qa.rotate(d.anchor_a - center_a),
+        rb: b.rot.rotate(d.anchor_b - b.local_center()),
         centres: b.position - ca,
         angle: b.angle - angle_a - reference_angle(&d.kind),
         axis: qa.rotate(local_axis(&d.kind)),

@@ -203,7 +203,10 @@ impl World {
         self.check_speed(
             def.linear_velocity,
             def.angular_velocity,
-            def.shape.bounding_radius(),
+            def.parts
+                .iter()
+                .map(|p| p.offset.length() + p.shape.bounding_radius())
+                .fold(def.shape.bounding_radius(), Real::max),
         )?;
         let index = match self.bodies.free.pop() {
             Some(i) => i,
@@ -484,10 +487,13 @@ impl World {
         Ok(())
     }
 
-    /// Set a body's collision filter. Its island wakes; from the next step, its contacts with
+    /// Set a body's collision filter (its own shape's, for a body of several). Its island wakes; from the next step, its contacts with
     /// bodies the filter now refuses end and new ones begin where it now allows them.
     pub fn set_filter(&mut self, id: BodyId, filter: Filter) -> Result<(), PhysicsError> {
         let b = self.body_mut(id)?;
+        if let Some(own) = b.parts.as_mut().map(|p| &mut p.all[0]) {
+            own.filter = filter;
+        }
         let was = std::mem::replace(&mut b.filter, filter);
         self.bodies.filtered += usize::from(filter != Filter::DEFAULT);
         self.bodies.filtered -= usize::from(was != Filter::DEFAULT);
@@ -527,6 +533,8 @@ impl World {
                 ContactInfo {
                     body_a: id(c.a),
                     body_b: id(c.b),
+                    shape_a: (c.shapes >> 16) as usize,
+                    shape_b: (c.shapes & 0xffff) as usize,
                     normal: c.normal,
                     points,
                     count: c.count,

@@ -24,7 +24,8 @@ use super::super::error::PhysicsError;
 use super::super::filter::Filter;
 use super::super::hash::Fnv1a;
 use super::super::joint::{JointDef, JointImpulses};
-use super::super::math::{Real, Rot, Vec2};
+use super::super::math::{Real, Rot, Transform, Vec2};
+use super::super::part::{Part, PartDef, Parts};
 use super::super::settings::Settings;
 use super::super::shape::Shape;
 use super::super::solver::graph::{ConstraintGraph, OVERFLOW, UNCOLOURED};
@@ -71,6 +72,13 @@ pub struct BodyState {
     pub kinematic: bool,
     /// Collision filter. Appended: checkpoint format version 10 on.
     pub filter: Filter,
+    /// Further shapes, as given (their densities the share of a body given by mass).
+    /// Appended, with the next two: checkpoint format version 11 on.
+    pub parts: Vec<PartDef>,
+    /// The centre of mass in the body's frame from its origin (m); zero with no parts.
+    pub local_center: [Real; 2],
+    /// The density of the body's own shape (kg/m^2) when it has parts.
+    pub own_density: Real,
 }
 
 /// A slot: its generation and its body, if live.
@@ -84,7 +92,7 @@ pub struct SlotState {
 
 /// The version of [`SolverHistory`] this build writes and reads. 1: contacts with their
 /// impulses, colours, held loads, spring frequencies, ages and recycling frames.
-pub const SOLVER_HISTORY_VERSION: u32 = 1;
+pub const SOLVER_HISTORY_VERSION: u32 = 2;
 
 /// The solver's history: what it carries from step to step and cannot work out again. Opaque
 /// to callers: written by [`World::export_state`], read back by [`World::import_state`], which
@@ -139,6 +147,9 @@ struct ContactRecord {
     /// Contact recycling: the normal in A's frame and B's rotation relative to A's (cos, sin)
     /// when the manifold was computed.
     recycle: [Real; 4],
+    /// Which shapes touch (A's index in the high 16 bits, B's in the low). Solver history
+    /// version 2 on.
+    shapes: u32,
 }
 
 /// Everything a World carries from one step to the next.
@@ -211,6 +222,7 @@ impl ContactRecord {
             key: c.key,
             a: c.a,
             b: c.b,
+            shapes: c.shapes,
             normal: v2(c.normal),
             friction: c.friction,
             restitution: c.restitution,
@@ -277,21 +289,25 @@ impl ContactRecord {
         for (out, p) in points.iter_mut().zip(&s.points) {
             *out = p.point()?;
         }
+        let shapes = [(s.a, s.shapes >> 16), (s.b, s.shapes & 0xffff)];
+        if shapes.iter().any(|&(i, k)| shape_of(slots, i, k).is_none()) {
+            return Err(StateError(format!(
+                "contact {:#x} names shapes {:#x} its bodies do not have",
+                s.key, s.shapes
+            )));
+        }
         Ok(Contact {
             key: s.key,
             a: s.a,
             b: s.b,
+            shapes: s.shapes,
             normal: vec(s.normal),
             friction: s.friction,
             restitution: s.restitution,
             touches_static: s.touches_static,
             // The shapes' own: worked out again, not stored.
-            rounding: [s.a, s.b].map(|i| {
-                slots[i as usize]
-                    .body
-                    .as_ref()
-                    .map_or(0.0, |b| b.shape.rounding())
-            }),
+            rounding: [(s.a, s.shapes >> 16), (s.b, s.shapes & 0xffff)]
+                .map(|(i, shape)| shape_of(slots, i, shape).map_or(0.0, Shape::rounding)),
             points,
             count: s.points.len(),
             hertz: s.hertz,
@@ -362,6 +378,15 @@ fn materials(what: &str, friction: Real, restitution: Real) -> Result<(), StateE
     }
 }
 
+/// Shape `k` of the body in slot `i` (0 its own, or the first of its parts), if it has one.
+fn shape_of(slots: &[Slot], i: u32, k: u32) -> Option<&Shape> {
+    let body = slots.get(i as usize)?.body.as_ref()?;
+    match &body.parts {
+        None => (k == 0).then_some(&body.shape),
+        Some(p) => p.all.get(k as usize).map(|part| &part.shape),
+    }
+}
+
 fn finite_all(what: &str, values: &[Real]) -> Result<(), StateError> {
     if values.iter().all(|v| v.is_finite()) {
         Ok(())
@@ -389,7 +414,38 @@ impl BodyState {
             sleep_island: b.sleep_island,
             kinematic: b.kinematic,
             filter: b.filter,
+            parts: b.parts().to_vec(),
+            local_center: v2(b.local_center()),
+            own_density: b.parts.as_ref().map_or(1.0, |p| p.own_density),
         }
+    }
+
+    /// The body's parts, each checked, placed around its stored centre of mass.
+    fn parts(&self, index: u32, shape: &Shape) -> Result<Option<Box<Parts>>, StateError> {
+        if self.parts.is_empty() {
+            return Ok(None);
+        }
+        let bad = |e: String| StateError(format!("body {index}: {e}"));
+        for (i, p) in self.parts.iter().enumerate() {
+            p.validate().map_err(|e| bad(format!("parts[{i}].{e}")))?;
+        }
+        finite_all(
+            &format!("body {index}"),
+            &[self.local_center[0], self.local_center[1], self.own_density],
+        )?;
+        let own = Part {
+            shape: shape.clone(),
+            pose: Transform {
+                p: Vec2::ZERO,
+                q: Rot::IDENTITY,
+            },
+            friction: self.friction,
+            restitution: self.restitution,
+            filter: self.filter,
+        };
+        let mut parts = Parts::new(own, &self.parts, vec(self.local_center));
+        parts.own_density = self.own_density;
+        Ok(Some(Box::new(parts)))
     }
 
     /// The body in slot `id`, checked: a valid shape, finite numbers, masses not negative, an
@@ -417,10 +473,16 @@ impl BodyState {
                 "body {index}: mass or island out of range"
             )));
         }
+        let parts = self.parts(index, &shape)?;
         Ok(Body {
             id,
-            bounding_radius: shape.bounding_radius(),
-            min_extent: shape.min_extent(),
+            bounding_radius: parts
+                .as_ref()
+                .map_or_else(|| shape.bounding_radius(), |p| p.bounding_radius()),
+            min_extent: parts
+                .as_ref()
+                .map_or_else(|| shape.min_extent(), |p| p.min_extent()),
+            parts,
             shape,
             position: vec(b.position),
             angle: b.angle,
@@ -598,11 +660,16 @@ impl World {
             }
             self.contacts.awake.push(c);
         }
-        if !self.contacts.awake.windows(2).all(|w| w[0].key < w[1].key) {
+        if !self
+            .contacts
+            .awake
+            .windows(2)
+            .all(|w| w[0].order() < w[1].order())
+        {
             return Err(StateError("contacts are not sorted by key".into()));
         }
         let awake_body = |i: u32| slots[i as usize].body.as_ref().is_some_and(Body::is_active);
-        let mut keys: Vec<u64> = self.contacts.awake.iter().map(|c| c.key).collect();
+        let mut keys: Vec<(u64, u32)> = self.contacts.awake.iter().map(|c| c.order()).collect();
         for record in &history.sleeping {
             let c = record.contact(slots)?;
             let refused = if c.colour != UNCOLOURED {
@@ -615,12 +682,15 @@ impl World {
             if let Some(why) = refused {
                 return Err(StateError(format!("sleeping contact {:#x} {why}", c.key)));
             }
-            keys.push(c.key);
+            keys.push(c.order());
             self.contacts.sleeping.push(c);
         }
         keys.sort_unstable();
         if let Some(w) = keys.windows(2).find(|w| w[0] == w[1]) {
-            return Err(StateError(format!("contact {:#x} is listed twice", w[0])));
+            return Err(StateError(format!(
+                "contact {:#x} (shapes {:#x}) is listed twice",
+                w[0].0, w[0].1
+            )));
         }
         self.contacts.graph = graph;
         Ok(())

@@ -294,7 +294,12 @@ impl World {
                 b.angular_velocity = sb.w;
                 let limit = FAST_FRACTION * b.min_extent;
                 // Turning moves the shape's core at most its reach (a disc's not at all).
-                let core_reach = b.bounding_radius - b.shape.rounding();
+                let rounding = if b.parts.is_none() {
+                    b.shape.rounding()
+                } else {
+                    0.0
+                };
+                let core_reach = b.bounding_radius - rounding;
                 if moved_more_than(sb.dp, sb.dtheta, core_reach, limit) {
                     fast.push(i as u32);
                 }

@@ -1,6 +1,6 @@
 //! Rigid bodies: their definition (what a caller asks for) and their state (what the World keeps).
 
-use super::error::{finite, finite_vec, non_negative, positive, unit_interval, PhysicsError};
+use super::error::{check_material, finite, finite_vec, positive, PhysicsError};
 use super::filter::Filter;
 use super::math::{is_finite_vec, Real, Rot, Transform, Vec2};
 use super::part::{mass_data, placed, Part, PartDef, Parts, MAX_SHAPES};
@@ -221,23 +221,7 @@ impl BodyDef {
     }
 }
 
-/// Refuse a friction outside [0, [`MAX_FRICTION`]] or a restitution outside [0, 1].
-pub(crate) fn check_material(friction: Real, restitution: Real) -> Result<(), PhysicsError> {
-    non_negative("friction", friction)?;
-    if friction > MAX_FRICTION {
-        return Err(PhysicsError::OutOfRange {
-            field: "friction",
-            value: friction,
-            expected: "must be within [0, 1000]",
-        });
-    }
-    unit_interval("restitution", restitution)?;
-    Ok(())
-}
-
-/// The largest friction coefficient accepted. Real materials stay below about 2; anything near
-/// the float range would overflow the friction cone mu x Pn.
-pub const MAX_FRICTION: Real = 1000.0;
+pub use super::error::MAX_FRICTION;
 
 /// A mass or moment of inertia the solver can divide by: finite, positive, finite inverse.
 fn usable(field: &'static str, value: Real) -> Result<Real, PhysicsError> {

@@ -173,3 +173,21 @@ pub(crate) fn unit_interval(field: &'static str, value: Real) -> Result<Real, Ph
         "must be within [0, 1]",
     )
 }
+
+/// Refuse a friction outside [0, [`MAX_FRICTION`]] or a restitution outside [0, 1].
+pub(crate) fn check_material(friction: Real, restitution: Real) -> Result<(), PhysicsError> {
+    non_negative("friction", friction)?;
+    if friction > MAX_FRICTION {
+        return Err(PhysicsError::OutOfRange {
+            field: "friction",
+            value: friction,
+            expected: "must be within [0, 1000]",
+        });
+    }
+    unit_interval("restitution", restitution)?;
+    Ok(())
+}
+
+/// The largest friction coefficient accepted. Real materials stay below about 2; anything near
+/// the float range would overflow the friction cone mu x Pn.
+pub const MAX_FRICTION: Real = 1000.0;

@@ -19,6 +19,7 @@ pub mod id;
 pub mod joint;
 pub mod math;
 pub mod part;
+pub(crate) mod part_tree;
 pub mod segment;
 pub mod settings;
 pub mod shape;

@@ -7,9 +7,10 @@
 //! centred on it, while the API reports the origin ([`super::Body::position`]). A body with no
 //! parts keeps its centre at its origin and pays nothing for any of this.
 
-use super::error::{finite, finite_vec, positive, PhysicsError};
+use super::error::{check_material, finite, finite_vec, positive, PhysicsError};
 use super::filter::Filter;
 use super::math::{Real, Rot, Transform, Vec2};
+use super::part_tree::{PartTree, TREE_FROM};
 use super::shape::{Aabb, Shape};
 use serde::{Deserialize, Serialize};
 
@@ -84,7 +85,7 @@ impl PartDef {
         finite_vec(["offset.x", "offset.y"], self.offset)?;
         finite("angle", self.angle)?;
         positive("density", self.density)?;
-        super::body::check_material(self.friction, self.restitution)
+        check_material(self.friction, self.restitution)
     }
 
     /// The part's pose in the body's frame about its origin.
@@ -126,6 +127,9 @@ pub(crate) struct Parts {
     pub defs: Vec<PartDef>,
     /// The density of the body's own shape (kg/m^2; its share of a body given by mass).
     pub own_density: Real,
+    /// Over the shapes' boxes in the centre-of-mass frame, for a body of more than
+    /// [`TREE_FROM`] shapes.
+    pub tree: Option<PartTree>,
 }
 
 /// A body's mass properties worked out from its shapes.
@@ -187,11 +191,16 @@ impl Parts {
             restitution: d.restitution,
             filter: d.filter,
         }));
+        let tree = (all.len() > TREE_FROM).then(|| {
+            let boxes: Vec<Aabb> = all.iter().map(|p| p.shape.aabb(p.pose)).collect();
+            PartTree::new(&boxes)
+        });
         Parts {
             all,
             local_center,
             defs: defs.to_vec(),
             own_density: 1.0,
+            tree,
         }
     }
 

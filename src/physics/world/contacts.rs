@@ -14,7 +14,8 @@ use super::tiers::TierInput;
 use super::*;
 use crate::physics::collide::{Manifold, ManifoldPoint};
 use crate::physics::math::Transform;
-use crate::physics::shape::Shape;
+use crate::physics::part_tree::PartTree;
+use crate::physics::shape::{Aabb, Shape};
 use crate::physics::solver::graph::UNCOLOURED;
 
 impl World {
@@ -97,7 +98,7 @@ impl World {
                     tiers.inputs.push(input);
                 }
             } else {
-                let out = (wake, &mut tiers.inputs);
+                let out = (wake, &mut tiers.inputs, &mut broad_phase.shape_pairs);
                 pairs.update_parts(key, (a, b), &mut merge, contacts, out);
             }
         }
@@ -129,24 +130,68 @@ impl<'a> Side<'a> {
         }
     }
 
-    /// Each shape of `body`, with its index.
-    fn each(body: &'a Body) -> impl Iterator<Item = (u32, Side<'a>, Filter)> + Clone + 'a {
-        let frame = body.frame();
-        let whole = std::iter::once((0, Side::whole(body), body.filter));
-        let parts = body.parts.iter().flat_map(move |p| {
-            p.all.iter().enumerate().map(move |(i, part)| {
+    /// Shape `i` of `body` (0 its own, or the first of its parts), with its filter.
+    fn of(body: &'a Body, i: u32) -> (Side<'a>, Filter) {
+        match &body.parts {
+            None => (Side::whole(body), body.filter),
+            Some(parts) => {
+                let part = &parts.all[i as usize];
                 let side = Side {
                     body,
                     shape: &part.shape,
-                    pose: frame.then(part.pose),
+                    pose: body.frame().then(part.pose),
                     friction: part.friction,
                     restitution: part.restitution,
                 };
-                (i as u32, side, part.filter)
-            })
-        });
-        whole.filter(move |_| body.parts.is_none()).chain(parts)
+                (side, part.filter)
+            }
+        }
     }
+
+    /// Each shape of `body`, with its index.
+    fn each(body: &'a Body) -> impl Iterator<Item = (u32, Side<'a>)> + 'a {
+        let count = body.parts.as_ref().map_or(1, |p| p.all.len() as u32);
+        (0..count).map(move |i| (i, Side::of(body, i).0))
+    }
+
+    /// The shape's box in the world.
+    fn aabb(&self) -> Aabb {
+        self.shape.aabb(self.pose)
+    }
+}
+
+/// The pairs of shapes of bodies `a` and `b` whose boxes may meet (A's grown by `margin`), as
+/// `i << 16 | j`, sorted: through a body's [`crate::physics::part_tree::PartTree`] when it has
+/// one (the other body's shapes query it), else every pair.
+fn shape_pairs(a: &Body, b: &Body, margin: Real, out: &mut Vec<u32>) {
+    fn tree(x: &Body) -> Option<&PartTree> {
+        x.parts.as_ref().and_then(|p| p.tree.as_ref())
+    }
+    out.clear();
+    if let Some(tb) = tree(b) {
+        for (i, sa) in Side::each(a) {
+            let start = out.len();
+            tb.query(b.frame(), &sa.aabb().inflated(margin), out);
+            out[start..].iter_mut().for_each(|j| *j |= i << 16);
+        }
+    } else if let Some(ta) = tree(a) {
+        for (j, sb) in Side::each(b) {
+            let start = out.len();
+            ta.query(a.frame(), &sb.aabb().inflated(margin), out);
+            out[start..].iter_mut().for_each(|i| *i = *i << 16 | j);
+        }
+    } else {
+        for (i, sa) in Side::each(a) {
+            let box_a = sa.aabb().inflated(margin);
+            for (j, sb) in Side::each(b) {
+                if box_a.overlaps(&sb.aabb()) {
+                    out.push(i << 16 | j);
+                }
+            }
+        }
+        return;
+    }
+    out.sort_unstable();
 }
 
 /// Whether the filters of pair `key`'s bodies let them collide.
@@ -321,28 +366,25 @@ impl<'a> PairInput<'a> {
 
     /// The contacts of a pair of which one body or both have several shapes: each pair of
     /// shapes whose boxes meet (grown as the bodies' proxies are) and whose filters allow it,
-    /// in shape order.
+    /// in shape order (`found`: scratch).
     fn update_parts(
         &self,
         key: u64,
         (a, b): (&Body, &Body),
         merge: &mut Merge,
         contacts: &mut Contacts,
-        (wake, inputs): (&mut Vec<u32>, &mut Vec<TierInput>),
+        (wake, inputs, found): (&mut Vec<u32>, &mut Vec<TierInput>, &mut Vec<u32>),
     ) {
         let margin =
             self.settings.speculative_distance + closing_reach(a, b, self.gravity, self.dt);
-        for (i, sa, fa) in Side::each(a) {
-            let box_a = sa.shape.aabb(sa.pose).inflated(margin);
-            for (j, sb, fb) in Side::each(b) {
-                if !(fa.should_collide(&fb) && box_a.overlaps(&sb.shape.aabb(sb.pose))) {
-                    continue;
-                }
-                if let Some(input) =
-                    self.update((key, i << 16 | j), (sa, sb), merge, contacts, wake)
-                {
-                    inputs.push(input);
-                }
+        shape_pairs(a, b, margin, found);
+        for &ij in found.iter() {
+            let ((sa, fa), (sb, fb)) = (Side::of(a, ij >> 16), Side::of(b, ij & 0xffff));
+            if !(fa.should_collide(&fb) && sa.aabb().inflated(margin).overlaps(&sb.aabb())) {
+                continue;
+            }
+            if let Some(input) = self.update((key, ij), (sa, sb), merge, contacts, wake) {
+                inputs.push(input);
             }
         }
     }

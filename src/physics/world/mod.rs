@@ -101,6 +101,8 @@ struct BroadPhase {
     proxies: Vec<Proxy>,
     /// This step's candidate pairs, by key.
     pair_keys: Vec<u64>,
+    /// Scratch for a pair of bodies of several shapes: its pairs of shapes whose boxes meet.
+    shape_pairs: Vec<u32>,
 }
 
 /// The solvers' buffers for one step.

@@ -27,9 +27,21 @@ fn the_parts_example_in_docs_scenes_md_loads_and_rests_as_it_says() {
     // Masses: the dumbbell 1 x (2 x 0.1) + 2 x pi 0.3^2; the L 2 x 1 + 3 x 0.75 (the part's own
     // density); the post 1 x 0.4 + 1 x 0.2 (the body's density inherited).
     let dumbbell = 0.2 + 2.0 * PI * 0.09;
-    assert!((body(&world, 1).mass() - dumbbell).abs() < 1e-5, "{}", body(&world, 1).mass());
-    assert!((body(&world, 2).mass() - 4.25).abs() < 1e-5, "{}", body(&world, 2).mass());
-    assert!((body(&world, 3).mass() - 0.6).abs() < 1e-5, "{}", body(&world, 3).mass());
+    assert!(
+        (body(&world, 1).mass() - dumbbell).abs() < 1e-5,
+        "{}",
+        body(&world, 1).mass()
+    );
+    assert!(
+        (body(&world, 2).mass() - 4.25).abs() < 1e-5,
+        "{}",
+        body(&world, 2).mass()
+    );
+    assert!(
+        (body(&world, 3).mass() - 0.6).abs() < 1e-5,
+        "{}",
+        body(&world, 3).mass()
+    );
     // The L's part has its own friction, the dumbbell's discs the body's.
     assert_eq!(body(&world, 2).parts()[0].friction, 0.9);
     assert_eq!(body(&world, 1).parts()[1].friction, 0.6);
@@ -44,7 +56,12 @@ fn the_parts_example_in_docs_scenes_md_loads_and_rests_as_it_says() {
     // give under gravity being a few mm.
     for (i, y) in [(1, 0.3), (2, 0.25), (3, 1.2)] {
         let b = body(&world, i);
-        assert!((b.position().y - y).abs() < 0.01, "{}: {:?}", i, b.position());
+        assert!(
+            (b.position().y - y).abs() < 0.01,
+            "{}: {:?}",
+            i,
+            b.position()
+        );
         assert!(b.angle().abs() < 0.02, "{}: {}", i, b.angle());
     }
 }

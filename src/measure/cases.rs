@@ -5,8 +5,8 @@
 
 use crate::physics::math::PI;
 use crate::physics::{
-    BodyDef, BodyId, Filter, JointDef, JointKind, PhysicsError, Polygon, Real, Revolute, Shape,
-    Vec2, World,
+    BodyDef, BodyId, Filter, JointDef, JointKind, Motor, PartDef, PhysicsError, Polygon, Real,
+    Revolute, Shape, Vec2, World,
 };
 
 /// A static ground box `width` x `thickness` metres whose top surface is at y = 0, centred on x = `x`.
@@ -179,18 +179,21 @@ pub struct Setup {
     pub joints: Vec<SetupJoint>,
 }
 
-/// A revolute joint of a [`Setup`]: bodies by index into `bodies`, anchors in each body's
-/// frame (m).
+/// A revolute joint of a [`Setup`]: bodies by index into `bodies` (A None: the world, a
+/// static body without shapes at the origin in engines that need one), anchors in each body's
+/// frame from its origin (m), and an optional motor.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SetupJoint {
-    /// Index of body A.
-    pub a: usize,
+    /// Index of body A, or None for the world.
+    pub a: Option<usize>,
     /// Index of body B.
     pub b: usize,
     /// A's anchor, in A's frame (m).
     pub anchor_a: Vec2,
     /// B's anchor, in B's frame (m).
     pub anchor_b: Vec2,
+    /// A motor: its speed (rad/s) and its largest torque (N m).
+    pub motor: Option<(Real, Real)>,
 }
 
 impl Setup {
@@ -207,9 +210,12 @@ impl Setup {
             .map(|def| world.add_body(def))
             .collect::<Result<Vec<_>, _>>()?;
         for j in &self.joints {
-            let hinge = JointKind::Revolute(Revolute::free());
-            let def =
-                JointDef::new(hinge, Some(ids[j.a]), ids[j.b]).with_anchors(j.anchor_a, j.anchor_b);
+            let hinge = JointKind::Revolute(Revolute {
+                motor: j.motor.map(|(speed, max)| Motor { speed, max }),
+                ..Revolute::free()
+            });
+            let a = j.a.map(|a| ids[a]);
+            let def = JointDef::new(hinge, a, ids[j.b]).with_anchors(j.anchor_a, j.anchor_b);
             world.add_joint(&def)?;
         }
         Ok(world)
@@ -241,7 +247,9 @@ fn boxes_pyramid(base: usize, x: Real, y0: Real, out: &mut Vec<BodyDef>) {
 ///   (see [`mixed_shapes`]) dropped from a 40 x 30 grid into a 50 m wide container, 500 steps,
 ///   sleep off;
 /// - `joint_grid`: Box2D's benchmark of that name ([`joint_grid`]), 500 steps, sleep off;
-/// - `smash`: Box2D's benchmark of that name ([`smash`]), 300 steps, sleep on.
+/// - `smash`: Box2D's benchmark of that name ([`smash`]), 300 steps, sleep on;
+/// - `tumbler` and `compounds`: Box2D's benchmarks of those names ([`tumbler`],
+///   [`compounds`]), bodies of several shapes.
 pub fn benchmark_setups() -> Vec<Setup> {
     let g = Vec2::new(0.0, -10.0);
     let ground = |width: Real| BodyDef::fixed(Shape::rect(width, 2.0), Vec2::new(0.0, -1.0));
@@ -328,6 +336,8 @@ pub fn benchmark_setups() -> Vec<Setup> {
         },
         joint_grid(100),
         smash(),
+        tumbler(),
+        compounds(),
         Setup {
             name: "mixed_shapes",
             gravity: g,
@@ -369,20 +379,22 @@ pub fn joint_grid(n: usize) -> Setup {
             bodies.push(def.with_filter(filter));
             if i > 0 {
                 joints.push(SetupJoint {
-                    a: index - 1,
+                    a: Some(index - 1),
                     b: index,
                     anchor_a: Vec2::new(0.0, -0.5),
                     anchor_b: Vec2::new(0.0, 0.5),
+                    motor: None,
                 });
             }
             // (Box2D also joins the static discs to each other; tiltbox refuses a joint with
             // no dynamic body, and such a joint does nothing.)
             if k > 0 && !(anchored(k, i) && anchored(k - 1, i)) {
                 joints.push(SetupJoint {
-                    a: index - n,
+                    a: Some(index - n),
                     b: index,
                     anchor_a: Vec2::new(0.5, 0.0),
                     anchor_b: Vec2::new(-0.5, 0.0),
+                    motor: None,
                 });
             }
         }
@@ -421,6 +433,110 @@ pub fn smash() -> Setup {
         gravity: Vec2::ZERO,
         bodies,
         steps: 300,
+        sleep: true,
+        warm_up: 0,
+        joints: Vec::new(),
+    }
+}
+
+/// Box2D v3's `tumbler` benchmark (`shared/benchmarks.c`): a drum of four walls (boxes 1 m x
+/// 20 m and 20 m x 1 m, 10 m out from its centre; density 50, so 4,000 kg) hinged to the
+/// world at (0, 10) m and turned by a revolute motor at 25 degrees/s with up to 1e8 N m, and
+/// 45 x 45 boxes of 0.25 m (density 1, 0.0625 kg) on a 0.4 m grid inside it. Gravity 10 m/s^2,
+/// 750 steps, sleep on. tiltbox's own shape sits at a body's origin, so the drum's origin is
+/// its right wall's centre and the other walls are its parts; its centre of mass, and what it
+/// turns about, is the drum's centre all the same.
+pub fn tumbler() -> Setup {
+    let wall =
+        |x: Real, y: Real, w: Real, h: Real| PartDef::new(Shape::rect(w, h), Vec2::new(x, y));
+    let drum = BodyDef::dynamic(Shape::rect(1.0, 20.0), Vec2::new(10.0, 10.0))
+        .with_density(50.0)
+        .with_part(wall(-20.0, 0.0, 1.0, 20.0).with_density(50.0))
+        .with_part(wall(-10.0, 10.0, 20.0, 1.0).with_density(50.0))
+        .with_part(wall(-10.0, -10.0, 20.0, 1.0).with_density(50.0));
+    let mut bodies = vec![drum];
+    let n = 45;
+    for i in 0..n {
+        for j in 0..n {
+            let at = Vec2::new(
+                -0.2 * n as Real + 0.4 * j as Real,
+                10.0 - 0.2 * n as Real + 0.4 * i as Real,
+            );
+            bodies.push(BodyDef::dynamic(Shape::rect(0.25, 0.25), at));
+        }
+    }
+    Setup {
+        name: "tumbler",
+        gravity: Vec2::new(0.0, -10.0),
+        bodies,
+        steps: 750,
+        sleep: true,
+        warm_up: 0,
+        joints: vec![SetupJoint {
+            a: None,
+            b: 0,
+            anchor_a: Vec2::new(0.0, 10.0),
+            anchor_b: Vec2::new(-10.0, 0.0),
+            motor: Some((25.0 * PI / 180.0, 1e8)),
+        }],
+    }
+}
+
+/// Box2D v3's `compounds` benchmark (`shared/benchmarks.c`): a static ground of one body and
+/// 282 shapes (a floor of 81 boxes 1.1 m x 1 m from x = -40 m to 40 m, two walls of 100 boxes 1
+/// m x 1.1 m at x = +-40 m, and a segment at y = -80 m from x = -800 m to 800 m), and 20
+/// columns of 150 bodies of two triangles each ((-1, 0), (0.5, 1), (0, 2) and its mirror image;
+/// density 1, friction 0.5) 2 m apart sideways and 2.25 m up from y = 5.575 m, shifted
+/// +-0.25 m in turn. Gravity 10 m/s^2, 500 steps, sleep on. The ground's origin is its first
+/// floor box's centre; a compound's is its left triangle's centroid, the right one a part.
+pub fn compounds() -> Setup {
+    let mut ground = BodyDef::fixed(Shape::rect(1.1, 1.0), Vec2::new(-40.0, 0.0));
+    let box_at = |w: Real, h: Real, x: Real, y: Real| {
+        PartDef::new(Shape::rect(w, h), Vec2::new(x + 40.0, y))
+    };
+    for i in 1..81 {
+        ground.parts.push(box_at(1.1, 1.0, -40.0 + i as Real, 0.0));
+    }
+    for x in [-40.0, 40.0] {
+        for i in 0..100 {
+            ground.parts.push(box_at(1.0, 1.1, x, 1.0 + i as Real));
+        }
+    }
+    let segment =
+        crate::physics::Segment::new(Vec2::new(-760.0, -80.0), Vec2::new(840.0, -80.0), 0.0);
+    ground
+        .parts
+        .push(PartDef::new(Shape::Segment(Box::new(segment)), Vec2::ZERO));
+    let triangle = |points: [Vec2; 3]| match Polygon::new(&points) {
+        Ok((p, centroid)) => (Shape::from(p), centroid),
+        Err(e) => panic!("compounds: a built-in triangle was refused: {e}"),
+    };
+    let v = Vec2::new;
+    let (left, cl) = triangle([v(-1.0, 0.0), v(0.5, 1.0), v(0.0, 2.0)]);
+    let (right, cr) = triangle([v(1.0, 0.0), v(0.0, 2.0), v(-0.5, 1.0)]);
+    let mut bodies = vec![ground];
+    let (columns, rows) = (20, 150);
+    let (shift, extra_y, y_start) = (2.0 as Real, 0.25 as Real, 5.0 as Real);
+    let (centre_x, centre_y) = (shift * columns as Real / 2.0 - 1.0, 1.15 / 2.0);
+    let mut side: Real = 0.25;
+    for i in 0..columns {
+        let x = i as Real * shift - centre_x;
+        for j in 0..rows {
+            let y = j as Real * (shift + extra_y) + centre_y + y_start;
+            let at = v(x + side, y);
+            side = -side;
+            bodies.push(
+                BodyDef::dynamic(left.clone(), at + cl)
+                    .with_friction(0.5)
+                    .with_part(PartDef::new(right.clone(), cr - cl).with_friction(0.5)),
+            );
+        }
+    }
+    Setup {
+        name: "compounds",
+        gravity: Vec2::new(0.0, -10.0),
+        bodies,
+        steps: 500,
         sleep: true,
         warm_up: 0,
         joints: Vec::new(),

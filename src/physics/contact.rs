@@ -67,8 +67,8 @@ pub(crate) struct Contact {
     pub rounding: [Real; 2],
     /// The points; the first `count` are live.
     pub points: [ContactPoint; 2],
-    /// Number of live points.
-    pub count: usize,
+    /// Number of live points (a byte: it packs into the padding beside `age` and `colour`).
+    pub count: u8,
     /// Soft step: the spring's frequency last step (Hz), carried over so that load-aware
     /// stiffening can let it fall only slowly (0 for a new contact).
     pub hertz: Real,
@@ -93,6 +93,18 @@ impl Contact {
     #[inline]
     pub fn order(&self) -> (u64, u32) {
         (self.key, self.shapes)
+    }
+
+    /// The live points.
+    #[inline]
+    pub fn live(&self) -> &[ContactPoint] {
+        &self.points[..self.count as usize]
+    }
+
+    /// The live points, to update.
+    #[inline]
+    pub fn live_mut(&mut self) -> &mut [ContactPoint] {
+        &mut self.points[..self.count as usize]
     }
 
     /// The tangent direction: the normal turned clockwise, t = n x z (appendix, step 2).

@@ -142,7 +142,7 @@ impl<L: Wide> BounceLanes<L> {
     #[inline(always)]
     pub fn set(&mut self, lane: usize, c: &Contact) {
         self.restitution.set_lane(lane, c.restitution);
-        for (v, p) in self.approach.iter_mut().zip(&c.points[..c.count]) {
+        for (v, p) in self.approach.iter_mut().zip(c.live()) {
             v.set_lane(lane, p.approach_velocity);
         }
     }
@@ -381,7 +381,7 @@ impl<L: Wide> Bundle<L> {
             self.i00.set_lane(lane, m);
             self.p[1].adjusted_separation.set_lane(lane, NEVER_TOUCHES);
         }
-        for ((v, p), kp) in self.p.iter_mut().zip(&c.points[..c.count]).zip(&k.points) {
+        for ((v, p), kp) in self.p.iter_mut().zip(c.live()).zip(&k.points) {
             let arms = kp.arms;
             for (field, x) in [
                 (&mut v.a_cross_n, arms.a_cross_n),

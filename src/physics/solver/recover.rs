@@ -96,7 +96,7 @@ impl Recovery {
     ) {
         let (mut count, mut beyond) = (0.0, 0.0);
         let mut arms = [Vec2::ZERO; 2];
-        for p in &c.points[..c.count] {
+        for p in c.live() {
             let depth = -(p.separation + reach);
             if depth > 0.0 {
                 count += 1.0;

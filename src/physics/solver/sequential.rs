@@ -29,7 +29,7 @@ pub(crate) fn solve(
         joints(bodies);
     }
     for c in contacts.iter_mut() {
-        for p in &mut c.points[..c.count] {
+        for p in c.live_mut() {
             p.total_normal_impulse = p.normal_impulse;
         }
     }
@@ -76,11 +76,7 @@ impl SplitImpulse {
             {
                 let n = c.normal;
                 let (ia, ib) = (c.a as usize, c.b as usize);
-                for ((p, k), acc) in c.points[..c.count]
-                    .iter()
-                    .zip(&k.points)
-                    .zip(acc.iter_mut())
-                {
+                for ((p, k), acc) in c.live().iter().zip(&k.points).zip(acc.iter_mut()) {
                     // Position bias (appendix eq. 70), on the overlap beyond the slop only.
                     let target = -settings.bias_factor
                         * inv_dt
@@ -129,7 +125,7 @@ fn prepare(
         let n = c.normal;
         let t = c.tangent();
         let (a, b) = pair_mut(bodies, c.a, c.b);
-        for (p, k) in c.points[..c.count].iter_mut().zip(&mut k.points) {
+        for (p, k) in c.points[..c.count as usize].iter_mut().zip(&mut k.points) {
             k.set_masses(a, b, p, n, t);
             let (ra, rb) = (p.anchor_a, p.anchor_b);
             let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
@@ -181,7 +177,7 @@ fn iterate(
         let (a, b) = pair_mut(bodies, c.a, c.b);
         let solved = settings.accumulate_impulses && c.count == 2 && block_normal(a, b, c, k);
         if !solved {
-            for (p, k) in c.points[..c.count].iter_mut().zip(&k.points) {
+            for (p, k) in c.live_mut().iter_mut().zip(&k.points) {
                 let (ra, rb) = (p.anchor_a, p.anchor_b);
                 // Normal impulse: drive the normal velocity to the bias, only ever pushing.
                 let dv = b.v + cross_sv(b.w, rb) - a.v - cross_sv(a.w, ra);
@@ -198,7 +194,7 @@ fn iterate(
                 apply_impulse(a, b, ra, rb, dpn * n);
             }
         }
-        for (p, k) in c.points[..c.count].iter_mut().zip(&k.points) {
+        for (p, k) in c.points[..c.count as usize].iter_mut().zip(&k.points) {
             let (ra, rb) = (p.anchor_a, p.anchor_b);
 
             // Friction impulse: stop sliding, within |Pt| <= mu Pn (appendix eq. 60).

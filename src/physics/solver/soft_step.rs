@@ -265,7 +265,7 @@ fn prepare_contact(
     let n = c.normal;
     let t = c.tangent();
     let mut deepest = Real::INFINITY;
-    for (p, kp) in c.points[..c.count].iter_mut().zip(&mut k.points) {
+    for (p, kp) in c.live_mut().iter_mut().zip(&mut k.points) {
         deepest = deepest.min(p.separation);
         p.normal_impulse *= stiffness.per_substep;
         p.tangent_impulse *= stiffness.per_substep;
@@ -316,7 +316,7 @@ fn hold_if_deep(c: &Contact, k: &mut ContactConstraint, deepest: Real, min_reach
 #[inline]
 fn finish(c: &mut Contact, ends: &[PointImpulses; 2], substeps: Real, inv_dt: Real) {
     let mut force = 0.0;
-    for (p, end) in c.points[..c.count].iter_mut().zip(ends) {
+    for (p, end) in c.points[..c.count as usize].iter_mut().zip(ends) {
         let max_f = (c.friction * end.normal).max(0.0);
         p.normal_impulse = end.normal * substeps;
         p.tangent_impulse = end.tangent.clamp(-max_f, max_f) * substeps;
@@ -387,7 +387,7 @@ impl Stiffness {
         }
         let mut force: Real = 0.0;
         let mut mass = Real::INFINITY;
-        for (p, k) in c.points[..c.count].iter().zip(points) {
+        for (p, k) in c.live().iter().zip(points) {
             force = force.max(p.normal_impulse / self.h);
             mass = mass.min(k.normal_mass);
         }
@@ -431,7 +431,7 @@ fn creep(c: &Contact, sf: Softness, inv_mass: Real) -> Real {
         return 0.0;
     }
     let steady = (c.load / c.force).min(1.0);
-    let impulse: Real = c.points[..c.count].iter().map(|p| p.normal_impulse).sum();
+    let impulse: Real = c.live().iter().map(|p| p.normal_impulse).sum();
     let stiffness = sf.mass_scale * sf.bias_rate;
     if stiffness > 0.0 {
         steady * sf.impulse_scale * impulse * inv_mass / stiffness
@@ -449,7 +449,7 @@ fn creep(c: &Contact, sf: Softness, inv_mass: Real) -> Real {
 fn spring_reach(c: &Contact, sf: Softness, points: &[PointConstraint; 2]) -> Real {
     let stiffness = sf.mass_scale * sf.bias_rate;
     let mut reach: Real = 0.0;
-    for (p, k) in c.points[..c.count].iter().zip(points) {
+    for (p, k) in c.live().iter().zip(points) {
         if stiffness > 0.0 && k.normal_mass > 0.0 {
             let compression = sf.impulse_scale * p.normal_impulse / (k.normal_mass * stiffness);
             reach = reach.max(LOAD_REACH * compression);

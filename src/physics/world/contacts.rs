@@ -521,7 +521,7 @@ impl<'a> PairInput<'a> {
             touches_static: a.inv_mass == 0.0 || b.inv_mass == 0.0,
             rounding: [sa.shape.rounding(), sb.shape.rounding()],
             points: [ContactPoint::default(); 2],
-            count: manifold.count,
+            count: manifold.count as u8,
             hertz: previous.map_or(0.0, |c| c.hertz),
             load: previous.map_or(0.0, |c| c.load),
             force: previous.map_or(0.0, |c| c.force),
@@ -541,9 +541,7 @@ impl<'a> PairInput<'a> {
             cp.local_a = xf_a.apply_inv(mp.point);
             cp.local_b = xf_b.apply_inv(mp.point);
             cp.base_separation = mp.separation;
-            if let Some(prev) =
-                previous.and_then(|c| c.points[..c.count].iter().find(|p| p.id == mp.id))
-            {
+            if let Some(prev) = previous.and_then(|c| c.live().iter().find(|p| p.id == mp.id)) {
                 cp.normal_impulse = prev.normal_impulse;
                 cp.tangent_impulse = prev.tangent_impulse;
                 cp.approach_velocity = prev.approach_velocity;
@@ -593,8 +591,8 @@ fn recycle(base: &Contact, xf_a: Transform, xf_b: Transform, max_drift: Real) ->
     let normal = xf_a.q.rotate(base.local_normal);
     let mut manifold = Manifold::EMPTY;
     manifold.normal = normal;
-    manifold.count = base.count;
-    for (mp, p) in manifold.points.iter_mut().zip(&base.points[..base.count]) {
+    manifold.count = base.count as usize;
+    for (mp, p) in manifold.points.iter_mut().zip(base.live()) {
         let (pa, pb) = (xf_a.apply(p.local_a), xf_b.apply(p.local_b));
         let drift = pb - pa;
         if drift.length_squared() > max_drift * max_drift {
@@ -762,7 +760,7 @@ mod tests {
             .contacts
             .awake
             .iter()
-            .flat_map(|c| c.points[..c.count].iter())
+            .flat_map(|c| c.live().iter())
             .filter(|p| p.separation != p.base_separation)
             .count();
         assert!(reused > 0, "no contact was recycled");
@@ -770,7 +768,7 @@ mod tests {
             .contacts
             .awake
             .iter()
-            .flat_map(|c| c.points[..c.count].iter())
+            .flat_map(|c| c.live().iter())
             .all(|p| p.separation == p.base_separation);
         assert!(fresh, "without recycling every manifold is fresh");
     }

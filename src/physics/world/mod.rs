@@ -524,7 +524,7 @@ impl World {
                     normal_impulse: 0.0,
                     tangent_impulse: 0.0,
                 }; 2];
-                for (out, p) in points.iter_mut().zip(&c.points[..c.count]) {
+                for (out, p) in points.iter_mut().zip(c.live()) {
                     *out = ContactPointInfo {
                         point: p.point,
                         separation: p.separation,
@@ -539,7 +539,7 @@ impl World {
                     shape_b: (c.shapes & 0xffff) as usize,
                     normal: c.normal,
                     points,
-                    count: c.count,
+                    count: c.count as usize,
                 }
             })
     }

@@ -194,7 +194,8 @@ fn vec(a: [Real; 2]) -> Vec2 {
 
 impl ContactRecord {
     fn of(c: &Contact) -> ContactRecord {
-        let points = c.points[..c.count.min(2)]
+        let points = c
+            .live()
             .iter()
             .map(|p| PointRecord {
                 id: p.id,
@@ -309,7 +310,7 @@ impl ContactRecord {
             rounding: [(s.a, s.shapes >> 16), (s.b, s.shapes & 0xffff)]
                 .map(|(i, shape)| shape_of(slots, i, shape).map_or(0.0, Shape::rounding)),
             points,
-            count: s.points.len(),
+            count: s.points.len() as u8,
             hertz: s.hertz,
             load: s.load,
             force: s.force,

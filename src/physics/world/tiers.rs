@@ -445,8 +445,7 @@ impl TierInput {
         TierInput {
             bodies: [c.a, c.b],
             load: c.load,
-            unmeasured: c.age < NEW_CONTACT_STEPS
-                && c.points[..c.count].iter().any(|p| p.separation <= slop),
+            unmeasured: c.age < NEW_CONTACT_STEPS && c.live().iter().any(|p| p.separation <= slop),
         }
     }
 }

@@ -236,6 +236,20 @@ fn usable(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
     }
 }
 
+/// What few bodies have, kept out of line ([`Body::extras`]).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Extras {
+    pub filter: Filter,
+    pub parts: Option<Parts>,
+}
+
+impl Extras {
+    /// The extras of a body with this filter and these parts; None when it has neither.
+    pub fn boxed(filter: Filter, parts: Option<Parts>) -> Option<Box<Extras>> {
+        (filter != Filter::DEFAULT || parts.is_some()).then(|| Box::new(Extras { filter, parts }))
+    }
+}
+
 /// A rigid body as the World keeps it.
 #[derive(Clone, Debug)]
 pub struct Body {
@@ -243,9 +257,10 @@ pub struct Body {
     /// The body's own shape, centred on its origin (and on its centre of mass unless it has
     /// parts).
     pub(crate) shape: Shape,
-    /// A body of several shapes: all of them, in the centre-of-mass frame. None for a body of
-    /// one shape, whose centre of mass is its origin.
-    pub(crate) parts: Option<Box<Parts>>,
+    /// What few bodies have (a filter other than the default, further shapes), out of line so
+    /// that a plain body stays small: the step reads every body's fields, and a filter is 24
+    /// bytes. None for a body of one shape with the default filter.
+    pub(crate) extras: Option<Box<Extras>>,
     /// `shape.bounding_radius()` (m), kept: the narrow phase and the sleep test read it for
     /// every pair and body each step (a square root for a box, a load from the heap for a
     /// polygon).
@@ -266,7 +281,6 @@ pub struct Body {
     pub(crate) inv_inertia: Real,
     pub(crate) friction: Real,
     pub(crate) restitution: Real,
-    pub(crate) filter: Filter,
     /// False while the body sleeps (it then costs nothing per step).
     pub(crate) awake: bool,
     /// How long the body has been slower than the sleep threshold (s).
@@ -295,8 +309,7 @@ impl Body {
             None => (Real::INFINITY, 0.0, Real::INFINITY, 0.0),
             Some(d) => (d.mass, 1.0 / d.mass, d.inertia, 1.0 / d.inertia),
         };
-        let parts =
-            (!def.parts.is_empty()).then(|| Box::new(Body::parts_of(def, data, own_density)));
+        let parts = (!def.parts.is_empty()).then(|| Body::parts_of(def, data, own_density));
         let rot = Rot::from_angle(def.angle);
         let kinematic = def.mass == MassSpec::Kinematic;
         let is_static = inv_mass == 0.0 && !kinematic;
@@ -313,7 +326,7 @@ impl Body {
                 None => def.position,
                 Some(p) => def.position + rot.rotate(p.local_center),
             },
-            parts,
+            extras: Extras::boxed(def.filter, parts),
             angle: def.angle,
             rot,
             linear_velocity: if is_static {
@@ -330,7 +343,6 @@ impl Body {
             inv_inertia,
             friction: def.friction,
             restitution: def.restitution,
-            filter: def.filter,
             awake: true,
             sleep_time: 0.0,
             sleep_island: id.index,
@@ -381,12 +393,12 @@ impl Body {
     }
     /// The body's further shapes, placed from its origin (empty for a body of one shape).
     pub fn parts(&self) -> &[PartDef] {
-        self.parts.as_ref().map_or(&[], |p| &p.defs)
+        self.compound().map_or(&[], |p| &p.defs)
     }
     /// The body's origin, world coordinates (m): where its own shape is centred, the centre
     /// of mass unless it has parts.
     pub fn position(&self) -> Vec2 {
-        match &self.parts {
+        match self.compound() {
             None => self.position,
             Some(p) => self.position - self.rot.rotate(p.local_center),
         }
@@ -397,15 +409,30 @@ impl Body {
     }
     /// The centre of mass in the body's frame, from its origin (m; zero with no parts).
     pub fn local_center(&self) -> Vec2 {
-        self.parts.as_ref().map_or(Vec2::ZERO, |p| p.local_center)
+        self.compound().map_or(Vec2::ZERO, |p| p.local_center)
     }
     /// Orientation (rad), accumulated: not wrapped to (-pi, pi].
     pub fn angle(&self) -> Real {
         self.angle
     }
-    /// Collision filter.
+    /// Collision filter (its own shape's, for a body of several).
     pub fn filter(&self) -> Filter {
-        self.filter
+        self.extras.as_ref().map_or(Filter::DEFAULT, |e| e.filter)
+    }
+    /// A body of several shapes: all of them, in the centre-of-mass frame. None for a body of
+    /// one shape, whose centre of mass is its origin.
+    #[inline]
+    pub(crate) fn compound(&self) -> Option<&Parts> {
+        self.extras.as_ref().and_then(|e| e.parts.as_ref())
+    }
+    /// Set the collision filter (of its own shape, for a body of several).
+    pub(crate) fn set_filter(&mut self, filter: Filter) {
+        let mut extras = self.extras.take().map_or_else(Extras::default, |e| *e);
+        extras.filter = filter;
+        if let Some(own) = extras.parts.as_mut().map(|p| &mut p.all[0]) {
+            own.filter = filter;
+        }
+        self.extras = Extras::boxed(extras.filter, extras.parts);
     }
     /// Orientation as a rotation.
     pub fn rotation(&self) -> Rot {
@@ -421,16 +448,16 @@ impl Body {
     /// Each of the body's shapes with its pose in the centre-of-mass frame.
     pub(crate) fn shapes(&self) -> impl Iterator<Item = (&Shape, Transform)> + Clone {
         let own = self
-            .parts
+            .compound()
             .is_none()
             .then_some((&self.shape, Transform::IDENTITY));
-        let parts = self.parts.iter().flat_map(|p| p.all.iter());
+        let parts = self.compound().into_iter().flat_map(|p| p.all.iter());
         own.into_iter().chain(parts.map(|p| (&p.shape, p.pose)))
     }
     /// The box around all the body's shapes as it is now.
     #[inline]
     pub(crate) fn aabb(&self) -> super::shape::Aabb {
-        match &self.parts {
+        match self.compound() {
             None => self.shape.aabb(self.frame()),
             Some(parts) => parts.aabb(self.frame()),
         }
@@ -520,14 +547,14 @@ impl Body {
                 MassSpec::Kinematic
             } else if self.is_static() {
                 MassSpec::Static
-            } else if let Some(p) = &self.parts {
+            } else if let Some(p) = self.compound() {
                 MassSpec::Density(p.own_density)
             } else {
                 MassSpec::Mass(self.mass)
             },
             friction: self.friction,
             restitution: self.restitution,
-            filter: self.filter,
+            filter: self.filter(),
             parts: self.parts().to_vec(),
         }
     }

@@ -9,7 +9,7 @@ use crate::{BodyState, Engine, Sanity};
 use boxdd_sys::ffi::*;
 use std::alloc::{GlobalAlloc, Layout};
 use tiltbox::measure::cases::Setup;
-use tiltbox::physics::{MassSpec, Mixing, Settings, Shape};
+use tiltbox::physics::{MassSpec, Mixing, Real, Rot, Settings, Shape, Transform};
 
 /// How the tables name this build of Box2D.
 pub const LABEL: &str = if cfg!(feature = "avx2") {
@@ -146,59 +146,34 @@ impl Box2d {
                 bd.enableSleep = setup.sleep;
                 let body = b2CreateBody(world, &bd);
 
-                let mut sd = b2DefaultShapeDef();
-                sd.filter.categoryBits = d.filter.category;
-                sd.filter.maskBits = d.filter.mask;
-                sd.filter.groupIndex = d.filter.group;
-                sd.material.friction = d.friction as f32;
-                sd.material.restitution = d.restitution as f32;
-                sd.density = match d.mass {
+                let own_density = match d.mass {
                     MassSpec::Static => 0.0,
                     MassSpec::Density(rho) => rho as f32,
                     // Box2D takes a density: the one that gives this mass.
-                    MassSpec::Mass(m) => (m / d.shape.area()) as f32,
+                    MassSpec::Mass(m) => {
+                        assert!(d.parts.is_empty(), "the peer scenes give parts by density");
+                        (m / d.shape.area()) as f32
+                    }
                     MassSpec::Kinematic => panic!("the peer scenes have no kinematic bodies"),
                 };
-                match d.shape {
-                    Shape::Rect { half_extents: h } => {
-                        let p = b2MakeBox(h.x as f32, h.y as f32);
-                        b2CreatePolygonShape(body, &sd, &p);
-                    }
-                    Shape::Circle { radius } => {
-                        let c = b2Circle {
-                            center: v(0.0, 0.0),
-                            radius: radius as f32,
-                        };
-                        b2CreateCircleShape(body, &sd, &c);
-                    }
-                    Shape::Capsule {
-                        half_length,
-                        radius,
-                    } => {
-                        let c = b2Capsule {
-                            center1: v(-half_length as f32, 0.0),
-                            center2: v(half_length as f32, 0.0),
-                            radius: radius as f32,
-                        };
-                        b2CreateCapsuleShape(body, &sd, &c);
-                    }
-                    Shape::Polygon(ref poly) => {
-                        // tiltbox's vertices (counter-clockwise, centred on the centroid) through
-                        // Box2D's hull, so the body origin is the centre of mass in both.
-                        let points: Vec<b2Vec2> = poly
-                            .vertices()
-                            .iter()
-                            .map(|p| v(p.x as f32, p.y as f32))
-                            .collect();
-                        let hull = b2ComputeHull(points.as_ptr(), points.len() as i32);
-                        assert!(
-                            hull.count as usize == points.len(),
-                            "Box2D's hull dropped a vertex of a tiltbox polygon"
-                        );
-                        let p = b2MakePolygon(&hull, 0.0);
-                        b2CreatePolygonShape(body, &sd, &p);
-                    }
-                    Shape::Segment(_) => panic!("the peer scenes have no segments or chains"),
+                let own = (&d.shape, Transform::IDENTITY, d.filter, d.friction, d.restitution, own_density);
+                let parts = d.parts.iter().map(|p| {
+                    let pose = Transform {
+                        p: p.offset,
+                        q: Rot::from_angle(p.angle),
+                    };
+                    let density = if is_static { 0.0 } else { p.density as f32 };
+                    (&p.shape, pose, p.filter, p.friction, p.restitution, density)
+                });
+                for (shape, pose, filter, friction, restitution, density) in std::iter::once(own).chain(parts) {
+                    let mut sd = b2DefaultShapeDef();
+                    sd.filter.categoryBits = filter.category;
+                    sd.filter.maskBits = filter.mask;
+                    sd.filter.groupIndex = filter.group;
+                    sd.material.friction = friction as f32;
+                    sd.material.restitution = restitution as f32;
+                    sd.density = density;
+                    create_shape(body, &sd, shape, pose);
                 }
                 if !is_static {
                     dynamic.push(body);
@@ -206,9 +181,12 @@ impl Box2d {
                 all.push(body);
             }
             let mut joints = Vec::with_capacity(setup.joints.len());
+            // The world, for joints to it: a static body without shapes at the origin.
+            let ground = b2CreateBody(world, &b2DefaultBodyDef());
             for j in &setup.joints {
                 let mut jd = b2DefaultRevoluteJointDef();
-                jd.base.bodyIdA = all[j.a];
+                let a = j.a.map_or(ground, |a| all[a]);
+                jd.base.bodyIdA = a;
                 jd.base.bodyIdB = all[j.b];
                 let (pa, pb) = (
                     v(j.anchor_a.x as f32, j.anchor_a.y as f32),
@@ -216,8 +194,13 @@ impl Box2d {
                 );
                 jd.base.localFrameA.p = pa;
                 jd.base.localFrameB.p = pb;
+                if let Some((speed, max)) = j.motor {
+                    jd.enableMotor = true;
+                    jd.motorSpeed = speed as f32;
+                    jd.maxMotorTorque = max as f32;
+                }
                 b2CreateRevoluteJoint(world, &jd);
-                joints.push((all[j.a], all[j.b], pa, pb));
+                joints.push((a, all[j.b], pa, pb));
             }
             Box2d {
                 world,
@@ -235,6 +218,64 @@ impl Drop for Box2d {
     fn drop(&mut self) {
         // SAFETY: the world was created in `with_step` and is destroyed once.
         unsafe { b2DestroyWorld(self.world) }
+    }
+}
+
+/// One tiltbox shape on a Box2D body, placed at `pose` in the body's frame.
+///
+/// # Safety
+/// `body` is a live body and `sd` a shape definition from `b2DefaultShapeDef`.
+unsafe fn create_shape(body: b2BodyId, sd: &b2ShapeDef, shape: &Shape, pose: Transform) {
+    let at = |x: Real, y: Real| {
+        let p = pose.apply(tiltbox::physics::vec2(x, y));
+        v(p.x as f32, p.y as f32)
+    };
+    let rot = b2Rot {
+        c: pose.q.c as f32,
+        s: pose.q.s as f32,
+    };
+    match *shape {
+        Shape::Rect { half_extents: h } => {
+            let p = b2MakeOffsetBox(h.x as f32, h.y as f32, at(0.0, 0.0), rot);
+            b2CreatePolygonShape(body, sd, &p);
+        }
+        Shape::Circle { radius } => {
+            let c = b2Circle {
+                center: at(0.0, 0.0),
+                radius: radius as f32,
+            };
+            b2CreateCircleShape(body, sd, &c);
+        }
+        Shape::Capsule {
+            half_length,
+            radius,
+        } => {
+            let c = b2Capsule {
+                center1: at(-half_length, 0.0),
+                center2: at(half_length, 0.0),
+                radius: radius as f32,
+            };
+            b2CreateCapsuleShape(body, sd, &c);
+        }
+        Shape::Polygon(ref poly) => {
+            // tiltbox's vertices (counter-clockwise, centred on the centroid) through Box2D's
+            // hull, so a body of one polygon has its origin at its centre of mass in both.
+            let points: Vec<b2Vec2> = poly.vertices().iter().map(|p| at(p.x, p.y)).collect();
+            let hull = b2ComputeHull(points.as_ptr(), points.len() as i32);
+            assert!(
+                hull.count as usize == points.len(),
+                "Box2D's hull dropped a vertex of a tiltbox polygon"
+            );
+            let p = b2MakePolygon(&hull, 0.0);
+            b2CreatePolygonShape(body, sd, &p);
+        }
+        Shape::Segment(ref s) => {
+            let segment = b2Segment {
+                point1: at(s.a.x, s.a.y),
+                point2: at(s.b.x, s.b.y),
+            };
+            b2CreateSegmentShape(body, sd, &segment);
+        }
     }
 }
 

@@ -52,7 +52,7 @@ use std::time::Instant;
 use tiltbox::measure::accuracy::max_penetration;
 use tiltbox::measure::cases::{benchmark_setups, Setup};
 use tiltbox::measure::machine::cpu_model;
-use tiltbox::physics::{BodyDef, MassSpec, Mixing, Settings, Shape, Vec2, World};
+use tiltbox::physics::{BodyDef, MassSpec, Mixing, Real, Settings, Shape, Vec2, World};
 
 // ---------------------------------------------------------------------------------------------
 // Counting allocator: live bytes and number of allocation calls.
@@ -341,7 +341,10 @@ fn rapier_collider(shape: &Shape) -> ColliderBuilder {
                 .expect("rapier2d refused a polygon tiltbox accepted");
             ColliderBuilder::new(shape)
         }
-        Shape::Segment(_) => panic!("the peer scenes have no segments or chains"),
+        Shape::Segment(ref s) => ColliderBuilder::segment(
+            Vector::new(s.a.x as f32, s.a.y as f32),
+            Vector::new(s.b.x as f32, s.b.y as f32),
+        ),
     }
 }
 
@@ -386,12 +389,19 @@ impl Rapier {
             }
             .translation(Vector::new(def.position.x as f32, def.position.y as f32))
             .rotation(def.angle as f32);
-            let collider = rapier_collider(&def.shape)
-                .friction(def.friction as f32)
-                .friction_combine_rule(friction_rule)
-                .restitution(def.restitution as f32)
-                .restitution_combine_rule(restitution_rule)
-                .collision_groups(rapier_groups(def.filter));
+            let material = |c: ColliderBuilder, friction: Real, restitution: Real, filter| {
+                c.friction(friction as f32)
+                    .friction_combine_rule(friction_rule)
+                    .restitution(restitution as f32)
+                    .restitution_combine_rule(restitution_rule)
+                    .collision_groups(rapier_groups(filter))
+            };
+            let collider = material(
+                rapier_collider(&def.shape),
+                def.friction,
+                def.restitution,
+                def.filter,
+            );
             let collider = match (def.mass, &def.shape) {
                 (MassSpec::Static, _) => collider,
                 // parry2d 0.31 moves a capsule's two half discs out by 3r/8 (a 3D hemisphere's
@@ -412,25 +422,62 @@ impl Rapier {
                     ))
                 }
                 (MassSpec::Density(d), _) => collider.density(d as f32),
-                (MassSpec::Mass(m), _) => collider.mass(m as f32),
+                (MassSpec::Mass(m), _) => {
+                    assert!(def.parts.is_empty(), "the peer scenes give parts by density");
+                    collider.mass(m as f32)
+                }
                 (MassSpec::Kinematic, _) => panic!("the peer scenes have no kinematic bodies"),
             };
             let (handle, _) = world.insert(builder, collider);
+            // A body's further shapes, each at its pose in the body's frame.
+            for part in &def.parts {
+                assert!(
+                    !matches!(part.shape, Shape::Capsule { .. }),
+                    "the peer scenes have no capsule parts"
+                );
+                let c = material(
+                    rapier_collider(&part.shape),
+                    part.friction,
+                    part.restitution,
+                    part.filter,
+                )
+                .translation(Vector::new(part.offset.x as f32, part.offset.y as f32))
+                .rotation(part.angle as f32);
+                let c = if def.mass == MassSpec::Static {
+                    c
+                } else {
+                    c.density(part.density as f32)
+                };
+                world.insert_collider(c, Some(handle));
+            }
             if def.mass != MassSpec::Static {
                 dynamic.push(handle);
             }
             handles.push(handle);
         }
         let mut joints = Vec::with_capacity(setup.joints.len());
+        // The world, for joints to it: a fixed body without colliders at the origin.
+        let ground = setup
+            .joints
+            .iter()
+            .any(|j| j.a.is_none())
+            .then(|| world.insert_body(RigidBodyBuilder::fixed()));
         for j in &setup.joints {
             let anchor = |p: Vec2| Vector::new(p.x as f32, p.y as f32);
-            let hinge = RevoluteJointBuilder::new()
+            let mut hinge = RevoluteJointBuilder::new()
                 .local_anchor1(anchor(j.anchor_a))
                 .local_anchor2(anchor(j.anchor_b))
                 .contacts_enabled(false);
-            world.insert_impulse_joint(handles[j.a], handles[j.b], hinge);
+            if let Some((speed, max)) = j.motor {
+                // A velocity motor (rapier's damping factor: how hard it pulls to the speed).
+                hinge = hinge
+                    .motor_velocity(speed as f32, 100.0)
+                    .motor_max_force(max as f32);
+            }
+            let a = j.a.map_or_else(|| ground.expect("made above"), |a| handles[a]);
+            world.insert_impulse_joint(a, handles[j.b], hinge);
             joints.push((
-                handles[j.a],
+                a,
                 handles[j.b],
                 anchor(j.anchor_a),
                 anchor(j.anchor_b),

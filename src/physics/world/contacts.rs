@@ -92,7 +92,7 @@ impl World {
                 continue;
             };
             let wake = &mut islands.wake_queue;
-            if a.parts.is_none() && b.parts.is_none() {
+            if a.compound().is_none() && b.compound().is_none() {
                 let sides = (Side::whole(a), Side::whole(b));
                 if let Some(input) = pairs.update((key, 0), sides, &mut merge, contacts, wake) {
                     tiers.inputs.push(input);
@@ -132,8 +132,8 @@ impl<'a> Side<'a> {
 
     /// Shape `i` of `body` (0 its own, or the first of its parts), with its filter.
     fn of(body: &'a Body, i: u32) -> (Side<'a>, Filter) {
-        match &body.parts {
-            None => (Side::whole(body), body.filter),
+        match body.compound() {
+            None => (Side::whole(body), body.filter()),
             Some(parts) => {
                 let part = &parts.all[i as usize];
                 let side = Side {
@@ -150,7 +150,7 @@ impl<'a> Side<'a> {
 
     /// Each shape of `body`, with its index.
     fn each(body: &'a Body) -> impl Iterator<Item = (u32, Side<'a>)> + 'a {
-        let count = body.parts.as_ref().map_or(1, |p| p.all.len() as u32);
+        let count = body.compound().map_or(1, |p| p.all.len() as u32);
         (0..count).map(move |i| (i, Side::of(body, i).0))
     }
 
@@ -165,7 +165,7 @@ impl<'a> Side<'a> {
 /// one (the other body's shapes query it), else every pair.
 fn shape_pairs(a: &Body, b: &Body, margin: Real, out: &mut Vec<u32>) {
     fn tree(x: &Body) -> Option<&PartTree> {
-        x.parts.as_ref().and_then(|p| p.tree.as_ref())
+        x.compound().and_then(|p| p.tree.as_ref())
     }
     out.clear();
     if let Some(tb) = tree(b) {
@@ -203,7 +203,7 @@ fn filters_allow(key: u64, bodies: &Bodies) -> bool {
     // A body of several shapes has a filter per shape, tested shape by shape.
     let filter = |i: u32| {
         let body = bodies.slots[i as usize].body.as_ref()?;
-        body.parts.is_none().then_some(body.filter)
+        body.compound().is_none().then_some(body.filter())
     };
     match (filter(a), filter(b)) {
         (Some(fa), Some(fb)) => fa.should_collide(&fb),

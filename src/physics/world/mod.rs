@@ -229,7 +229,7 @@ impl World {
         };
         let body = Body::from_def(id, def);
         let passive = body.is_static();
-        self.bodies.filtered += usize::from(body.filter != Filter::DEFAULT);
+        self.bodies.filtered += usize::from(body.filter() != Filter::DEFAULT);
         slot.body = Some(body);
         self.bodies.count += 1;
         self.broad_phase.sweep.insert(index, passive);
@@ -300,7 +300,7 @@ impl World {
         for &id in ids {
             let slot = &mut self.bodies.slots[id.index as usize];
             let body = slot.body.take().expect("checked above");
-            self.bodies.filtered -= usize::from(body.filter != Filter::DEFAULT);
+            self.bodies.filtered -= usize::from(body.filter() != Filter::DEFAULT);
             removed.push(body);
             slot.generation = slot.generation.wrapping_add(1);
             self.bodies.free.push(id.index);
@@ -493,10 +493,8 @@ impl World {
     /// bodies the filter now refuses end and new ones begin where it now allows them.
     pub fn set_filter(&mut self, id: BodyId, filter: Filter) -> Result<(), PhysicsError> {
         let b = self.body_mut(id)?;
-        if let Some(own) = b.parts.as_mut().map(|p| &mut p.all[0]) {
-            own.filter = filter;
-        }
-        let was = std::mem::replace(&mut b.filter, filter);
+        let was = b.filter();
+        b.set_filter(filter);
         self.bodies.filtered += usize::from(filter != Filter::DEFAULT);
         self.bodies.filtered -= usize::from(was != Filter::DEFAULT);
         Ok(())

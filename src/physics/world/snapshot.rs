@@ -18,6 +18,7 @@
 //! visibility: the state's shape, its export, and its checked import (every field validated
 //! before anything is replaced).
 
+use super::super::body::Extras;
 use super::super::body::{Body, BodyId};
 use super::super::contact::{Contact, ContactPoint};
 use super::super::error::PhysicsError;
@@ -382,7 +383,7 @@ fn materials(what: &str, friction: Real, restitution: Real) -> Result<(), StateE
 /// Shape `k` of the body in slot `i` (0 its own, or the first of its parts), if it has one.
 fn shape_of(slots: &[Slot], i: u32, k: u32) -> Option<&Shape> {
     let body = slots.get(i as usize)?.body.as_ref()?;
-    match &body.parts {
+    match body.compound() {
         None => (k == 0).then_some(&body.shape),
         Some(p) => p.all.get(k as usize).map(|part| &part.shape),
     }
@@ -414,15 +415,15 @@ impl BodyState {
             sleep_time: b.sleep_time,
             sleep_island: b.sleep_island,
             kinematic: b.kinematic,
-            filter: b.filter,
+            filter: b.filter(),
             parts: b.parts().to_vec(),
             local_center: v2(b.local_center()),
-            own_density: b.parts.as_ref().map_or(1.0, |p| p.own_density),
+            own_density: b.compound().map_or(1.0, |p| p.own_density),
         }
     }
 
     /// The body's parts, each checked, placed around its stored centre of mass.
-    fn parts(&self, index: u32, shape: &Shape) -> Result<Option<Box<Parts>>, StateError> {
+    fn parts(&self, index: u32, shape: &Shape) -> Result<Option<Parts>, StateError> {
         if self.parts.is_empty() {
             return Ok(None);
         }
@@ -446,7 +447,7 @@ impl BodyState {
         };
         let mut parts = Parts::new(own, &self.parts, vec(self.local_center));
         parts.own_density = self.own_density;
-        Ok(Some(Box::new(parts)))
+        Ok(Some(parts))
     }
 
     /// The body in slot `id`, checked: a valid shape, finite numbers, masses not negative, an
@@ -483,7 +484,7 @@ impl BodyState {
             min_extent: parts
                 .as_ref()
                 .map_or_else(|| shape.min_extent(), |p| p.min_extent()),
-            parts,
+            extras: Extras::boxed(b.filter, parts),
             shape,
             position: vec(b.position),
             angle: b.angle,
@@ -502,7 +503,6 @@ impl BodyState {
             sleep_time: b.sleep_time,
             sleep_island: b.sleep_island,
             kinematic: b.kinematic && b.mass[1] == 0.0,
-            filter: b.filter,
         })
     }
 }
@@ -622,7 +622,7 @@ impl World {
                 let passive = b.is_static() || !b.awake;
                 self.broad_phase.sweep.insert(id.index, passive);
                 self.bodies.count += 1;
-                self.bodies.filtered += usize::from(b.filter != Filter::DEFAULT);
+                self.bodies.filtered += usize::from(b.filter() != Filter::DEFAULT);
             }
             self.bodies.slots.push(Slot {
                 generation: s.generation,

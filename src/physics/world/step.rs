@@ -294,7 +294,7 @@ impl World {
                 b.angular_velocity = sb.w;
                 let limit = FAST_FRACTION * b.min_extent;
                 // Turning moves the shape's core at most its reach (a disc's not at all).
-                let rounding = if b.parts.is_none() {
+                let rounding = if b.compound().is_none() {
                     b.shape.rounding()
                 } else {
                     0.0

@@ -251,6 +251,7 @@ impl Merge {
 
     /// Move to `key` among last step's contacts, ending those passed over; whether last step
     /// had a contact for `key` ([`Merge::last`]).
+    #[inline(always)]
     fn seek(&mut self, contacts: &mut Contacts, order: (u64, u32)) -> bool {
         if self.in_place
             && contacts
@@ -366,7 +367,9 @@ impl<'a> PairInput<'a> {
 
     /// The contacts of a pair of which one body or both have several shapes: each pair of
     /// shapes whose boxes meet (grown as the bodies' proxies are) and whose filters allow it,
-    /// in shape order (`found`: scratch).
+    /// in shape order (`found`: scratch). Kept out of the loop over plain pairs: cold.
+    #[cold]
+    #[inline(never)]
     fn update_parts(
         &self,
         key: u64,

@@ -218,3 +218,18 @@ fn a_heavy_block_on_a_light_rope_rests_within_its_joints_closed_form_give() {
 fn a_slack_bridge_carries_its_weight_and_hangs_as_a_catenary() {
     check(extreme::bridge);
 }
+
+#[test]
+fn a_motor_turns_a_heavy_drum_at_its_speed_and_keeps_every_box_inside() {
+    check(extreme::tumbler);
+}
+
+#[test]
+fn a_paddle_of_unlimited_torque_stirs_six_thousand_bodies_at_its_speed() {
+    check(extreme::spinner);
+}
+
+#[test]
+fn a_car_on_wheel_joints_drives_over_hills_without_tipping() {
+    check(extreme::car);
+}

@@ -519,8 +519,9 @@ impl Engine for Rapier {
                 let b = &self.world.bodies[h];
                 let m = &b.mass_properties().local_mprops;
                 BodyState {
-                    // The centre of mass (equal to the translation when the collider is centred).
-                    position: [b.center_of_mass().x, b.center_of_mass().y],
+                    // The body's origin, as tiltbox and Box2D report (its centre of mass unless
+                    // it has colliders off its centre).
+                    position: [b.translation().x, b.translation().y],
                     angle: b.rotation().angle(),
                     velocity: [b.linvel().x, b.linvel().y],
                     angular_velocity: b.angvel(),

@@ -44,6 +44,7 @@ impl World {
         let fast = std::mem::take(&mut self.solver.fast);
         let mut hits = std::mem::take(&mut self.solver.fast_hits);
         let mut place = std::mem::take(&mut self.solver.fast_place);
+        let mut found = std::mem::take(&mut self.broad_phase.shape_pairs);
         hits.clear();
         hits.resize(fast.len(), 1.0);
         place.resize(self.bodies.slots.len(), NOT_FAST);
@@ -57,12 +58,13 @@ impl World {
                 // Only a static body can be `other`: it has no inverse mass (read from the
                 // solver's compact bodies before the body itself).
                 if i != NOT_FAST && self.solver.bodies[other as usize].inv_mass == 0.0 {
-                    let t = self.impact(moving, other);
+                    let t = self.impact(moving, other, &mut found);
                     hits[i as usize] = hits[i as usize].min(t);
                 }
             }
         }
-        self.sweep_escaped(&fast, &mut hits);
+        self.sweep_escaped(&fast, &mut hits, &mut found);
+        self.broad_phase.shape_pairs = found;
         for (&slot, &t) in fast.iter().zip(&hits) {
             place[slot as usize] = NOT_FAST;
             if t < 1.0 {
@@ -80,7 +82,7 @@ impl World {
     /// speed within the step, struck by another body: the statics it reached were never
     /// paired with it, so it is swept against every static whose box its path's box meets
     /// (Box2D queries its static tree alike). Rare: the statics are listed only then.
-    fn sweep_escaped(&mut self, fast: &[u32], hits: &mut [Real]) {
+    fn sweep_escaped(&mut self, fast: &[u32], hits: &mut [Real], found: &mut Vec<u32>) {
         let mut statics = std::mem::take(&mut self.solver.statics);
         statics.clear();
         let mut listed = false;
@@ -99,15 +101,16 @@ impl World {
                 listed = true;
             }
             for &other in &statics {
-                hits[i] = hits[i].min(self.impact(slot, other));
+                hits[i] = hits[i].min(self.impact(slot, other, found));
             }
         }
         self.solver.statics = statics;
     }
 
     /// The fraction of its step's motion at which body `moving` first comes within the slop of
-    /// body `other`, if that is static; 1 if never.
-    fn impact(&self, moving: u32, other: u32) -> Real {
+    /// body `other`, if that is static; 1 if never. A static body of many shapes is swept
+    /// against only those near the path, found through its tree (`found`: scratch).
+    fn impact(&self, moving: u32, other: u32, found: &mut Vec<u32>) -> Real {
         let slots = &self.bodies.slots;
         let (Some(body), Some(fixed)) = (
             slots[moving as usize].body.as_ref(),
@@ -134,12 +137,26 @@ impl World {
         if !swept.overlaps(&self.broad_phase.proxies[other as usize].aabb) {
             return 1.0;
         }
+        let near = fixed
+            .compound()
+            .and_then(|p| p.tree.as_ref().map(|t| (p, t)));
+        if let Some((_, tree)) = near {
+            found.clear();
+            tree.query(fixed.frame(), &swept, found);
+        }
         let mut first: Real = 1.0;
         for (shape, local) in body.shapes() {
             let sweep = Sweep { start, end, local };
-            for (fixed_shape, pose) in fixed.shapes() {
+            let mut sweep_against = |(fixed_shape, pose): (&Shape, Transform)| {
                 let xf = fixed.frame().then(pose);
                 first = first.min(self.shape_impact((fixed_shape, xf), shape, &sweep));
+            };
+            match near {
+                Some((parts, _)) => found
+                    .iter()
+                    .map(|&k| &parts.all[k as usize])
+                    .for_each(|p| sweep_against((&p.shape, p.pose))),
+                None => fixed.shapes().for_each(&mut sweep_against),
             }
         }
         first

@@ -9,11 +9,13 @@
 //! - `limits.rs`: tiny and large bodies, gravity flips, a huge step, non-finite input;
 //! - `terrain.rs`: sliding across a tiled floor, as boxes and as a chain; rolling down a chain;
 //! - `motion.rs`: contacts that move: kinematic carriers and pushers, rolling, bouncing;
-//! - `joints.rs`: a hanging chain, a heavy block on a light rope, a slack bridge.
+//! - `joints.rs`: a hanging chain, a heavy block on a light rope, a slack bridge;
+//! - `machines.rs`: motors and bodies of several shapes: Box2D's tumbler and spinner, a car.
 
 mod contacts;
 mod joints;
 mod limits;
+mod machines;
 mod motion;
 mod stacks;
 mod terrain;
@@ -24,6 +26,7 @@ pub use contacts::{
 };
 pub use joints::{bridge, hanging_chain, heavy_rope};
 pub use limits::{gravity_flip, huge_dt, large_bodies, non_finite_refused, tiny_bodies};
+pub use machines::{car, spinner, tumbler};
 pub use motion::{kinematic_carrier, kinematic_pusher, restitution_drop, rolling_disc};
 pub use stacks::{
     far_from_origin, pyramid_100, pyramid_134, pyramid_20, pyramid_200, pyramid_30, pyramid_sleeps,
@@ -71,7 +74,7 @@ const fn report_case(name: &'static str, title: &'static str, run: Runner) -> Ex
 /// Every case, in report order (the report-only cases last). One row a case, kept as a
 /// table.
 #[rustfmt::skip]
-const CASES: [ExtremeCase; 32] = [
+const CASES: [ExtremeCase; 35] = [
     case("stack_20", "Stack of 20, 30 s", stack_20),
     case("stack_50", "Stack of 50, 10 s", stack_50),
     case("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
@@ -102,6 +105,9 @@ const CASES: [ExtremeCase; 32] = [
     case("hanging_chain", "A 50-link chain hangs by its joints' give", hanging_chain),
     case("heavy_rope", "A 900 kg block on 0.5 kg links (1,800:1)", heavy_rope),
     case("bridge", "A slack 100-plank bridge hangs as a catenary", bridge),
+    case("tumbler", "A 4,000 kg drum tumbles 2,025 boxes of 62.5 g", tumbler),
+    case("spinner", "A paddle of unlimited torque stirs 6,076 bodies", spinner),
+    case("car", "A car on wheel joints drives over hills", car),
     report_case("pyramid_134", "Pyramid base 134 (9,045 boxes) stands", pyramid_134),
     report_case("pyramid_100", "Pyramid base 100 (5,050 boxes)", pyramid_100),
 ];

@@ -339,7 +339,8 @@ impl SweepAndPrune {
 
 /// Push every overlapping pair of `active` (sorted by left edge), sweeping along x in
 /// horizontal bands: band k holds the boxes that reach into [y0 + k h, y0 + (k + 1) h), with h
-/// the tallest box's height (so a box is in one or two bands, three only by rounding), each
+/// the tallest box's height but the outliers' (so a box is in one or two bands, three only by
+/// rounding; an outlier in as many as it reaches), each
 /// band in the list's order. A pair is pushed only in the band of the higher of its two lower edges: that edge
 /// lies in both boxes' height, so both are in its band (the band of a height is
 /// non-decreasing in it, rounding included), and it is one band. Within a band the tests are
@@ -350,11 +351,33 @@ fn band_pairs(
     starts: &mut Vec<u32>,
     out: &mut Vec<u64>,
 ) {
-    let (mut y0, mut y1, mut height) = (Real::INFINITY, Real::NEG_INFINITY, 0.0 as Real);
+    let (mut y0, mut y1, mut sum) = (Real::INFINITY, Real::NEG_INFINITY, 0.0 as Real);
     for b in active {
         y0 = y0.min(b.min_y);
         y1 = y1.max(b.max_y);
-        height = height.max(b.max_y - b.min_y);
+        sum += b.max_y - b.min_y;
+    }
+    // The tallest box but the outliers: one body many times the others' size (Box2D's
+    // tumbler's drum, 28 m around 0.35 m boxes) would make one band of them all. An outlier
+    // goes into every band it reaches, which costs it one insertion per band.
+    let cap = OUTLIER * sum / active.len().max(1) as Real;
+    let (mut height, mut tallest) = (0.0 as Real, 0.0 as Real);
+    for b in active {
+        let h = b.max_y - b.min_y;
+        tallest = tallest.max(h);
+        if h <= cap {
+            height = height.max(h);
+        }
+    }
+    // Unless the outliers together would be inserted more than three times per box (many
+    // tall boxes): then the tallest sets the height, as without outliers.
+    let insertions: Real = active
+        .iter()
+        .map(|b| ((b.max_y - b.min_y) - cap).max(0.0))
+        .sum::<Real>()
+        / height;
+    if !(insertions <= 3.0 * active.len() as Real) {
+        height = tallest;
     }
     // At most one band per two boxes: a world of small boxes spread very far apart
     // vertically does not pay for empty bands.
@@ -412,6 +435,9 @@ fn sweep_band(boxes: &[SortedBox], here: impl Fn(Real) -> bool, out: &mut Vec<u6
         }
     }
 }
+
+/// A box taller than this many times the mean height does not set the bands' height.
+const OUTLIER: Real = 4.0;
 
 /// Fewer active bodies than this are swept in one band.
 const BANDS_FROM: usize = 64;
@@ -683,6 +709,13 @@ mod tests {
         let mut far = spread.clone();
         far.push(unit(0.0, 1.0e30, 1.0, 1.0));
         bands_match_a_full_search(&far);
+        // A drum around the grid, 30 times its boxes' height: in every band it reaches.
+        let mut drum = grid.clone();
+        drum.push(unit(-1.0, -1.0, 12.0, 30.0));
+        assert_eq!(
+            bands_match_a_full_search(&drum),
+            9 * 12 + 10 * 11 + 2 * 9 * 11 + 120
+        );
         let mut overflow = spread;
         overflow.push(unit(0.0, Real::MAX / 2.0, 1.0, Real::MAX / 2.0));
         overflow.push(unit(0.0, -Real::MAX / 2.0, 1.0, 1.0));

@@ -20,6 +20,7 @@ pub mod joint;
 pub mod math;
 pub mod part;
 pub(crate) mod part_tree;
+pub mod ragdoll;
 pub mod segment;
 pub mod settings;
 pub mod shape;

@@ -7,7 +7,7 @@
 //! line at hand for the message.
 
 use super::error::{body_label, describe, LineCounter};
-use super::joints::{JointEntry, RopeEntry};
+use super::joints::{JointEntry, RagdollEntry, RopeEntry};
 use super::{Colour, Scene, SceneBody, SceneError, MAX_BODIES};
 use crate::physics::error::{finite, non_negative, positive, unit_interval};
 use crate::physics::segment::chain;
@@ -55,6 +55,8 @@ struct SceneFile<B, S, P> {
     pyramid: Vec<Spanned<P>>,
     #[serde(default = "Vec::new")]
     rope: Vec<RopeEntry>,
+    #[serde(default = "Vec::new")]
+    ragdoll: Vec<RagdollEntry>,
     #[serde(default = "Vec::new")]
     joint: Vec<JointEntry>,
 }
@@ -385,29 +387,43 @@ fn generator_label(kind: Kind, name: Option<&str>, k: usize) -> String {
 /// table kept loose and read in its turn, so that the error names the table, its index and
 /// its line, after any refusal of an earlier table, as the file is read top to bottom.
 pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
-    let (name, gravity, settings, mut entries, ropes, joint_entries) = match toml::from_str::<
-        TypedFile,
-    >(text)
-    {
-        Ok(f) => {
-            let mut entries = Vec::with_capacity(f.body.len() + f.stack.len() + f.pyramid.len());
-            push_all(&mut entries, Kind::Body, f.body, Entry::Body);
-            push_all(&mut entries, Kind::Stack, f.stack, Entry::Stack);
-            push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Pyramid);
-            (f.name, f.gravity, f.settings, entries, f.rope, f.joint)
-        }
-        Err(_) => {
-            let f: LooseFile = toml::from_str(text).map_err(|e| SceneError::Parse {
-                entry: None,
-                message: e.to_string().trim_end().to_owned(),
-            })?;
-            let mut entries = Vec::with_capacity(f.body.len() + f.stack.len() + f.pyramid.len());
-            push_all(&mut entries, Kind::Body, f.body, Entry::Loose);
-            push_all(&mut entries, Kind::Stack, f.stack, Entry::Loose);
-            push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Loose);
-            (f.name, f.gravity, f.settings, entries, f.rope, f.joint)
-        }
-    };
+    let (name, gravity, settings, mut entries, (ropes, ragdolls), joint_entries) =
+        match toml::from_str::<TypedFile>(text) {
+            Ok(f) => {
+                let mut entries =
+                    Vec::with_capacity(f.body.len() + f.stack.len() + f.pyramid.len());
+                push_all(&mut entries, Kind::Body, f.body, Entry::Body);
+                push_all(&mut entries, Kind::Stack, f.stack, Entry::Stack);
+                push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Pyramid);
+                (
+                    f.name,
+                    f.gravity,
+                    f.settings,
+                    entries,
+                    (f.rope, f.ragdoll),
+                    f.joint,
+                )
+            }
+            Err(_) => {
+                let f: LooseFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+                    entry: None,
+                    message: e.to_string().trim_end().to_owned(),
+                })?;
+                let mut entries =
+                    Vec::with_capacity(f.body.len() + f.stack.len() + f.pyramid.len());
+                push_all(&mut entries, Kind::Body, f.body, Entry::Loose);
+                push_all(&mut entries, Kind::Stack, f.stack, Entry::Loose);
+                push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Loose);
+                (
+                    f.name,
+                    f.gravity,
+                    f.settings,
+                    entries,
+                    (f.rope, f.ragdoll),
+                    f.joint,
+                )
+            }
+        };
 
     let gravity = Vec2::new(gravity[0], gravity[1]);
     check("scene", finite("gravity.x", gravity.x))?;
@@ -449,11 +465,14 @@ pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
             Entry::Loose(_) => unreachable!("read above"),
         }
     }
-    // Ropes after every other body (their links are named `NAME[i]`), then the joints, which
-    // may name any body, a rope's links included.
+    // Ropes and ragdolls after every other body (named `NAME[i]`, `NAME.hip`, ...), then the
+    // joints, which may name any body, theirs included.
     let mut joints = Vec::with_capacity(joint_entries.len());
     for (k, rope) in ropes.into_iter().enumerate() {
         rope.expand(k, &mut bodies, &mut joints)?;
+    }
+    for (k, ragdoll) in ragdolls.into_iter().enumerate() {
+        ragdoll.expand(k, &mut bodies, &mut joints)?;
     }
     for (k, entry) in joint_entries.into_iter().enumerate() {
         joints.push(entry.into_joint(k, &bodies)?);

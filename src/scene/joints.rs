@@ -6,6 +6,7 @@ use super::{Colour, SceneBody, SceneError, MAX_BODIES};
 use crate::physics::joint::{
     Distance, JointKind, Limit, Motor, MotorJoint, Prismatic, Revolute, Spring, Weld, Wheel,
 };
+use crate::physics::ragdoll::{ragdoll, RagdollDef};
 use crate::physics::{BodyDef, Real, Rot, Shape, Vec2};
 use serde::{Deserialize, Serialize};
 
@@ -449,6 +450,138 @@ impl RopeEntry {
             check_joint(&at, j, bodies)?;
         }
         joints.extend(list);
+        Ok(())
+    }
+}
+
+/// A `[[ragdoll]]` table: a human as Box2D's `human.c` lays it out ([`crate::physics::ragdoll`])
+/// standing at `position`, its bones named `NAME.hip`, `NAME.torso`, ... and its joints after
+/// the bones they join.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RagdollEntry {
+    name: Option<String>,
+    position: [Real; 2],
+    #[serde(default = "default_scale")]
+    scale: Real,
+    #[serde(default = "default_friction_torque")]
+    friction_torque: Real,
+    #[serde(default)]
+    hertz: Real,
+    #[serde(default = "default_ragdoll_damping")]
+    damping_ratio: Real,
+    group: Option<i32>,
+    colour: Option<String>,
+}
+
+fn default_scale() -> Real {
+    1.0
+}
+fn default_friction_torque() -> Real {
+    0.05
+}
+fn default_ragdoll_damping() -> Real {
+    0.5
+}
+
+impl RagdollEntry {
+    /// The ragdoll's bones (appended to `bodies`) and joints; `k` is its index among the
+    /// ragdoll tables (its default group is -(k + 1): its bones never collide with each other).
+    pub(super) fn expand(
+        self,
+        k: usize,
+        bodies: &mut Vec<SceneBody>,
+        joints: &mut Vec<SceneJoint>,
+    ) -> Result<(), SceneError> {
+        let prefix = self.name.clone().unwrap_or_else(|| format!("ragdoll {k}"));
+        let at = match &self.name {
+            Some(name) => format!("ragdoll {name:?} ([[ragdoll]] #{k})"),
+            None => format!("[[ragdoll]] #{k}"),
+        };
+        let checks = [
+            (
+                "scale",
+                self.scale,
+                self.scale.is_finite() && (0.01..=100.0).contains(&self.scale),
+                "must be within [0.01, 100]",
+            ),
+            (
+                "friction_torque",
+                self.friction_torque,
+                self.friction_torque.is_finite() && self.friction_torque >= 0.0,
+                "must be finite and >= 0 (N m)",
+            ),
+            (
+                "hertz",
+                self.hertz,
+                self.hertz.is_finite() && self.hertz >= 0.0,
+                "must be finite and >= 0 (0: no spring)",
+            ),
+            (
+                "damping_ratio",
+                self.damping_ratio,
+                self.damping_ratio.is_finite() && self.damping_ratio >= 0.0,
+                "must be finite and >= 0",
+            ),
+            (
+                "position",
+                self.position[0],
+                self.position.iter().all(|v| v.is_finite()),
+                "must be finite",
+            ),
+        ];
+        for (field, value, ok, message) in checks {
+            if !ok {
+                return Err(SceneError::invalid(
+                    &at,
+                    field,
+                    Some(value.to_string()),
+                    message,
+                ));
+            }
+        }
+        let colour = match self.colour.as_deref() {
+            None => Colour::GREY,
+            Some(s) => s.parse().map_err(|_| {
+                SceneError::invalid(&at, "colour", Some(s.to_owned()), "must be \"#rrggbb\"")
+            })?,
+        };
+        let bones = ragdoll(&RagdollDef {
+            position: Vec2::from(self.position),
+            scale: self.scale,
+            friction_torque: self.friction_torque,
+            hertz: self.hertz,
+            damping_ratio: self.damping_ratio,
+            group: self.group.unwrap_or(-(k as i32) - 1),
+        });
+        if bodies.len() + bones.len() > MAX_BODIES {
+            let message = format!("the scene may have at most {MAX_BODIES} bodies");
+            return Err(SceneError::invalid(&at, "position", None, message));
+        }
+        let first = bodies.len();
+        for bone in &bones {
+            let mut body = SceneBody::new(format!("{prefix}.{}", bone.name), bone.def.clone());
+            body.colour = colour;
+            bodies.push(body);
+        }
+        for (i, bone) in bones.iter().enumerate() {
+            if let Some((parent, point, kind)) = &bone.joint {
+                let (a, b) = (first + parent, first + i);
+                let joint = SceneJoint {
+                    name: format!("{prefix}.{}", bone.name),
+                    a: Some(a),
+                    b,
+                    anchor_a: local(bodies, Some(a), *point),
+                    anchor_b: local(bodies, Some(b), *point),
+                    kind: kind.clone(),
+                    collide_connected: false,
+                    break_force: Real::INFINITY,
+                    break_torque: Real::INFINITY,
+                };
+                check_joint(&at, &joint, bodies)?;
+                joints.push(joint);
+            }
+        }
         Ok(())
     }
 }

@@ -10,7 +10,7 @@ use crate::physics::{
 };
 
 /// The widest distance (m) between a joint's two anchors, over every joint of `w`.
-fn widest_gap(w: &World) -> f64 {
+pub(super) fn widest_gap(w: &World) -> f64 {
     let at = |id: Option<BodyId>, p: Vec2| match id.and_then(|id| w.body(id)) {
         Some(b) => b.transform().apply(p),
         None => p,

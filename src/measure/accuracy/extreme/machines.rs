@@ -250,3 +250,78 @@ pub fn car(settings: &Settings) -> Verdict {
         "",
     )
 }
+
+/// A pile of 30 ragdolls ([`crate::physics::ragdoll`], Box2D's `human.c`: 11 bones each, the
+/// lower legs with a foot, 10 limited hinges with joint friction) dropped from a 6 x 5 grid
+/// into a 6 m wide box, 10 s. Bounds, at the end: the pile at rest (every bone slower than
+/// 5 cm/s), every joint's anchors within 1 cm of each other (two linear slops), and no hinge
+/// more than 0.05 rad past a limit (limits stop a hinge at the limit; 0.05 rad is what one
+/// ragdoll alone rests at, 0.006 rad, with room). The widest gap during the fall is reported.
+pub fn ragdoll_pile(settings: &Settings) -> Verdict {
+    use crate::physics::ragdoll::{add_ragdoll, RagdollDef};
+    let mut w = new_world(settings, gravity());
+    for (w_, h, x, y) in [
+        (6.0, 1.0, 0.0, -0.5),
+        (1.0, 20.0, -3.5, 10.0),
+        (1.0, 20.0, 3.5, 10.0),
+    ] {
+        w.add_body(&BodyDef::fixed(Shape::rect(w_, h), vec2(x, y)))
+            .expect("valid wall");
+    }
+    for k in 0..30 {
+        let at = vec2(-2.5 + (k % 6) as Real, 0.5 + 2.0 * (k / 6) as Real);
+        let def = RagdollDef {
+            position: at,
+            scale: 1.0,
+            friction_torque: 0.05,
+            hertz: 0.0,
+            damping_ratio: 0.5,
+            group: -(k + 1),
+        };
+        add_ragdoll(&mut w, &def).expect("a valid ragdoll");
+    }
+    let (mut ok, mut falling_gap) = (true, 0.0);
+    for _ in 0..600 {
+        ok &= w.step(super::DT_60).is_ok() && all_finite(&w);
+        falling_gap = f64::max(falling_gap, super::joints::widest_gap(&w));
+    }
+    let gap = super::joints::widest_gap(&w);
+    let past = beyond_limits(&w) as f64;
+    let fastest = w
+        .bodies()
+        .map(|b| b.linear_velocity().length() as f64)
+        .fold(0.0, f64::max);
+    let passed = ok && gap <= 0.01 && past <= 0.05 && fastest < 0.05;
+    verdict(
+        "ragdoll_pile",
+        "30 ragdolls of Box2D's human.c (11 bones, feet, 10 limited hinges with friction) dropped into \
+         a 6 m box, 10 s: at rest at the end, joint gaps within 1 cm, no hinge 0.05 rad past a limit"
+            .into(),
+        passed,
+        vec![
+            ("widest joint gap at rest (m)", gap),
+            ("furthest past a limit at rest (rad)", past),
+            ("fastest bone at 10 s (m/s)", fastest),
+            ("widest joint gap while falling (m)", falling_gap),
+        ],
+        "",
+    )
+}
+
+/// How far (rad) the hinge furthest past one of its limits is past it (0 when none is).
+fn beyond_limits(w: &World) -> Real {
+    w.joints()
+        .filter_map(|j| {
+            let d = j.def();
+            let JointKind::Revolute(r) = &d.kind else {
+                return None;
+            };
+            let limit = r.limit?;
+            let angle_of =
+                |id: Option<BodyId>| id.and_then(|id| w.body(id)).map_or(0.0, |b| b.angle());
+            let angle =
+                angle_of(Some(d.body_b)) - angle_of(d.body_a) - r.reference_angle.unwrap_or(0.0);
+            Some((limit.lower - angle).max(angle - limit.upper).max(0.0))
+        })
+        .fold(0.0, Real::max)
+}

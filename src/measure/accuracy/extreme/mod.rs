@@ -10,7 +10,8 @@
 //! - `terrain.rs`: sliding across a tiled floor, as boxes and as a chain; rolling down a chain;
 //! - `motion.rs`: contacts that move: kinematic carriers and pushers, rolling, bouncing;
 //! - `joints.rs`: a hanging chain, a heavy block on a light rope, a slack bridge;
-//! - `machines.rs`: motors and bodies of several shapes: Box2D's tumbler and spinner, a car.
+//! - `machines.rs`: motors and bodies of several shapes: Box2D's tumbler and spinner, a car,
+//!   a pile of ragdolls.
 
 mod contacts;
 mod joints;
@@ -26,7 +27,7 @@ pub use contacts::{
 };
 pub use joints::{bridge, hanging_chain, heavy_rope};
 pub use limits::{gravity_flip, huge_dt, large_bodies, non_finite_refused, tiny_bodies};
-pub use machines::{car, spinner, tumbler};
+pub use machines::{car, ragdoll_pile, spinner, tumbler};
 pub use motion::{kinematic_carrier, kinematic_pusher, restitution_drop, rolling_disc};
 pub use stacks::{
     far_from_origin, pyramid_100, pyramid_134, pyramid_20, pyramid_200, pyramid_30, pyramid_sleeps,
@@ -74,7 +75,7 @@ const fn report_case(name: &'static str, title: &'static str, run: Runner) -> Ex
 /// Every case, in report order (the report-only cases last). One row a case, kept as a
 /// table.
 #[rustfmt::skip]
-const CASES: [ExtremeCase; 35] = [
+const CASES: [ExtremeCase; 36] = [
     case("stack_20", "Stack of 20, 30 s", stack_20),
     case("stack_50", "Stack of 50, 10 s", stack_50),
     case("pyramid_20", "Pyramid base 20, 30 s", pyramid_20),
@@ -108,6 +109,7 @@ const CASES: [ExtremeCase; 35] = [
     case("tumbler", "A 4,000 kg drum tumbles 2,025 boxes of 62.5 g", tumbler),
     case("spinner", "A paddle of unlimited torque stirs 6,076 bodies", spinner),
     case("car", "A car on wheel joints drives over hills", car),
+    case("ragdoll_pile", "A pile of 30 ragdolls (Box2D's human.c)", ragdoll_pile),
     report_case("pyramid_134", "Pyramid base 134 (9,045 boxes) stands", pyramid_134),
     report_case("pyramid_100", "Pyramid base 100 (5,050 boxes)", pyramid_100),
 ];

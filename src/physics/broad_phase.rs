@@ -376,7 +376,8 @@ fn band_pairs(
         .map(|b| ((b.max_y - b.min_y) - cap).max(0.0))
         .sum::<Real>()
         / height;
-    if !(insertions <= 3.0 * active.len() as Real) {
+    let few = insertions <= 3.0 * active.len() as Real;
+    if !few {
         height = tallest;
     }
     // At most one band per two boxes: a world of small boxes spread very far apart

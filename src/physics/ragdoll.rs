@@ -9,12 +9,17 @@
 //! 1.5 cm with sharp corners; Box2D's linear damping on the head and forearms and its sleep
 //! threshold of 0.1 m/s are left out (tiltbox has neither).
 
+use super::body::{BodyDef, BodyId};
+use super::convex::Polygon;
+use super::error::PhysicsError;
 use super::filter::Filter;
+use super::joint::JointDef;
 use super::joint::{JointKind, Limit, Motor, Revolute, Spring};
 use super::math::{Real, Vec2, PI};
+use super::math::{Rot, Transform};
 use super::part::PartDef;
 use super::shape::Shape;
-use super::{BodyDef, Polygon};
+use super::world::World;
 
 /// How a ragdoll is made: where, how big, how stiff its joints are, and its group.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -242,10 +247,7 @@ fn foot(s: Real, middle: Real, filter: Filter) -> PartDef {
 
 /// Add a ragdoll to `world`: its bones' ids, hip first (as [`ragdoll`] lists them). All or
 /// nothing: on an error (a bone faster than the World allows, say) nothing is added.
-pub fn add_ragdoll(
-    world: &mut super::World,
-    def: &RagdollDef,
-) -> Result<Vec<super::BodyId>, super::PhysicsError> {
+pub fn add_ragdoll(world: &mut World, def: &RagdollDef) -> Result<Vec<BodyId>, PhysicsError> {
     let bones = ragdoll(def);
     let mut ids = Vec::with_capacity(bones.len());
     let added = (|| {
@@ -254,15 +256,15 @@ pub fn add_ragdoll(
         }
         for (b, &id) in bones.iter().zip(&ids) {
             if let Some((parent, point, kind)) = &b.joint {
-                let frame = |d: &BodyDef| super::Transform {
+                let frame = |d: &BodyDef| Transform {
                     p: d.position,
-                    q: super::Rot::from_angle(d.angle),
+                    q: Rot::from_angle(d.angle),
                 };
                 let anchors = (
                     frame(&bones[*parent].def).apply_inv(*point),
                     frame(&b.def).apply_inv(*point),
                 );
-                let joint = super::JointDef::new(kind.clone(), Some(ids[*parent]), id)
+                let joint = JointDef::new(kind.clone(), Some(ids[*parent]), id)
                     .with_anchors(anchors.0, anchors.1);
                 world.add_joint(&joint)?;
             }

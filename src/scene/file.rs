@@ -61,6 +61,40 @@ struct SceneFile<B, S, P> {
     joint: Vec<JointEntry>,
 }
 
+/// What a scene file holds: name, gravity, settings, its entry tables in file order, its
+/// ropes and ragdolls, and its joints.
+type Split = (
+    String,
+    [Real; 2],
+    Settings,
+    Vec<Placed>,
+    (Vec<RopeEntry>, Vec<RagdollEntry>),
+    Vec<JointEntry>,
+);
+
+/// How a scene file's body, stack and pyramid tables become [`Entry`]s.
+type Wraps<B, S, P> = (fn(B) -> Entry, fn(S) -> Entry, fn(P) -> Entry);
+
+impl<B, S, P> SceneFile<B, S, P> {
+    /// The file's parts, its body, stack and pyramid tables each made an [`Entry`] by `wrap`.
+    fn split(self, wrap: Wraps<B, S, P>) -> Split {
+        let mut entries =
+            Vec::with_capacity(self.body.len() + self.stack.len() + self.pyramid.len());
+        push_all(&mut entries, Kind::Body, self.body, wrap.0);
+        push_all(&mut entries, Kind::Stack, self.stack, wrap.1);
+        push_all(&mut entries, Kind::Pyramid, self.pyramid, wrap.2);
+        let generators = (self.rope, self.ragdoll);
+        (
+            self.name,
+            self.gravity,
+            self.settings,
+            entries,
+            generators,
+            self.joint,
+        )
+    }
+}
+
 /// A scene file whose entry tables are typed.
 type TypedFile = SceneFile<BodyEntry, StackEntry, PyramidEntry>;
 /// A scene file whose entry tables are kept as loose TOML tables.
@@ -389,39 +423,13 @@ fn generator_label(kind: Kind, name: Option<&str>, k: usize) -> String {
 pub(crate) fn parse(text: &str) -> Result<Scene, SceneError> {
     let (name, gravity, settings, mut entries, (ropes, ragdolls), joint_entries) =
         match toml::from_str::<TypedFile>(text) {
-            Ok(f) => {
-                let mut entries =
-                    Vec::with_capacity(f.body.len() + f.stack.len() + f.pyramid.len());
-                push_all(&mut entries, Kind::Body, f.body, Entry::Body);
-                push_all(&mut entries, Kind::Stack, f.stack, Entry::Stack);
-                push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Pyramid);
-                (
-                    f.name,
-                    f.gravity,
-                    f.settings,
-                    entries,
-                    (f.rope, f.ragdoll),
-                    f.joint,
-                )
-            }
+            Ok(f) => f.split((Entry::Body, Entry::Stack, Entry::Pyramid)),
             Err(_) => {
                 let f: LooseFile = toml::from_str(text).map_err(|e| SceneError::Parse {
                     entry: None,
                     message: e.to_string().trim_end().to_owned(),
                 })?;
-                let mut entries =
-                    Vec::with_capacity(f.body.len() + f.stack.len() + f.pyramid.len());
-                push_all(&mut entries, Kind::Body, f.body, Entry::Loose);
-                push_all(&mut entries, Kind::Stack, f.stack, Entry::Loose);
-                push_all(&mut entries, Kind::Pyramid, f.pyramid, Entry::Loose);
-                (
-                    f.name,
-                    f.gravity,
-                    f.settings,
-                    entries,
-                    (f.rope, f.ragdoll),
-                    f.joint,
-                )
+                f.split((Entry::Loose, Entry::Loose, Entry::Loose))
             }
         };
 

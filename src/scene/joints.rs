@@ -96,6 +96,7 @@ pub(super) struct RopeEntry {
 fn default_thickness() -> Real {
     0.125
 }
+/// A rope's density and a ragdoll's scale unless given.
 fn default_density() -> Real {
     1.0
 }
@@ -462,7 +463,7 @@ impl RopeEntry {
 pub(super) struct RagdollEntry {
     name: Option<String>,
     position: [Real; 2],
-    #[serde(default = "default_scale")]
+    #[serde(default = "default_density")]
     scale: Real,
     #[serde(default = "default_friction_torque")]
     friction_torque: Real,
@@ -474,9 +475,6 @@ pub(super) struct RagdollEntry {
     colour: Option<String>,
 }
 
-fn default_scale() -> Real {
-    1.0
-}
 fn default_friction_torque() -> Real {
     0.05
 }

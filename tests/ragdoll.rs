@@ -2,6 +2,9 @@
 //! feet's areas, a ragdoll dropped on the ground comes to rest within its limits with its
 //! joints closed, all-or-nothing adding, and `[[ragdoll]]` in scene files.
 
+#[cfg(feature = "scene")]
+mod common;
+
 use tiltbox::physics::ragdoll::{add_ragdoll, ragdoll, RagdollDef};
 use tiltbox::physics::{vec2, BodyDef, JointKind, Real, Shape, World};
 
@@ -178,13 +181,10 @@ fn ragdoll_tables_in_scene_files_build_named_bones_and_refuse_bad_values() {
 #[test]
 fn the_ragdoll_in_docs_scenes_md_is_as_tall_and_heavy_as_it_says() {
     // "1.59 m tall at scale 1 (density 1: 0.39 kg)", and the example's soles at y = 0.
-    let doc =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/scenes.md")).unwrap();
+    let doc = common::read_repo_file("docs/scenes.md");
     assert!(doc.contains("1.59 m tall at scale 1 (density 1: 0.39 kg)"));
-    let at = doc.find("### `[[ragdoll]]`").unwrap();
-    let start = at + doc[at..].find("```toml\n").unwrap() + "```toml\n".len();
-    let end = start + doc[start..].find("```").unwrap();
-    let scene = tiltbox::scene::Scene::from_toml_str(&doc[start..end]).unwrap();
+    let example = common::scene::docs_example("### `[[ragdoll]]`");
+    let scene = tiltbox::scene::Scene::from_toml_str(&example).unwrap();
     let (w, ids) = scene.build_world().unwrap();
     let mass: Real = ids.iter().map(|&id| w.body(id).unwrap().mass()).sum();
     assert!((mass - 0.39).abs() < 0.005, "{mass}");

@@ -8,11 +8,7 @@ use tiltbox::physics::Vec2;
 use tiltbox::scene::Scene;
 
 fn joints_example() -> String {
-    let doc = common::read_repo_file("docs/scenes.md");
-    let at = doc.find("## Example with joints").expect("the section");
-    let start = at + doc[at..].find("```toml\n").expect("a toml example") + "```toml\n".len();
-    let end = start + doc[start..].find("```").unwrap();
-    doc[start..end].to_owned()
+    common::scene::docs_example("## Example with joints")
 }
 
 #[test]

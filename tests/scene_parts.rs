@@ -12,11 +12,7 @@ use tiltbox::scene::Scene;
 const PI: Real = std::f64::consts::PI as Real;
 
 fn parts_example() -> String {
-    let doc = common::read_repo_file("docs/scenes.md");
-    let at = doc.find("## Example with parts").expect("the section");
-    let start = at + doc[at..].find("```toml\n").expect("a toml example") + "```toml\n".len();
-    let end = start + doc[start..].find("```").unwrap();
-    doc[start..end].to_owned()
+    common::scene::docs_example("## Example with parts")
 }
 
 #[test]

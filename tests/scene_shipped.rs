@@ -188,11 +188,7 @@ fn assert_settles_inside_the_box(scene: Scene) {
 
 #[test]
 fn the_example_in_docs_scenes_md_loads() {
-    let doc = common::read_repo_file("docs/scenes.md");
-    let at = doc.find("\n## Example\n").expect("the section");
-    let start = at + doc[at..].find("```toml\n").expect("a toml example") + "```toml\n".len();
-    let end = start + doc[start..].find("```").unwrap();
-    let scene = Scene::from_toml_str(&doc[start..end]).unwrap();
+    let scene = Scene::from_toml_str(&docs_example("\n## Example\n")).unwrap();
     assert_eq!(scene.name, "Bricks on a shelf");
     assert_eq!(scene.settings.solver, SolverKind::Sequential);
     // ground + brick + 5 stacked + 3 + 2 + 1 in the pyramid
@@ -383,11 +379,7 @@ fn shapes_pile_settles_inside_the_box_without_sleep() {
 
 #[test]
 fn the_shapes_example_in_docs_scenes_md_loads() {
-    let doc = common::read_repo_file("docs/scenes.md");
-    let at = doc.find("## Example with shapes").expect("the section");
-    let start = at + doc[at..].find("```toml\n").expect("a toml example") + "```toml\n".len();
-    let end = start + doc[start..].find("```").unwrap();
-    let scene = Scene::from_toml_str(&doc[start..end]).unwrap();
+    let scene = Scene::from_toml_str(&docs_example("## Example with shapes")).unwrap();
     assert_eq!(scene.name, "One of each");
     let kinds: Vec<&str> = scene.bodies[3..]
         .iter()

@@ -67,3 +67,14 @@ pub fn parse_body(body: &str) -> Result<SceneBody, String> {
 pub fn refusal(name: &str, shape: &str) -> String {
     parse_body(&shaped(name, shape, "position = [0, 1]\ndensity = 1")).unwrap_err()
 }
+
+/// The first TOML example (a fenced `toml` block) after `heading` in docs/scenes.md.
+pub fn docs_example(heading: &str) -> String {
+    let doc = super::read_repo_file("docs/scenes.md");
+    let at = doc
+        .find(heading)
+        .unwrap_or_else(|| panic!("{heading:?} in docs/scenes.md"));
+    let start = at + doc[at..].find("```toml\n").expect("a toml example") + "```toml\n".len();
+    let end = start + doc[start..].find("```").expect("the example's end");
+    doc[start..end].to_owned()
+}

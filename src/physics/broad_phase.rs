@@ -87,6 +87,8 @@ pub(crate) struct SweepAndPrune {
     /// Scratch for [`band_pairs`]: the active boxes band by band, and where each band starts.
     band_boxes: Vec<SortedBox>,
     band_start: Vec<u32>,
+    /// Scratch for [`sort_keys`].
+    sort_scratch: Vec<u64>,
     /// Slots freed since the lists were last compacted, flagged by slot in `dead` (removal
     /// marks them, the next query drops them in one pass: removing k bodies costs k, not k
     /// passes over the lists).
@@ -300,7 +302,7 @@ impl SweepAndPrune {
         cross_pairs(moved_active, active, &mut self.new_pairs);
         cross_pairs(moved_active, passive, &mut self.new_pairs);
         cross_pairs(moved_passive, active, &mut self.new_pairs);
-        self.new_pairs.sort_unstable();
+        sort_keys(&mut self.new_pairs, &mut self.sort_scratch, proxies.len());
         self.new_pairs.dedup();
         merge_sorted(&mut self.fat_pairs, &self.new_pairs);
         for &i in &self.outside {
@@ -333,7 +335,7 @@ impl SweepAndPrune {
 
         // Active with passive: each active box against the passive list, from both sides.
         cross_pairs(active, passive, out);
-        out.sort_unstable();
+        sort_keys(out, &mut self.sort_scratch, boxes.len());
     }
 }
 
@@ -439,6 +441,49 @@ fn sweep_band(boxes: &[SortedBox], here: impl Fn(Real) -> bool, out: &mut Vec<u6
 
 /// A box taller than this many times the mean height does not set the bands' height.
 const OUTLIER: Real = 4.0;
+
+/// Sort pair keys ascending, as `sort_unstable` does, for keys of slots below `slots`. A full
+/// sweep yields its pairs in no order, thousands of them when everything moves (2,025 boxes
+/// tumbling in Box2D's `tumbler`): a least-significant-digit radix sort, 11 bits a pass over
+/// each half's significant bits (two or four passes for up to 2^11 or 2^22 slots), is linear
+/// where the comparison sort is n log n. Short lists, and worlds of more slots, take the
+/// comparison sort.
+fn sort_keys(keys: &mut Vec<u64>, scratch: &mut Vec<u64>, slots: usize) {
+    const BITS: u32 = 11;
+    let wide = usize::BITS - slots.max(1).leading_zeros();
+    if keys.len() < RADIX_FROM || wide > 2 * BITS {
+        keys.sort_unstable();
+        return;
+    }
+    let passes_per_half = wide.div_ceil(BITS);
+    scratch.clear();
+    scratch.resize(keys.len(), 0);
+    let mut counts = [0u32; 1 << BITS];
+    // The higher slot (low half) first, then the lower (high half): least significant first.
+    for shift in (0..passes_per_half)
+        .map(|p| p * BITS)
+        .chain((0..passes_per_half).map(|p| 32 + p * BITS))
+    {
+        let digit = |k: u64| ((k >> shift) as usize) & ((1 << BITS) - 1);
+        counts.fill(0);
+        for &k in keys.iter() {
+            counts[digit(k)] += 1;
+        }
+        let mut at = 0;
+        for c in counts.iter_mut() {
+            (at, *c) = (at + *c, at);
+        }
+        for &k in keys.iter() {
+            let d = digit(k);
+            scratch[counts[d] as usize] = k;
+            counts[d] += 1;
+        }
+        std::mem::swap(keys, scratch);
+    }
+}
+
+/// Pair lists shorter than this are sorted by comparison ([`sort_keys`]).
+const RADIX_FROM: usize = 512;
 
 /// Fewer active bodies than this are swept in one band.
 const BANDS_FROM: usize = 64;
@@ -721,6 +766,34 @@ mod tests {
         overflow.push(unit(0.0, Real::MAX / 2.0, 1.0, Real::MAX / 2.0));
         overflow.push(unit(0.0, -Real::MAX / 2.0, 1.0, 1.0));
         bands_match_a_full_search(&overflow);
+    }
+
+    #[test]
+    fn pair_keys_sort_as_the_comparison_sort_sorts_them() {
+        // Lengths on both sides of the radix threshold, slot counts needing two and four
+        // passes and the comparison sort's fallback, duplicates included.
+        let mut rand = xorshift(0x9e37_79b9);
+        let mut scratch = Vec::new();
+        for (n, slots) in [
+            (100, 50),
+            (600, 2_000),
+            (5_000, 2_048),
+            (5_000, 300_000),
+            (3_000, 1 << 23),
+        ] {
+            let mut keys: Vec<u64> = (0..n)
+                .map(|_| {
+                    let a = (rand() * slots as Real) as u32 % slots as u32;
+                    let b = (rand() * slots as Real) as u32 % slots as u32;
+                    pair_key(a, b)
+                })
+                .collect();
+            keys.extend_from_slice(&keys[..n / 10].to_vec());
+            let mut expected = keys.clone();
+            expected.sort_unstable();
+            sort_keys(&mut keys, &mut scratch, slots);
+            assert_eq!(keys, expected, "{n} keys of {slots} slots");
+        }
     }
 
     #[test]

@@ -788,7 +788,7 @@ mod tests {
                     pair_key(a, b)
                 })
                 .collect();
-            keys.extend_from_slice(&keys[..n / 10].to_vec());
+            keys.extend_from_within(..n / 10);
             let mut expected = keys.clone();
             expected.sort_unstable();
             sort_keys(&mut keys, &mut scratch, slots);

@@ -1,5 +1,6 @@
 //! Rigid bodies: their definition (what a caller asks for) and their state (what the World keeps).
 
+use super::builder::builder_setters;
 use super::error::{check_material, finite, finite_vec, positive, PhysicsError};
 use super::filter::Filter;
 use super::math::{is_finite_vec, Real, Rot, Transform, Vec2};
@@ -55,19 +56,6 @@ pub struct BodyDef {
     /// is shared in proportion to area x density, the body's own shape at density 1.
     #[serde(default)]
     pub parts: Vec<PartDef>,
-}
-
-/// `BodyDef`'s builder methods: each takes the definition, sets one field and hands it back.
-macro_rules! builder_setters {
-    ($($(#[$doc:meta])* $name:ident($arg:ident: $ty:ty) => $field:ident = $value:expr;)*) => {
-        $(
-            $(#[$doc])*
-            pub fn $name(mut self, $arg: $ty) -> Self {
-                self.$field = $value;
-                self
-            }
-        )*
-    };
 }
 
 impl BodyDef {

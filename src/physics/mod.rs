@@ -9,6 +9,7 @@
 
 pub mod body;
 pub(crate) mod broad_phase;
+pub(crate) mod builder;
 pub mod collide;
 pub mod contact;
 pub mod convex;

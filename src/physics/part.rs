@@ -7,6 +7,7 @@
 //! centred on it, while the API reports the origin ([`super::Body::position`]). A body with no
 //! parts keeps its centre at its origin and pays nothing for any of this.
 
+use super::builder::builder_setters;
 use super::error::{check_material, finite, finite_vec, positive, PhysicsError};
 use super::filter::Filter;
 use super::math::{Real, Rot, Transform, Vec2};
@@ -53,30 +54,17 @@ impl PartDef {
         }
     }
 
-    /// Set the angle in the body's frame (rad).
-    pub fn with_angle(mut self, angle: Real) -> Self {
-        self.angle = angle;
-        self
-    }
-    /// Set the density (kg/m^2).
-    pub fn with_density(mut self, density: Real) -> Self {
-        self.density = density;
-        self
-    }
-    /// Set the friction coefficient.
-    pub fn with_friction(mut self, friction: Real) -> Self {
-        self.friction = friction;
-        self
-    }
-    /// Set the coefficient of restitution.
-    pub fn with_restitution(mut self, restitution: Real) -> Self {
-        self.restitution = restitution;
-        self
-    }
-    /// Set the collision filter.
-    pub fn with_filter(mut self, filter: Filter) -> Self {
-        self.filter = filter;
-        self
+    builder_setters! {
+        /// Set the angle in the body's frame (rad).
+        with_angle(angle: Real) => angle = angle;
+        /// Set the density (kg/m^2).
+        with_density(density: Real) => density = density;
+        /// Set the friction coefficient.
+        with_friction(friction: Real) => friction = friction;
+        /// Set the coefficient of restitution.
+        with_restitution(restitution: Real) => restitution = restitution;
+        /// Set the collision filter.
+        with_filter(filter: Filter) => filter = filter;
     }
 
     /// Refuse what cannot be simulated, naming the field (the caller names the part).

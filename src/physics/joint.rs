@@ -420,6 +420,9 @@ pub struct Joint {
     /// Force (N) and torque (N m) on B at the end of the last step.
     pub(crate) force: Vec2,
     pub(crate) torque: Real,
+    /// Its colour in the constraint graph while either body is awake; `UNCOLOURED` asleep
+    /// and before its first step.
+    pub(crate) colour: u8,
 }
 
 /// The impulses a joint carries from one step to the next (N s; per step).

@@ -34,7 +34,8 @@ use std::thread::JoinHandle;
 /// 10: the World carries its joints (definitions and impulses) and their free list.
 /// 11: bodies carry their parts (further shapes) and centre of mass, contacts which shapes
 /// touch (solver history version 2).
-pub const FORMAT_VERSION: u32 = 11;
+/// 12: the solver history carries the joints' colours in the constraint graph (version 3).
+pub const FORMAT_VERSION: u32 = 12;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

@@ -49,6 +49,25 @@ impl Width {
     }
 }
 
+/// A solve pass's kind, 1 / substep (1/s) and push-out cap (m/s).
+pub(crate) type PassArgs = (PassKind, Real, Real);
+
+/// The joints of a pass, if it has any: called with a colour's solve rank (the overflow 0,
+/// colour c c + 1) before that colour's contacts, it runs the joints up to that rank that have
+/// not run (`joint::JointPass`), so each colour's joints go just before its contacts.
+pub(crate) type Joints<'a> = Option<&'a mut dyn FnMut(&mut [SolverBody], u8)>;
+
+/// The overflow's solve rank.
+const OVERFLOW_RANK: u8 = 0;
+
+/// Run `joints` up to the solve rank of the colour of list `slot` (colour * 2 + kind).
+#[inline(always)]
+fn before_colour(joints: &mut Joints, bodies: &mut [SolverBody], slot: u16) {
+    if let Some(run) = joints.as_mut() {
+        run(bodies, (slot / 2) as u8 + 1);
+    }
+}
+
 /// Bundles of one width, in lists per (colour, kind) flattened as colour * 2 + kind, solved in
 /// that order, with the restitution lanes of the bundles that bounce.
 #[derive(Clone, Debug)]
@@ -144,12 +163,17 @@ impl<L: Wide> Packed<L> {
         }
     }
 
-    /// The warm start of a substep (or, with warm starting off, zeroed impulses).
+    /// The warm start of a substep (or, with warm starting off, zeroed impulses), with
+    /// `joints` run before each colour.
     #[inline(always)]
-    fn warm_start(&mut self, bodies: &mut [SolverBody], warm_starting: bool) {
+    fn warm_start(&mut self, bodies: &mut [SolverBody], warm_starting: bool, joints: Joints) {
         if warm_starting {
-            for bundle in self.packed.iter_mut().flatten() {
-                bundle.warm_start(bodies);
+            let mut joints = joints;
+            for (list, &slot) in self.packed.iter_mut().zip(&self.slots) {
+                before_colour(&mut joints, bodies, slot);
+                for bundle in list {
+                    bundle.warm_start(bodies);
+                }
             }
         } else {
             for bundle in self.packed.iter_mut().flatten() {
@@ -158,31 +182,38 @@ impl<L: Wide> Packed<L> {
         }
     }
 
-    /// One solve pass of `kind` over every bundle: one copy of the loop per kind of pass, each
-    /// compiled without the arithmetic its kind leaves out (the relax passes without the bias,
-    /// the normal relax also without friction).
+    /// One solve pass of `kind` over every bundle, with `joints` run before each colour: one
+    /// copy of the loop per kind of pass, each compiled without the arithmetic its kind leaves
+    /// out (the relax passes without the bias, the normal relax also without friction).
     #[inline(always)]
-    fn solve(&mut self, bodies: &mut [SolverBody], kind: PassKind, inv_h: Real, push_out: Real) {
+    fn solve(&mut self, bodies: &mut [SolverBody], args: PassArgs, joints: Joints) {
+        let (kind, inv_h, push_out) = args;
         let (inv_h, push_out) = (L::splat(inv_h), L::splat(-push_out));
         match kind {
-            PassKind::Biased => self.pass(bodies, &Pass::new(inv_h, true, push_out), true),
-            PassKind::Relax => self.pass(bodies, &Pass::new(inv_h, false, push_out), true),
-            PassKind::NormalRelax => self.pass(bodies, &Pass::new(inv_h, false, push_out), false),
+            PassKind::Biased => self.pass(bodies, &Pass::new(inv_h, true, push_out), true, joints),
+            PassKind::Relax => self.pass(bodies, &Pass::new(inv_h, false, push_out), true, joints),
+            PassKind::NormalRelax => {
+                self.pass(bodies, &Pass::new(inv_h, false, push_out), false, joints)
+            }
         }
     }
 
-    /// One pass over every bundle, with `friction` or without. The biased pass updates the
-    /// bouncing bundles' approach speeds.
+    /// One pass over every bundle, with `friction` or without, with `joints` run before each
+    /// colour. The biased pass updates the bouncing bundles' approach speeds.
     #[inline(always)]
-    fn pass(&mut self, bodies: &mut [SolverBody], pass: &Pass<L>, friction: bool) {
+    fn pass(&mut self, bodies: &mut [SolverBody], pass: &Pass<L>, friction: bool, joints: Joints) {
         let (rounds, bounces) = (&self.rounds, &mut self.bounces);
-        for bundle in self.packed.iter_mut().flatten() {
-            // (None for a bundle without them: its index is out of range.)
-            let sides = Sides {
-                round: rounds.get(bundle.round_index as usize),
-                bounce: bounces.get_mut(bundle.bounce_index as usize),
-            };
-            bundle.solve(bodies, pass, sides, friction);
+        let mut joints = joints;
+        for (list, &slot) in self.packed.iter_mut().zip(&self.slots) {
+            before_colour(&mut joints, bodies, slot);
+            for bundle in list {
+                // (None for a bundle without them: its index is out of range.)
+                let sides = Sides {
+                    round: rounds.get(bundle.round_index as usize),
+                    bounce: bounces.get_mut(bundle.bounce_index as usize),
+                };
+                bundle.solve(bodies, pass, sides, friction);
+            }
         }
     }
 
@@ -278,32 +309,35 @@ impl ContactBundles {
         };
     }
 
-    /// The warm start of a substep, or with `warm_starting` off zeroed impulses.
+    /// The warm start of a substep, or with `warm_starting` off zeroed impulses; `joints`, if
+    /// any, are run before the overflow and before each colour (see [`Joints`]).
     #[inline]
-    pub fn warm_start(&mut self, bodies: &mut [SolverBody], warm_starting: bool) {
-        self.overflow.warm_start(bodies, warm_starting);
+    pub fn warm_start(&mut self, bodies: &mut [SolverBody], warm_starting: bool, joints: Joints) {
+        let mut joints = joints;
+        if let Some(run) = joints.as_mut() {
+            run(bodies, OVERFLOW_RANK);
+        }
+        self.overflow.warm_start(bodies, warm_starting, None);
         match self.built {
-            Some(Width::Eight) => eight::warm_start(&mut self.eight, bodies, warm_starting),
-            Some(Width::One) => self.single.warm_start(bodies, warm_starting),
-            _ => self.four.warm_start(bodies, warm_starting),
+            Some(Width::Eight) => eight::warm_start(&mut self.eight, bodies, warm_starting, joints),
+            Some(Width::One) => self.single.warm_start(bodies, warm_starting, joints),
+            _ => self.four.warm_start(bodies, warm_starting, joints),
         }
     }
 
-    /// One solve pass of `kind`; `inv_h` is 1 / substep (1/s), `push_out` the push-out cap
-    /// (m/s).
+    /// One solve pass of `kind`, with `inv_h` 1 / substep (1/s) and `push_out` the push-out
+    /// cap (m/s); `joints`, if any, are run before the overflow and before each colour.
     #[inline]
-    pub fn solve(
-        &mut self,
-        bodies: &mut [SolverBody],
-        kind: PassKind,
-        inv_h: Real,
-        push_out: Real,
-    ) {
-        self.overflow.solve(bodies, kind, inv_h, push_out);
+    pub fn solve(&mut self, bodies: &mut [SolverBody], args: PassArgs, joints: Joints) {
+        let mut joints = joints;
+        if let Some(run) = joints.as_mut() {
+            run(bodies, OVERFLOW_RANK);
+        }
+        self.overflow.solve(bodies, args, None);
         match self.built {
-            Some(Width::Eight) => eight::solve(&mut self.eight, bodies, kind, inv_h, push_out),
-            Some(Width::One) => self.single.solve(bodies, kind, inv_h, push_out),
-            _ => self.four.solve(bodies, kind, inv_h, push_out),
+            Some(Width::Eight) => eight::solve(&mut self.eight, bodies, args, joints),
+            Some(Width::One) => self.single.solve(bodies, args, joints),
+            _ => self.four.solve(bodies, args, joints),
         }
     }
 
@@ -390,7 +424,7 @@ where
 /// The eight-lane stages: compiled for AVX2 on x86-64, where [`ContactBundles::build`] packs
 /// eight-lane bundles only if the processor has it; elsewhere never chosen.
 mod eight {
-    use super::{Lanes8, Packed, PassKind, Real, SolverBody};
+    use super::{Joints, Lanes8, Packed, PassArgs, Real, SolverBody};
 
     /// Runs `$body` compiled for AVX2 where `Lanes8` is an AVX register, plainly elsewhere.
     macro_rules! avx2 {
@@ -411,11 +445,11 @@ mod eight {
         };
     }
 
-    avx2!(warm_start(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], warm_starting: bool) {
-        packed.warm_start(bodies, warm_starting)
+    avx2!(warm_start(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], warm_starting: bool, joints: Joints) {
+        packed.warm_start(bodies, warm_starting, joints)
     });
-    avx2!(solve(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], kind: PassKind, inv_h: Real, push_out: Real) {
-        packed.solve(bodies, kind, inv_h, push_out)
+    avx2!(solve(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], args: PassArgs, joints: Joints) {
+        packed.solve(bodies, args, joints)
     });
     avx2!(apply_restitution(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], threshold: Real) {
         packed.apply_restitution(bodies, threshold)

@@ -3,11 +3,11 @@
 //!
 //! Within a colour the constraints are independent, so the soft step packs each colour's
 //! contacts into bundles and solves them in the lanes of one SIMD value. A constraint gets its
-//! colour when it begins (a contact's first step, or its island waking) and gives it back when
-//! it ends (the pair parts, a body is removed, its island falls asleep); in between it keeps
-//! it, so the colouring costs nothing per step. Constraints begin and end in contact-key
-//! order, so the colours, and the solve order they set, are the same on every run and after a
-//! checkpoint is restored (a contact's colour is part of the solver's history).
+//! colour when it begins (a contact's or a joint's first step, or its island waking) and gives
+//! it back when it ends (the pair parts, a body or joint is removed, its island falls asleep);
+//! in between it keeps it, so the colouring costs nothing per step. Contacts begin and end in
+//! key order, joints in slot order, so the colours, and the solve order they set, are the same
+//! on every run and after a checkpoint is restored (colours are part of the solver's history).
 //!
 //! Only dynamic bodies (awake or asleep) are nodes of the graph: nothing writes to a static or
 //! kinematic body, so any number of constraints of one colour may share one. A sleeping body
@@ -20,9 +20,12 @@
 //! by one and first (lowest priority) by the same kernel at width one; it stays there until
 //! it ends.
 //!
-//! Joints will take colours from the same graph; a tier of adaptive stiffness solves the subset of
-//! the colours' contacts that are its own (islands of different tiers share no dynamic body,
-//! so any subset of a valid colouring is one).
+//! Joints take colours from the same graph, by the same rules, when either body is awake
+//! (a joint to the world is a constraint with one fixed body), and give them back when their
+//! island sleeps or they are removed; each colour's joints are solved just before its
+//! contacts. A tier of adaptive stiffness solves the subset of the colours' constraints that
+//! are its own (islands of different tiers share no dynamic body, so any subset of a valid
+//! colouring is one).
 
 /// How many colours the graph has (one bit each in a body's mask).
 pub(crate) const COLOURS: usize = 32;

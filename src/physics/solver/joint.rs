@@ -16,6 +16,7 @@
 //! `Joint` does, with a Baumgarte bias of 0.2 C / dt in the velocity. Positions are read from the bodies' motion since the start of
 //! the step (dp, dq), so nothing is recomputed from the World between substeps.
 
+use super::graph::OVERFLOW;
 use super::softness::Softness;
 use super::{Selected, SolverBody};
 use crate::physics::joint::{JointImpulses, JointKind, Limit, Motor, Spring};
@@ -253,6 +254,9 @@ pub(crate) struct JointSet {
     pub constraints: Vec<JointConstraint>,
     /// Each constraint's cold part, indexed alike.
     pub cold: Vec<JointCold>,
+    /// Each constraint's place in the solve order of the constraint graph's colours
+    /// ([`solve_rank`]), indexed alike; the constraints are pushed in this order.
+    ranks: Vec<u8>,
     rows: Vec<Row>,
 }
 
@@ -261,6 +265,7 @@ impl JointSet {
     pub fn clear(&mut self) {
         self.constraints.clear();
         self.cold.clear();
+        self.ranks.clear();
         self.rows.clear();
     }
 
@@ -269,12 +274,14 @@ impl JointSet {
         self.constraints.is_empty()
     }
 
-    /// Add the constraint of a joint of `kind` (distance joints: rest `length`, m) between
-    /// solver bodies `a` and `b` posed as `frame`, carrying last step's `impulses`; `hertz` and
-    /// `zeta` are its rigid rows' stiffness (Hz) and damping ratio.
+    /// Add the constraint of the joint in World slot `slot` of `kind` (distance joints: rest
+    /// `length`, m) between solver bodies `a` and `b`, of `colour` in the constraint graph,
+    /// posed as `frame`, carrying last step's `impulses`; `hertz` and `zeta` are its rigid
+    /// rows' stiffness (Hz) and damping ratio. Joints are pushed in the order of their
+    /// colours' [`solve_rank`].
     pub fn push(
         &mut self,
-        (slot, a, b): (u32, u32, u32),
+        (slot, [a, b], colour): (u32, [u32; 2], u8),
         (kind, length): (&JointKind, Real),
         frame: Frame,
         impulses: &JointImpulses,
@@ -298,6 +305,8 @@ impl JointSet {
             }),
             rows: (start, end),
         });
+        debug_assert!(self.ranks.last().map_or(true, |&r| r <= solve_rank(colour)));
+        self.ranks.push(solve_rank(colour));
         self.cold.push(JointCold {
             slot,
             hertz,
@@ -356,6 +365,7 @@ pub(crate) fn prepare(set: &mut JointSet, selected: Selected, step: JointStep) {
         constraints,
         cold,
         rows,
+        ..
     } = set;
     selected.for_each_index(constraints.len(), |k| {
         let (j, c) = (&mut constraints[k], &mut cold[k]);
@@ -406,25 +416,29 @@ fn pull_softness(pull: Pull, joint: Softness, h: Real) -> (Softness, bool) {
     }
 }
 
-/// Warm start: apply each joint's accumulated impulses.
+/// Warm start: apply each joint's accumulated impulses (the sequential solver: all at once).
 #[inline(never)]
 pub(crate) fn warm_start(set: &JointSet, selected: Selected, bodies: &mut [SolverBody]) {
-    selected.for_each_index(set.constraints.len(), |k| {
-        let j = &set.constraints[k];
-        let (a, b) = two_mut(bodies, j.a, j.b);
-        let pose = j.pose(a, b);
-        if let Some(p) = &j.point {
-            j.apply_point(a, b, &pose, p.impulse);
-        }
-        for row in &set.rows[j.row_range()] {
-            let jac = jacobian(row.measure, &pose);
-            j.apply_row(a, b, &jac, row.sign() * row.impulse);
-        }
-    });
+    selected.for_each_index(set.constraints.len(), |k| warm_start_one(set, k, bodies));
+}
+
+/// Warm start joint `k`.
+#[inline]
+fn warm_start_one(set: &JointSet, k: usize, bodies: &mut [SolverBody]) {
+    let j = &set.constraints[k];
+    let (a, b) = two_mut(bodies, j.a, j.b);
+    let pose = j.pose(a, b);
+    if let Some(p) = &j.point {
+        j.apply_point(a, b, &pose, p.impulse);
+    }
+    for row in &set.rows[j.row_range()] {
+        let jac = jacobian(row.measure, &pose);
+        j.apply_row(a, b, &jac, row.sign() * row.impulse);
+    }
 }
 
 /// One pass over the joints: `biased` (the soft bias) or a relax pass (rigid); `inv_h` is
-/// 1 / substep (1/s).
+/// 1 / substep (1/s). (The sequential solver: all at once.)
 #[inline(never)]
 pub(crate) fn solve(
     set: &mut JointSet,
@@ -433,21 +447,88 @@ pub(crate) fn solve(
     biased: bool,
     inv_h: Real,
 ) {
-    let JointSet {
-        constraints, rows, ..
-    } = set;
-    selected.for_each_index(constraints.len(), |k| {
-        let j = &mut constraints[k];
-        let (a, b) = two_mut(bodies, j.a, j.b);
-        for row in &mut rows[j.row_range()] {
-            let pose = j.pose(a, b);
-            solve_row(row, masses(a, b), (a, b), &pose, (biased, inv_h));
+    let n = set.constraints.len();
+    selected.for_each_index(n, |k| solve_one(set, k, bodies, (biased, inv_h)));
+}
+
+/// Solve joint `k`'s rows, then its point block (`biased`, `inv_h` as [`solve`]).
+#[inline]
+fn solve_one(set: &mut JointSet, k: usize, bodies: &mut [SolverBody], pass: (bool, Real)) {
+    let j = &mut set.constraints[k];
+    let (a, b) = two_mut(bodies, j.a, j.b);
+    for row in &mut set.rows[j.row_range()] {
+        let pose = j.pose(a, b);
+        solve_row(row, masses(a, b), (a, b), &pose, pass);
+    }
+    if j.point.is_some() {
+        let pose = j.pose(a, b);
+        j.solve_point((a, b), &pose, pass.0);
+    }
+}
+
+/// Where a constraint of `colour` comes in the soft step's solve order: the overflow first
+/// (rank 0), then colour c (rank c + 1), Box2D v3's order.
+#[inline]
+pub(crate) fn solve_rank(colour: u8) -> u8 {
+    if colour >= OVERFLOW {
+        0
+    } else {
+        colour + 1
+    }
+}
+
+/// What a [`JointPass`] does with each joint.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum JointWork {
+    WarmStart,
+    /// A solve pass: biased or not, and 1 / substep (1/s).
+    Solve {
+        biased: bool,
+        inv_h: Real,
+    },
+}
+
+/// One pass of the soft step over the selected joints, taken colour by colour: the contact
+/// bundles call [`JointPass::run_until`] before each of their colours, so that each colour's
+/// joints go just before its contacts and the overflow's before the overflow's (a joint to a
+/// static body, in a top colour, then has the last word over the contacts of the colours
+/// below, as in Box2D v3).
+pub(crate) struct JointPass<'a> {
+    set: &'a mut JointSet,
+    selected: Selected<'a>,
+    work: JointWork,
+    /// How many of the selected joints are done.
+    done: usize,
+}
+
+impl<'a> JointPass<'a> {
+    /// A pass of `work` over `set`'s `selected` joints, none done yet.
+    pub fn new(set: &'a mut JointSet, selected: Selected<'a>, work: JointWork) -> Self {
+        JointPass {
+            set,
+            selected,
+            work,
+            done: 0,
         }
-        if j.point.is_some() {
-            let pose = j.pose(a, b);
-            j.solve_point((a, b), &pose, biased);
+    }
+
+    /// Run the joints not yet done whose solve rank is at most `rank`.
+    pub fn run_until(&mut self, bodies: &mut [SolverBody], rank: u8) {
+        let n = self.selected.count(self.set.constraints.len());
+        while self.done < n {
+            let k = self.selected.at(self.done);
+            if self.set.ranks[k] > rank {
+                return;
+            }
+            match self.work {
+                JointWork::WarmStart => warm_start_one(self.set, k, bodies),
+                JointWork::Solve { biased, inv_h } => {
+                    solve_one(self.set, k, bodies, (biased, inv_h))
+                }
+            }
+            self.done += 1;
         }
-    });
+    }
 }
 
 /// Store: the impulses back to per step, and each joint's force and torque on B (N, N m)
@@ -464,6 +545,7 @@ pub(crate) fn store(
         constraints,
         cold,
         rows,
+        ..
     } = set;
     selected.for_each_index(constraints.len(), |k| {
         let j = &mut constraints[k];

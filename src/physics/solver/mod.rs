@@ -163,6 +163,15 @@ impl Selected<'_> {
         }
     }
 
+    /// The index of the `n`th selected contact.
+    #[inline]
+    pub fn at(self, n: usize) -> usize {
+        match self {
+            Selected::All => n,
+            Selected::Only(list) => list[n] as usize,
+        }
+    }
+
     /// Run `f` on every selected contact's index, in order. (One loop, so that `f` has one
     /// call site and is inlined.)
     #[inline]

@@ -19,14 +19,15 @@
 //! push-out speed is capped; speculative points (separation > 0) only let the bodies close
 //! the gap in one substep, which stops fast bodies at the surface. Every stage but prepare and
 //! store runs on the bundles (`bundles.rs`): the overflow, then the colours, in one kernel
-//! (`contact_solver.rs`). Joints (`joint.rs`) go through the same stages, before the contacts
-//! in each.
+//! (`contact_solver.rs`). Joints (`joint.rs`) go through the same stages and take colours in
+//! the same constraint graph (`graph.rs`): in the warm start and each pass, each colour's
+//! joints run just before its contacts.
 
 use super::block::BlockMass;
 use super::bundles::{ContactBundles, PackInput};
 use super::constraint::{Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
-use super::joint::{self, JointSet, JointStep};
+use super::joint::{self, JointPass, JointSet, JointStep, JointWork};
 use super::recover::{Recovery, LOAD_REACH, SPRING_REACH};
 use super::softness::Softness;
 use super::{
@@ -193,29 +194,37 @@ fn prepare_joints(ctx: &mut StepContext, plan: &Plan) {
 }
 
 /// Warm start: apply each joint's and contact's accumulated impulses (zero them with warm
-/// starting off).
+/// starting off), colour by colour.
 fn warm_start(ctx: &mut StepContext) {
-    if !ctx.joints.is_empty() {
-        joint::warm_start(ctx.joints, ctx.joint_selected, ctx.bodies);
-    }
     let warm_starting = ctx.settings.warm_starting;
-    ctx.bundles.warm_start(ctx.bodies, warm_starting);
+    if ctx.joints.is_empty() {
+        ctx.bundles.warm_start(ctx.bodies, warm_starting, None);
+        return;
+    }
+    let mut pass = JointPass::new(ctx.joints, ctx.joint_selected, JointWork::WarmStart);
+    let mut run = |bodies: &mut [SolverBody], rank: u8| pass.run_until(bodies, rank);
+    ctx.bundles
+        .warm_start(ctx.bodies, warm_starting, Some(&mut run));
+    pass.run_until(ctx.bodies, u8::MAX);
 }
 
-/// One solve pass of `kind` over the joints (but for a normal relax pass), then the contacts.
+/// One solve pass of `kind` over the joints (but for a normal relax pass) and the contacts,
+/// colour by colour: the overflow's joints, the overflow's contacts, then each colour's
+/// joints and contacts (Box2D v3's order).
 fn solve_pass(ctx: &mut StepContext, plan: &Plan, kind: PassKind) {
-    if kind != PassKind::NormalRelax && !ctx.joints.is_empty() {
-        let biased = kind == PassKind::Biased;
-        joint::solve(
-            ctx.joints,
-            ctx.joint_selected,
-            ctx.bodies,
-            biased,
-            plan.inv_h,
-        );
+    let args = (kind, plan.inv_h, ctx.settings.max_push_out_speed);
+    if kind == PassKind::NormalRelax || ctx.joints.is_empty() {
+        ctx.bundles.solve(ctx.bodies, args, None);
+        return;
     }
-    let push_out = ctx.settings.max_push_out_speed;
-    ctx.bundles.solve(ctx.bodies, kind, plan.inv_h, push_out);
+    let work = JointWork::Solve {
+        biased: kind == PassKind::Biased,
+        inv_h: plan.inv_h,
+    };
+    let mut pass = JointPass::new(ctx.joints, ctx.joint_selected, work);
+    let mut run = |bodies: &mut [SolverBody], rank: u8| pass.run_until(bodies, rank);
+    ctx.bundles.solve(ctx.bodies, args, Some(&mut run));
+    pass.run_until(ctx.bodies, u8::MAX);
 }
 
 /// Recover: the overlap beyond the springs' reach pushed out in position (`recover.rs`).

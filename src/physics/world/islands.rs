@@ -36,6 +36,7 @@ impl World {
             .sweep
             .set_passive(&self.islands.changed, true);
         self.set_sleeping_contacts_aside();
+        self.set_sleeping_joints_aside();
     }
 
     /// Each awake body's time at rest: how long it has been slower than the threshold.

@@ -5,7 +5,8 @@ use super::snapshot::{JointSlotState, StateError};
 use super::*;
 use crate::physics::broad_phase::pair_key;
 use crate::physics::joint::{Joint, JointDef, JointId, JointImpulses, JointKind};
-use crate::physics::solver::joint::{Frame, JointSet};
+use crate::physics::solver::graph::UNCOLOURED;
+use crate::physics::solver::joint::{solve_rank, Frame, JointSet};
 use std::collections::HashMap;
 
 /// One entry of the joint array: a joint, or a free slot remembering its generation.
@@ -27,6 +28,8 @@ pub(super) struct Joints {
     no_collide: HashMap<u64, u32>,
     /// This step's constraints, for the joints with an awake body.
     pub constraints: JointSet,
+    /// Scratch: this step's awake joints as (solve rank, slot), sorted.
+    order: Vec<(u8, u32)>,
     /// The joints that broke in the last step, in id order.
     pub broken: Vec<JointId>,
 }
@@ -41,6 +44,28 @@ impl Joints {
     #[inline]
     pub fn may_collide(&self, key: u64) -> bool {
         !self.no_collide.contains_key(&key)
+    }
+}
+
+/// Whether either of a joint's bodies is awake and dynamic.
+pub(super) fn joint_is_awake(def: &JointDef, slots: &[Slot]) -> bool {
+    let active = |i: u32| slots[i as usize].body.as_ref().is_some_and(Body::is_active);
+    active(def.body_b.index) || def.body_a.is_some_and(|a| active(a.index))
+}
+
+/// A joint's two ends as nodes of the constraint graph: the bodies' slots, and which are
+/// dynamic (awake or asleep). The world's end (`body_a: None`) is B's slot again, not a node.
+pub(super) fn graph_ends(def: &JointDef, slots: &[Slot]) -> ([u32; 2], [bool; 2]) {
+    let dynamic = |i: u32| {
+        slots[i as usize]
+            .body
+            .as_ref()
+            .is_some_and(|b| b.inv_mass > 0.0)
+    };
+    let b = def.body_b.index;
+    match def.body_a {
+        Some(a) => ([a.index, b], [dynamic(a.index), dynamic(b)]),
+        None => ([b, b], [false, dynamic(b)]),
     }
 }
 
@@ -103,6 +128,7 @@ impl World {
             impulses: JointImpulses::default(),
             force: Vec2::ZERO,
             torque: 0.0,
+            colour: UNCOLOURED,
         });
         self.joints.count += 1;
         id
@@ -118,6 +144,8 @@ impl World {
             .ok_or(PhysicsError::UnknownJoint(id))?;
         let joint = slot.joint.take().expect("checked above");
         slot.generation = slot.generation.wrapping_add(1);
+        let (ends, _) = graph_ends(&joint.def, &self.bodies.slots);
+        self.contacts.graph.remove(joint.colour, ends);
         self.joints.free.push(id.index());
         self.joints.count -= 1;
         if !joint.def.collide_connected {
@@ -252,30 +280,41 @@ impl World {
     }
 
     /// This step's constraints: one for each joint with an awake body, posed as the bodies
-    /// are at the start of the step, carrying last step's impulses.
+    /// are at the start of the step, carrying last step's impulses, in the solve order of
+    /// their colours. A joint whose island woke (or new) takes its colour here, in slot order.
     #[inline(never)]
     pub(super) fn build_joint_constraints(&mut self) {
         let fixed = self.solver.bodies.len() as u32 - 1;
+        let mut order = std::mem::take(&mut self.joints.order);
+        order.clear();
+        let (slots, graph) = (&self.bodies.slots, &mut self.contacts.graph);
+        for (slot, s) in self.joints.slots.iter_mut().enumerate() {
+            let Some(j) = &mut s.joint else { continue };
+            if !joint_is_awake(&j.def, slots) {
+                continue;
+            }
+            if j.colour == UNCOLOURED {
+                let (ends, dynamic) = graph_ends(&j.def, slots);
+                j.colour = graph.add(ends, dynamic);
+            }
+            order.push((solve_rank(j.colour), slot as u32));
+        }
+        // (Stable, and slots are unique: the same order on every run.)
+        order.sort_unstable();
         let mut constraints = std::mem::take(&mut self.joints.constraints);
         constraints.clear();
-        for (slot, s) in self.joints.slots.iter().enumerate() {
-            let Some(j) = &s.joint else { continue };
+        for &(_, slot) in &order {
+            let j = self.joints.slots[slot as usize].joint.as_ref();
+            let j = j.expect("listed live");
             let d = &j.def;
             let a = d.body_a.and_then(|id| self.body(id));
             let b = self
                 .body(d.body_b)
                 .expect("joints of removed bodies are removed");
-            if !b.is_active() && !a.is_some_and(Body::is_active) {
-                continue;
-            }
-            let ends = (
-                slot as u32,
-                solver_index(d.body_a, fixed),
-                solver_index(Some(d.body_b), fixed),
-            );
+            let ends = [solver_index(d.body_a, fixed), d.body_b.index];
             let stiffness = (d.constraint_hertz, d.constraint_damping_ratio);
             constraints.push(
-                ends,
+                (slot, ends, j.colour),
                 (&d.kind, rest_length(&d.kind)),
                 frame(d, a, b),
                 &j.impulses,
@@ -283,6 +322,25 @@ impl World {
             );
         }
         self.joints.constraints = constraints;
+        self.joints.order = order;
+    }
+
+    /// The joints whose bodies have all fallen asleep give their colours back (the sleeping
+    /// contacts do the same); they take new ones when their island wakes.
+    pub(super) fn set_sleeping_joints_aside(&mut self) {
+        if self.joints.count == 0 {
+            return;
+        }
+        let (slots, graph) = (&self.bodies.slots, &mut self.contacts.graph);
+        for s in &mut self.joints.slots {
+            let Some(j) = s.joint.as_mut().filter(|j| j.colour != UNCOLOURED) else {
+                continue;
+            };
+            if !joint_is_awake(&j.def, slots) {
+                graph.remove(j.colour, graph_ends(&j.def, slots).0);
+                j.colour = UNCOLOURED;
+            }
+        }
     }
 
     /// After the solve: each solved joint's impulses and reaction back into it; then the

@@ -30,6 +30,7 @@ use super::super::part::{Part, PartDef, Parts};
 use super::super::settings::Settings;
 use super::super::shape::Shape;
 use super::super::solver::graph::{ConstraintGraph, OVERFLOW, UNCOLOURED};
+use super::joints::{graph_ends, joint_is_awake};
 use super::{Slot, World};
 use serde::{Deserialize, Serialize};
 
@@ -92,8 +93,9 @@ pub struct SlotState {
 }
 
 /// The version of [`SolverHistory`] this build writes and reads. 1: contacts with their
-/// impulses, colours, held loads, spring frequencies, ages and recycling frames.
-pub const SOLVER_HISTORY_VERSION: u32 = 2;
+/// impulses, colours, held loads, spring frequencies, ages and recycling frames. 2: contacts
+/// say which shapes touch. 3: joints' colours.
+pub const SOLVER_HISTORY_VERSION: u32 = 3;
 
 /// The solver's history: what it carries from step to step and cannot work out again. Opaque
 /// to callers: written by [`World::export_state`], read back by [`World::import_state`], which
@@ -106,6 +108,9 @@ pub struct SolverHistory {
     contacts: Vec<ContactRecord>,
     /// Sleeping contacts, in the World's order.
     sleeping: Vec<ContactRecord>,
+    /// Each joint slot's colour in the constraint graph (`UNCOLOURED` for an empty slot, a
+    /// sleeping joint, or one not yet stepped). Version 3 on.
+    joint_colours: Vec<u8>,
 }
 
 /// One contact point with its solver state.
@@ -565,6 +570,12 @@ impl World {
                     .iter()
                     .map(ContactRecord::of)
                     .collect(),
+                joint_colours: self
+                    .joints
+                    .slots
+                    .iter()
+                    .map(|s| s.joint.as_ref().map_or(UNCOLOURED, |j| j.colour))
+                    .collect(),
             },
         }
     }
@@ -583,6 +594,7 @@ impl World {
         world.steps = state.steps;
         world.import_contacts(&state.solver)?;
         world.import_joints(&state.joints, &state.joint_free)?;
+        world.import_joint_colours(&state.solver.joint_colours)?;
         Ok(world)
     }
 
@@ -694,6 +706,40 @@ impl World {
             )));
         }
         self.contacts.graph = graph;
+        Ok(())
+    }
+
+    /// The joints' colours, one per joint slot, put back into the constraint graph: a joint
+    /// with an awake body may have one (free on its dynamic bodies), any other none.
+    fn import_joint_colours(&mut self, colours: &[u8]) -> Result<(), StateError> {
+        if colours.len() != self.joints.slots.len() {
+            return Err(StateError(format!(
+                "{} joint colours for {} joint slots",
+                colours.len(),
+                self.joints.slots.len()
+            )));
+        }
+        let (slots, graph) = (&self.bodies.slots, &mut self.contacts.graph);
+        for (index, (s, &colour)) in self.joints.slots.iter_mut().zip(colours).enumerate() {
+            if colour == UNCOLOURED {
+                continue;
+            }
+            let refused = match &mut s.joint {
+                None => true,
+                Some(j) => {
+                    let (ends, dynamic) = graph_ends(&j.def, slots);
+                    j.colour = colour;
+                    !joint_is_awake(&j.def, slots)
+                        || colour > OVERFLOW
+                        || !graph.restore(colour, ends, dynamic)
+                }
+            };
+            if refused {
+                return Err(StateError(format!(
+                    "joint slot {index} has colour {colour}, which it cannot take"
+                )));
+            }
+        }
         Ok(())
     }
 }

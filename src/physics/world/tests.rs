@@ -452,14 +452,16 @@ fn a_speculative_point_that_never_touches_does_not_bounce() {
     );
 }
 
-/// The constraint graph stays exact while contacts begin, end, sleep and wake, bodies are
-/// removed and added: after every step each dynamic body's mask is exactly the colours of the
-/// awake contacts on it, no two awake contacts of one colour share a dynamic body, every awake
-/// contact has a colour and every sleeping one none. (A colour not given back would leak: the
-/// body's colours would run out and its contacts go to the overflow for good.)
+/// The constraint graph stays exact while contacts and joints begin, end, sleep and wake,
+/// bodies are removed and added: after every step each dynamic body's mask is exactly the
+/// colours of the awake contacts and joints on it, no two of one colour share a dynamic body,
+/// every awake contact has a colour and every sleeping contact and joint none. (A colour not
+/// given back would leak: the body's colours would run out and its constraints go to the
+/// overflow for good.) Joints to the world take the top colours, as contacts with the ground.
 #[test]
 fn the_constraint_graph_matches_the_contacts_at_every_step() {
-    use crate::physics::solver::graph::{COLOURS, UNCOLOURED};
+    use crate::physics::joint::{Distance, JointDef, JointKind, Revolute};
+    use crate::physics::solver::graph::{COLOURS, DYNAMIC_COLOURS, UNCOLOURED};
     let mut w = World::new(Settings::default(), vec2(0.0, -10.0)).unwrap();
     w.add_body(&BodyDef::fixed(Shape::rect(20.0, 1.0), vec2(0.0, -0.5)))
         .unwrap();
@@ -474,9 +476,19 @@ fn the_constraint_graph_matches_the_contacts_at_every_step() {
         let at = vec2(-4.5 + col + 0.1 * row, 0.5 + 0.9 * row);
         ids.push(w.add_body(&BodyDef::dynamic(shape, at)).unwrap());
     }
-    let (mut slept, mut coloured) = (false, 0);
+    // Neighbours in a row held apart (one of them removed with its body), and one body on a
+    // hinge to the world.
+    let rod = JointKind::Distance(Distance::default());
+    for a in [10, 12, 20, 21, 22, 30] {
+        let def = JointDef::new(rod.clone(), Some(ids[a]), ids[a + 1]);
+        w.add_joint(&def).unwrap();
+    }
+    let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), None, ids[35]);
+    let hinge = w.add_joint(&hinge).unwrap();
+    let (mut slept, mut coloured, mut joints_coloured) = (false, 0, 0);
     for step in 0..600 {
         match step {
+            100 => drop(w.remove_joint(hinge).unwrap()),
             200 => drop(w.remove_bodies(&ids[10..14]).unwrap()),
             300 => w.apply_impulse(ids[40], vec2(0.0, 3.0)).unwrap(),
             420 => w.set_gravity(vec2(2.0, -10.0)).unwrap(),
@@ -515,6 +527,25 @@ fn the_constraint_graph_matches_the_contacts_at_every_step() {
                 }
             }
         }
+        for j in w.joints.slots.iter().filter_map(|s| s.joint.as_ref()) {
+            let (ends, dynamic) = joints::graph_ends(&j.def, &w.bodies.slots);
+            if !joints::joint_is_awake(&j.def, &w.bodies.slots) {
+                assert_eq!(j.colour, UNCOLOURED, "step {step}: a sleeping joint");
+                continue;
+            }
+            assert_ne!(j.colour, UNCOLOURED, "step {step}: an awake joint");
+            if j.def.body_a.is_none() {
+                assert!(j.colour as usize >= DYNAMIC_COLOURS, "{}", j.colour);
+            }
+            joints_coloured += 1;
+            let bit = 1u32 << j.colour;
+            for (i, node) in ends.into_iter().zip(dynamic) {
+                if node {
+                    assert_eq!(masks[i as usize] & bit, 0, "step {step}: body {i}");
+                    masks[i as usize] |= bit;
+                }
+            }
+        }
         for (i, &mask) in masks.iter().enumerate() {
             assert_eq!(
                 w.contacts.graph.mask(i as u32),
@@ -526,6 +557,10 @@ fn the_constraint_graph_matches_the_contacts_at_every_step() {
     }
     assert!(slept, "some island fell asleep (and woke)");
     assert!(coloured > 1000, "contacts were coloured: {coloured}");
+    assert!(
+        joints_coloured > 1000,
+        "joints were coloured: {joints_coloured}"
+    );
 }
 
 /// A speed above the World's cap is refused naming the cap this World runs with (not the

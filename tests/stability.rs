@@ -224,16 +224,13 @@ fn a_motor_turns_a_heavy_drum_at_its_speed_and_keeps_every_box_inside() {
     check(extreme::tumbler);
 }
 
-/// Box2D's spinner is in the suite and docs/accuracy.md, but not asserted here: its paddle,
-/// driven with unlimited torque at 5 rad/s, turns at 4.27 rad/s on average (85 %): each pass
-/// solves the motor before the contacts, so the bodies' push has the last word. What does
-/// hold is asserted: every body stays in the ring and the step stays finite.
+/// Box2D's spinner: the paddle, driven with unlimited torque at 5 rad/s, turns at 5 rad/s on
+/// average from 1 s on (within 1 %), never below 95 %, with every body inside the ring. (Its
+/// tips pass 0.2 m beyond the ring at the bottom, as in Box2D: continuous collision leaves a
+/// segment that a body's centre does not approach to its contacts, as Box2D does.)
 #[test]
 fn a_paddle_of_unlimited_torque_stirs_six_thousand_bodies_inside_its_ring() {
-    let v = extreme::spinner(&Settings::default());
-    println!("{}", v.summary());
-    assert!(measured(&v, "farthest centre from the ring's (m)") < 40.0);
-    assert!(measured(&v, "slowest paddle speed (rad/s)") > 0.0);
+    check(extreme::spinner);
 }
 
 #[test]

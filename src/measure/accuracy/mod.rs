@@ -3,7 +3,8 @@
 //! Three families, all built from [`crate::physics`] and the set-ups of [`super::cases`]:
 //!
 //! - [`closed_form`]: cases with an analytic answer (free fall, slide to a stop, slopes, bounce,
-//!   head-on collision, spin under torque, resting stack). Each is a function
+//!   head-on collision, spin under torque, resting stack), and [`joint_forms`] for joints
+//!   (pendulum period and energy, spring frequency). Each is a function
 //!   `fn(&Settings, dt) -> Measurement` giving the error against the closed form.
 //! - [`mod@reference`]: cases without a closed form (Falling Bricks, pyramid of base 20), measured
 //!   against a reference run of the same solver at a much finer step ([`reference::reference`]).
@@ -20,6 +21,7 @@
 
 pub mod closed_form;
 pub mod extreme;
+pub mod joint_forms;
 pub mod reference;
 pub mod sweep;
 

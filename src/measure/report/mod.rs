@@ -7,7 +7,7 @@ pub mod markdown;
 pub mod peers;
 
 use crate::measure::accuracy::sweep::{CaseSweep, SuiteResults};
-use crate::measure::accuracy::{closed_form, reference, sweep};
+use crate::measure::accuracy::{closed_form, joint_forms, reference, sweep};
 use std::io;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -50,7 +50,7 @@ pub fn generate(options: &ReportOptions, progress: &mut dyn FnMut(&str)) -> io::
     let img = options.out.join("img");
     std::fs::create_dir_all(&img)?;
     let mut sweeps = Vec::new();
-    for case in closed_form::all() {
+    for case in closed_form::all().into_iter().chain(joint_forms::all()) {
         progress(&format!("sweep {}", case.name));
         sweeps.push(sweep::sweep_closed(&case, options.quick));
     }

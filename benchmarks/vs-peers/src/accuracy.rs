@@ -17,7 +17,12 @@
 //!   way in every engine from the bodies' poses (the separating-axis overlap of each pair of
 //!   boxes after each step), not from each engine's contact points, whose age differs (each
 //!   engine reports the overlap it found at the start of its step); the deepest contact-reported
-//!   overlap is printed to stderr beside it as a cross-check.
+//!   overlap is printed to stderr beside it as a cross-check;
+//! - `pendulum_period` (`accuracy::joint_forms::pendulum_period`: a disc of r = 0.1 m 1 m
+//!   below a free hinge to the world, released at 0.1 rad, 10 s): |T - closed form| (s), T the
+//!   mean period of the disc's x. The report's other joint cases (the pendulum's energy, a
+//!   distance spring's frequency) need velocities or a distance spring, which the peers'
+//!   adapters do not carry: tiltbox alone on those charts.
 //!
 //! Run time: the whole run (building included, as the report times tiltbox), the minimum over
 //! up to 3 runs within 2 s, per simulated second.
@@ -26,8 +31,9 @@ use crate::{box2d, Engine, Rapier, Tiltbox};
 use std::io::{self, Write};
 use std::path::Path;
 use std::time::Instant;
+use tiltbox::measure::accuracy::joint_forms::{self, mean_period};
 use tiltbox::measure::accuracy::{reference::ReferenceCase, steps_for, G};
-use tiltbox::measure::cases::Setup;
+use tiltbox::measure::cases::{Setup, SetupJoint};
 use tiltbox::physics::{BodyDef, MassSpec, Real, Settings, Shape, Vec2};
 
 /// What a case's error is.
@@ -41,6 +47,8 @@ enum Error {
     TopDrift,
     /// Deepest overlap between two boxes (separating-axis test on the poses) over every step.
     MaxPenetration,
+    /// |T - T_closed_form| (s), T the mean period of the first dynamic body's x.
+    Period(f64),
 }
 
 struct Case {
@@ -108,6 +116,22 @@ fn cases() -> Vec<Case> {
         b
     };
     let pyramid_times = ReferenceCase::Pyramid20.sample_times();
+    // `joint_forms::pendulum_period`: a disc of r = 0.1 m hung 1 m below a free hinge to the
+    // world, released at 0.1 rad.
+    let (l, r, a0): (Real, Real, Real) = (1.0, 0.1, 0.1);
+    let centre = Vec2::new(l * a0.sin(), -l * a0.cos());
+    let mut pendulum = setup(
+        "pendulum_period",
+        vec![BodyDef::dynamic(Shape::circle(r), centre).with_friction(0.0)],
+    );
+    pendulum.joints.push(SetupJoint {
+        a: None,
+        b: 0,
+        anchor_a: Vec2::ZERO,
+        anchor_b: -centre,
+        motor: None,
+    });
+    let period = joint_forms::pendulum_period_closed_form(l as f64, r as f64, a0 as f64);
     vec![
         Case {
             name: "pyramid_20",
@@ -138,6 +162,12 @@ fn cases() -> Vec<Case> {
             setup: setup("mass_ratio_1000", ratio(1000.0)),
             seconds: 5.0,
             error: Error::MaxPenetration,
+        },
+        Case {
+            name: "pendulum_period",
+            setup: pendulum,
+            seconds: 10.0,
+            error: Error::Period(period),
         },
     ]
 }
@@ -182,6 +212,8 @@ struct Record {
     penetration: f64,
     /// The deepest overlap the engine's own contact points reported (cross-check).
     contact_penetration: f64,
+    /// The first dynamic body's x after every step, with the time (s).
+    xs: Vec<(f64, f64)>,
     diverged: bool,
 }
 
@@ -255,12 +287,18 @@ fn simulate(which: Which, case: &Case, dt: f32, substeps: u32) -> Record {
         top_drift: 0.0,
         penetration: 0.0,
         contact_penetration: 0.0,
+        xs: Vec::new(),
         diverged: false,
     };
     let total = steps_for(case.seconds, dt as _);
     let mut next = 0;
     for done in 1..=total {
         e.step();
+        if matches!(case.error, Error::Period(_)) {
+            if let Some(b) = e.dynamic_bodies().first() {
+                r.xs.push((done as f64 * dt as f64, b.position[0] as f64));
+            }
+        }
         if per_step {
             if matches!(case.error, Error::MaxPenetration) {
                 r.penetration = r.penetration.max(deepest_box_overlap(case, e.as_ref()));
@@ -348,6 +386,7 @@ pub fn write_csv(out: &Path, quick: bool) -> io::Result<()> {
                         Error::TopDisplacement => rec.top_displacement,
                         Error::TopDrift => rec.top_drift,
                         Error::MaxPenetration => rec.penetration,
+                        Error::Period(expected) => (mean_period(&rec.xs) - expected).abs(),
                     }
                 };
                 let simulated = steps_for(case.seconds, dt as _) as f64 * dt as f64;
@@ -407,7 +446,8 @@ pub fn write_csv(out: &Path, quick: bool) -> io::Result<()> {
          tiltbox::measure::accuracy (pyramid_20: RMS distance (m) to the same engine at dt 1/960 with 16 \
          substeps at t = 0.5, 1, 2 s; resting_stack: top box displacement after 10 s (m); \
          stack_20: jittered 20-stack's largest top drift over 30 s (m); mass_ratio_*: deepest \
-         overlap of two boxes over 5 s, separating-axis test on the poses after each step (m)); cpu_ms_per_simulated_s: min of up to 3 whole runs, single thread"
+         overlap of two boxes over 5 s, separating-axis test on the poses after each step (m); \
+         pendulum_period: |T - closed form| (s) over 10 s, a disc on a free hinge to the world); cpu_ms_per_simulated_s: min of up to 3 whole runs, single thread"
     )?;
     writeln!(f, "engine,case,dt,error,cpu_ms_per_simulated_s")?;
     for r in rows {

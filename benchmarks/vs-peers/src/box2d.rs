@@ -156,7 +156,14 @@ impl Box2d {
                     }
                     MassSpec::Kinematic => panic!("the peer scenes have no kinematic bodies"),
                 };
-                let own = (&d.shape, Transform::IDENTITY, d.filter, d.friction, d.restitution, own_density);
+                let own = (
+                    &d.shape,
+                    Transform::IDENTITY,
+                    d.filter,
+                    d.friction,
+                    d.restitution,
+                    own_density,
+                );
                 let parts = d.parts.iter().map(|p| {
                     let pose = Transform {
                         p: p.offset,
@@ -165,7 +172,9 @@ impl Box2d {
                     let density = if is_static { 0.0 } else { p.density as f32 };
                     (&p.shape, pose, p.filter, p.friction, p.restitution, density)
                 });
-                for (shape, pose, filter, friction, restitution, density) in std::iter::once(own).chain(parts) {
+                for (shape, pose, filter, friction, restitution, density) in
+                    std::iter::once(own).chain(parts)
+                {
                     let mut sd = b2DefaultShapeDef();
                     sd.filter.categoryBits = filter.category;
                     sd.filter.maskBits = filter.mask;

@@ -423,7 +423,10 @@ impl Rapier {
                 }
                 (MassSpec::Density(d), _) => collider.density(d as f32),
                 (MassSpec::Mass(m), _) => {
-                    assert!(def.parts.is_empty(), "the peer scenes give parts by density");
+                    assert!(
+                        def.parts.is_empty(),
+                        "the peer scenes give parts by density"
+                    );
                     collider.mass(m as f32)
                 }
                 (MassSpec::Kinematic, _) => panic!("the peer scenes have no kinematic bodies"),
@@ -474,14 +477,10 @@ impl Rapier {
                     .motor_velocity(speed as f32, 100.0)
                     .motor_max_force(max as f32);
             }
-            let a = j.a.map_or_else(|| ground.expect("made above"), |a| handles[a]);
+            let a =
+                j.a.map_or_else(|| ground.expect("made above"), |a| handles[a]);
             world.insert_impulse_joint(a, handles[j.b], hinge);
-            joints.push((
-                a,
-                handles[j.b],
-                anchor(j.anchor_a),
-                anchor(j.anchor_b),
-            ));
+            joints.push((a, handles[j.b], anchor(j.anchor_a), anchor(j.anchor_b)));
         }
         Rapier {
             world,

@@ -419,11 +419,30 @@ fn pull_softness(pull: Pull, joint: Softness, h: Real) -> (Softness, bool) {
 /// Warm start: apply each joint's accumulated impulses (the sequential solver: all at once).
 #[inline(never)]
 pub(crate) fn warm_start(set: &JointSet, selected: Selected, bodies: &mut [SolverBody]) {
-    selected.for_each_index(set.constraints.len(), |k| warm_start_one(set, k, bodies));
+    let all = 0..selected.count(set.constraints.len());
+    warm_start_span(set, selected, all, bodies);
+}
+
+/// Warm start the selected joints at positions `span` of the selection.
+#[inline(never)]
+fn warm_start_span(
+    set: &JointSet,
+    selected: Selected,
+    span: std::ops::Range<usize>,
+    bodies: &mut [SolverBody],
+) {
+    match selected {
+        Selected::All => span.for_each(|k| warm_start_one(set, k, bodies)),
+        Selected::Only(list) => {
+            for &k in &list[span] {
+                warm_start_one(set, k as usize, bodies);
+            }
+        }
+    }
 }
 
 /// Warm start joint `k`.
-#[inline]
+#[inline(always)]
 fn warm_start_one(set: &JointSet, k: usize, bodies: &mut [SolverBody]) {
     let j = &set.constraints[k];
     let (a, b) = two_mut(bodies, j.a, j.b);
@@ -447,12 +466,32 @@ pub(crate) fn solve(
     biased: bool,
     inv_h: Real,
 ) {
-    let n = set.constraints.len();
-    selected.for_each_index(n, |k| solve_one(set, k, bodies, (biased, inv_h)));
+    let all = 0..selected.count(set.constraints.len());
+    solve_span(set, selected, all, bodies, (biased, inv_h));
+}
+
+/// Solve the selected joints at positions `span` of the selection (`pass`: biased, and
+/// 1 / substep, as [`solve`]).
+#[inline(never)]
+fn solve_span(
+    set: &mut JointSet,
+    selected: Selected,
+    span: std::ops::Range<usize>,
+    bodies: &mut [SolverBody],
+    pass: (bool, Real),
+) {
+    match selected {
+        Selected::All => span.for_each(|k| solve_one(set, k, bodies, pass)),
+        Selected::Only(list) => {
+            for &k in &list[span] {
+                solve_one(set, k as usize, bodies, pass);
+            }
+        }
+    }
 }
 
 /// Solve joint `k`'s rows, then its point block (`biased`, `inv_h` as [`solve`]).
-#[inline]
+#[inline(always)]
 fn solve_one(set: &mut JointSet, k: usize, bodies: &mut [SolverBody], pass: (bool, Real)) {
     let j = &mut set.constraints[k];
     let (a, b) = two_mut(bodies, j.a, j.b);
@@ -515,18 +554,20 @@ impl<'a> JointPass<'a> {
     /// Run the joints not yet done whose solve rank is at most `rank`.
     pub fn run_until(&mut self, bodies: &mut [SolverBody], rank: u8) {
         let n = self.selected.count(self.set.constraints.len());
-        while self.done < n {
-            let k = self.selected.at(self.done);
-            if self.set.ranks[k] > rank {
-                return;
+        let start = self.done;
+        let mut end = start;
+        while end < n && self.set.ranks[self.selected.at(end)] <= rank {
+            end += 1;
+        }
+        if end == start {
+            return;
+        }
+        self.done = end;
+        match self.work {
+            JointWork::WarmStart => warm_start_span(self.set, self.selected, start..end, bodies),
+            JointWork::Solve { biased, inv_h } => {
+                solve_span(self.set, self.selected, start..end, bodies, (biased, inv_h))
             }
-            match self.work {
-                JointWork::WarmStart => warm_start_one(self.set, k, bodies),
-                JointWork::Solve { biased, inv_h } => {
-                    solve_one(self.set, k, bodies, (biased, inv_h))
-                }
-            }
-            self.done += 1;
         }
     }
 }

@@ -30,6 +30,8 @@ pub(super) struct Joints {
     pub constraints: JointSet,
     /// Scratch: this step's awake joints as (solve rank, slot), sorted.
     order: Vec<(u8, u32)>,
+    /// Scratch: the awake joints' slots in solve order.
+    sorted: Vec<u32>,
     /// The joints that broke in the last step, in id order.
     pub broken: Vec<JointId>,
 }
@@ -44,6 +46,26 @@ impl Joints {
     #[inline]
     pub fn may_collide(&self, key: u64) -> bool {
         !self.no_collide.contains_key(&key)
+    }
+}
+
+/// The slots of `order` (solve rank, slot), in slot order, sorted by rank into `sorted`: a
+/// counting sort, stable, so each rank keeps slot order (a comparison sort of joint_grid's
+/// 19,794 joints took 5 % of its step).
+fn by_rank(order: &[(u8, u32)], sorted: &mut Vec<u32>) {
+    let mut start = [0usize; 256];
+    for &(rank, _) in order {
+        start[rank as usize] += 1;
+    }
+    let mut next = 0;
+    for s in start.iter_mut() {
+        (*s, next) = (next, next + *s);
+    }
+    sorted.clear();
+    sorted.resize(order.len(), 0);
+    for &(rank, slot) in order {
+        sorted[start[rank as usize]] = slot;
+        start[rank as usize] += 1;
     }
 }
 
@@ -299,11 +321,11 @@ impl World {
             }
             order.push((solve_rank(j.colour), slot as u32));
         }
-        // (Stable, and slots are unique: the same order on every run.)
-        order.sort_unstable();
+        let mut sorted = std::mem::take(&mut self.joints.sorted);
+        by_rank(&order, &mut sorted);
         let mut constraints = std::mem::take(&mut self.joints.constraints);
         constraints.clear();
-        for &(_, slot) in &order {
+        for &slot in &sorted {
             let j = self.joints.slots[slot as usize].joint.as_ref();
             let j = j.expect("listed live");
             let d = &j.def;
@@ -323,6 +345,7 @@ impl World {
         }
         self.joints.constraints = constraints;
         self.joints.order = order;
+        self.joints.sorted = sorted;
     }
 
     /// The joints whose bodies have all fallen asleep give their colours back (the sleeping

@@ -636,7 +636,9 @@ impl JointConstraint {
         }
     }
 
-    /// Solve the point block at `pose`.
+    /// Solve the point block at `pose`. (Inlined into the pass: out of line it cost
+    /// joint_grid, whose hinges are all point block, 5 % of its step.)
+    #[inline(always)]
     fn solve_point(
         &mut self,
         (a, b): (&mut SolverBody, &mut SolverBody),

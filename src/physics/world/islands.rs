@@ -168,6 +168,8 @@ impl World {
         if self.islands.changed.is_empty() {
             return;
         }
+        // Their joints take colours at the next step.
+        self.joints.sorted_kept = false;
         self.broad_phase
             .sweep
             .set_passive(&self.islands.changed, false);

@@ -30,8 +30,10 @@ pub(super) struct Joints {
     pub constraints: JointSet,
     /// Scratch: this step's awake joints as (solve rank, slot), sorted.
     order: Vec<(u8, u32)>,
-    /// Scratch: the awake joints' slots in solve order.
+    /// The awake joints' slots in solve order, worked out again only when `sorted_kept` is
+    /// false: a joint was added or removed, or an island woke or fell asleep.
     sorted: Vec<u32>,
+    pub sorted_kept: bool,
     /// The joints that broke in the last step, in id order.
     pub broken: Vec<JointId>,
 }
@@ -153,6 +155,7 @@ impl World {
             colour: UNCOLOURED,
         });
         self.joints.count += 1;
+        self.joints.sorted_kept = false;
         id
     }
 
@@ -170,6 +173,7 @@ impl World {
         self.contacts.graph.remove(joint.colour, ends);
         self.joints.free.push(id.index());
         self.joints.count -= 1;
+        self.joints.sorted_kept = false;
         if !joint.def.collide_connected {
             if let Some(a) = joint.def.body_a {
                 let key = pair_key(a.index, joint.def.body_b.index);
@@ -306,26 +310,13 @@ impl World {
     /// their colours. A joint whose island woke (or new) takes its colour here, in slot order.
     #[inline(never)]
     pub(super) fn build_joint_constraints(&mut self) {
-        let fixed = self.solver.bodies.len() as u32 - 1;
-        let mut order = std::mem::take(&mut self.joints.order);
-        order.clear();
-        let (slots, graph) = (&self.bodies.slots, &mut self.contacts.graph);
-        for (slot, s) in self.joints.slots.iter_mut().enumerate() {
-            let Some(j) = &mut s.joint else { continue };
-            if !joint_is_awake(&j.def, slots) {
-                continue;
-            }
-            if j.colour == UNCOLOURED {
-                let (ends, dynamic) = graph_ends(&j.def, slots);
-                j.colour = graph.add(ends, dynamic);
-            }
-            order.push((solve_rank(j.colour), slot as u32));
+        if !self.joints.sorted_kept {
+            self.sort_awake_joints();
         }
-        let mut sorted = std::mem::take(&mut self.joints.sorted);
-        by_rank(&order, &mut sorted);
+        let fixed = self.solver.bodies.len() as u32 - 1;
         let mut constraints = std::mem::take(&mut self.joints.constraints);
         constraints.clear();
-        for &slot in &sorted {
+        for &slot in &self.joints.sorted {
             let j = self.joints.slots[slot as usize].joint.as_ref();
             let j = j.expect("listed live");
             let d = &j.def;
@@ -344,8 +335,28 @@ impl World {
             );
         }
         self.joints.constraints = constraints;
+    }
+
+    /// The joints with an awake body, each given a colour if it has none (in slot order),
+    /// listed in solve order: by their colour's rank, then slot.
+    fn sort_awake_joints(&mut self) {
+        let mut order = std::mem::take(&mut self.joints.order);
+        order.clear();
+        let (slots, graph) = (&self.bodies.slots, &mut self.contacts.graph);
+        for (slot, s) in self.joints.slots.iter_mut().enumerate() {
+            let Some(j) = &mut s.joint else { continue };
+            if !joint_is_awake(&j.def, slots) {
+                continue;
+            }
+            if j.colour == UNCOLOURED {
+                let (ends, dynamic) = graph_ends(&j.def, slots);
+                j.colour = graph.add(ends, dynamic);
+            }
+            order.push((solve_rank(j.colour), slot as u32));
+        }
+        by_rank(&order, &mut self.joints.sorted);
         self.joints.order = order;
-        self.joints.sorted = sorted;
+        self.joints.sorted_kept = true;
     }
 
     /// The joints whose bodies have all fallen asleep give their colours back (the sleeping
@@ -362,6 +373,7 @@ impl World {
             if !joint_is_awake(&j.def, slots) {
                 graph.remove(j.colour, graph_ends(&j.def, slots).0);
                 j.colour = UNCOLOURED;
+                self.joints.sorted_kept = false;
             }
         }
     }

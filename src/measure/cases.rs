@@ -199,9 +199,15 @@ pub struct SetupJoint {
 impl Setup {
     /// A World with this scene, the default (soft-step) settings and the scene's sleep flag.
     pub fn build(&self) -> Result<World, PhysicsError> {
+        self.build_with(Default::default())
+    }
+
+    /// A World with this scene (bodies, then joints) and `settings`, their sleep flag
+    /// replaced by the scene's.
+    pub fn build_with(&self, settings: crate::physics::Settings) -> Result<World, PhysicsError> {
         let settings = crate::physics::Settings {
             enable_sleep: self.sleep,
-            ..Default::default()
+            ..settings
         };
         let mut world = World::new(settings, self.gravity)?;
         let ids = self

@@ -181,14 +181,9 @@ impl Tiltbox {
 
     /// The scene with `settings` (its sleep flag replaced by the scene's), stepped at `dt`.
     pub(crate) fn with_settings(setup: &Setup, settings: Settings, dt: f32) -> Tiltbox {
-        let settings = Settings {
-            enable_sleep: setup.sleep,
-            ..settings
-        };
-        let mut world = World::new(settings, setup.gravity).expect("tiltbox refused the settings");
-        for def in &setup.bodies {
-            world.add_body(def).expect("tiltbox refused a body");
-        }
+        let world = setup
+            .build_with(settings)
+            .expect("tiltbox refused the set-up");
         Tiltbox { world, dt }
     }
 }

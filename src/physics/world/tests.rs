@@ -460,31 +460,7 @@ fn a_speculative_point_that_never_touches_does_not_bounce() {
 /// overflow for good.) Joints to the world take the top colours, as contacts with the ground.
 #[test]
 fn the_constraint_graph_matches_the_contacts_at_every_step() {
-    use crate::physics::joint::{Distance, JointDef, JointKind, Revolute};
-    use crate::physics::solver::graph::{COLOURS, DYNAMIC_COLOURS, UNCOLOURED};
-    let mut w = World::new(Settings::default(), vec2(0.0, -10.0)).unwrap();
-    w.add_body(&BodyDef::fixed(Shape::rect(20.0, 1.0), vec2(0.0, -0.5)))
-        .unwrap();
-    let mut ids = Vec::new();
-    for i in 0..60 {
-        let (col, row) = ((i % 10) as Real, (i / 10) as Real);
-        let shape = if i % 2 == 0 {
-            Shape::rect(0.8, 0.5)
-        } else {
-            Shape::circle(0.3)
-        };
-        let at = vec2(-4.5 + col + 0.1 * row, 0.5 + 0.9 * row);
-        ids.push(w.add_body(&BodyDef::dynamic(shape, at)).unwrap());
-    }
-    // Neighbours in a row held apart (one of them removed with its body), and one body on a
-    // hinge to the world.
-    let rod = JointKind::Distance(Distance::default());
-    for a in [10, 12, 20, 21, 22, 30] {
-        let def = JointDef::new(rod.clone(), Some(ids[a]), ids[a + 1]);
-        w.add_joint(&def).unwrap();
-    }
-    let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), None, ids[35]);
-    let hinge = w.add_joint(&hinge).unwrap();
+    let (mut w, ids, hinge) = graph_test_world();
     let (mut slept, mut coloured, mut joints_coloured) = (false, 0, 0);
     for step in 0..600 {
         match step {
@@ -502,50 +478,8 @@ fn the_constraint_graph_matches_the_contacts_at_every_step() {
         w.step(1.0 / 60.0).unwrap();
         slept |= !w.contacts.sleeping.is_empty();
         let mut masks = vec![0u32; w.bodies.slots.len()];
-        for c in &w.contacts.awake {
-            assert_ne!(
-                c.colour, UNCOLOURED,
-                "step {step}: an awake contact has no colour"
-            );
-            if (c.colour as usize) < COLOURS {
-                coloured += 1;
-                for i in [c.a, c.b] {
-                    let dynamic = w.bodies.slots[i as usize]
-                        .body
-                        .as_ref()
-                        .is_some_and(|b| b.inv_mass > 0.0);
-                    if dynamic {
-                        let bit = 1u32 << c.colour;
-                        assert_eq!(
-                            masks[i as usize] & bit,
-                            0,
-                            "step {step}: colour {} twice on body {i}",
-                            c.colour
-                        );
-                        masks[i as usize] |= bit;
-                    }
-                }
-            }
-        }
-        for j in w.joints.slots.iter().filter_map(|s| s.joint.as_ref()) {
-            let (ends, dynamic) = joints::graph_ends(&j.def, &w.bodies.slots);
-            if !joints::joint_is_awake(&j.def, &w.bodies.slots) {
-                assert_eq!(j.colour, UNCOLOURED, "step {step}: a sleeping joint");
-                continue;
-            }
-            assert_ne!(j.colour, UNCOLOURED, "step {step}: an awake joint");
-            if j.def.body_a.is_none() {
-                assert!(j.colour as usize >= DYNAMIC_COLOURS, "{}", j.colour);
-            }
-            joints_coloured += 1;
-            let bit = 1u32 << j.colour;
-            for (i, node) in ends.into_iter().zip(dynamic) {
-                if node {
-                    assert_eq!(masks[i as usize] & bit, 0, "step {step}: body {i}");
-                    masks[i as usize] |= bit;
-                }
-            }
-        }
+        coloured += contact_colours(&w, &mut masks, step);
+        joints_coloured += joint_colours(&w, &mut masks, step);
         for (i, &mask) in masks.iter().enumerate() {
             assert_eq!(
                 w.contacts.graph.mask(i as u32),
@@ -553,7 +487,6 @@ fn the_constraint_graph_matches_the_contacts_at_every_step() {
                 "step {step}: body {i}'s mask"
             );
         }
-        assert!(w.contacts.sleeping.iter().all(|c| c.colour == UNCOLOURED));
     }
     assert!(slept, "some island fell asleep (and woke)");
     assert!(coloured > 1000, "contacts were coloured: {coloured}");
@@ -561,6 +494,87 @@ fn the_constraint_graph_matches_the_contacts_at_every_step() {
         joints_coloured > 1000,
         "joints were coloured: {joints_coloured}"
     );
+}
+
+/// 60 boxes and discs in rows over a floor; neighbours in a row held apart by distance
+/// joints (one pair removed with its bodies later), and one body on a hinge to the world.
+fn graph_test_world() -> (World, Vec<BodyId>, crate::physics::joint::JointId) {
+    use crate::physics::joint::{Distance, JointDef, JointKind, Revolute};
+    let mut w = World::new(Settings::default(), vec2(0.0, -10.0)).unwrap();
+    w.add_body(&BodyDef::fixed(Shape::rect(20.0, 1.0), vec2(0.0, -0.5)))
+        .unwrap();
+    let mut ids = Vec::new();
+    for i in 0..60 {
+        let (col, row) = ((i % 10) as Real, (i / 10) as Real);
+        let shape = if i % 2 == 0 {
+            Shape::rect(0.8, 0.5)
+        } else {
+            Shape::circle(0.3)
+        };
+        let at = vec2(-4.5 + col + 0.1 * row, 0.5 + 0.9 * row);
+        ids.push(w.add_body(&BodyDef::dynamic(shape, at)).unwrap());
+    }
+    let rod = JointKind::Distance(Distance::default());
+    for a in [10, 12, 20, 21, 22, 30] {
+        let def = JointDef::new(rod.clone(), Some(ids[a]), ids[a + 1]);
+        w.add_joint(&def).unwrap();
+    }
+    let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), None, ids[35]);
+    let hinge = w.add_joint(&hinge).unwrap();
+    (w, ids, hinge)
+}
+
+/// Add each awake contact's colour to its dynamic bodies' `masks`, checking it is there
+/// once, that every awake contact has a colour and no sleeping one; how many are coloured.
+fn contact_colours(w: &World, masks: &mut [u32], step: usize) -> usize {
+    use crate::physics::solver::graph::{COLOURS, UNCOLOURED};
+    let mut coloured = 0;
+    for c in &w.contacts.awake {
+        assert_ne!(c.colour, UNCOLOURED, "step {step}: an awake contact");
+        if (c.colour as usize) < COLOURS {
+            coloured += 1;
+            let dynamic = |i: u32| {
+                w.bodies.slots[i as usize]
+                    .body
+                    .as_ref()
+                    .is_some_and(|b| b.inv_mass > 0.0)
+            };
+            for i in [c.a, c.b].into_iter().filter(|&i| dynamic(i)) {
+                let bit = 1u32 << c.colour;
+                assert_eq!(masks[i as usize] & bit, 0, "step {step}: body {i}");
+                masks[i as usize] |= bit;
+            }
+        }
+    }
+    assert!(w.contacts.sleeping.iter().all(|c| c.colour == UNCOLOURED));
+    coloured
+}
+
+/// The same for the joints: an awake joint has a colour (a top one if it holds to the
+/// world), a sleeping one none; how many are coloured.
+fn joint_colours(w: &World, masks: &mut [u32], step: usize) -> usize {
+    use crate::physics::solver::graph::{DYNAMIC_COLOURS, UNCOLOURED};
+    let mut coloured = 0;
+    for j in w.joints.slots.iter().filter_map(|s| s.joint.as_ref()) {
+        let (ends, dynamic) = joints::graph_ends(&j.def, &w.bodies.slots);
+        if !joints::joint_is_awake(&j.def, &w.bodies.slots) {
+            assert_eq!(j.colour, UNCOLOURED, "step {step}: a sleeping joint");
+            continue;
+        }
+        assert_ne!(j.colour, UNCOLOURED, "step {step}: an awake joint");
+        if j.def.body_a.is_none() {
+            assert!(j.colour as usize >= DYNAMIC_COLOURS, "{}", j.colour);
+        }
+        coloured += 1;
+        let bit = 1u32 << j.colour;
+        for (i, node) in ends.into_iter().zip(dynamic) {
+            if node {
+                assert_eq!(masks[i as usize] & bit, 0, "step {step}: body {i}");
+                masks[i as usize] |= bit;
+            }
+        }
+    }
+    coloured
 }
 
 /// A speed above the World's cap is refused naming the cap this World runs with (not the

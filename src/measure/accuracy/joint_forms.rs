@@ -88,17 +88,11 @@ pub fn pendulum_period(settings: &Settings, dt: Real) -> Measurement {
     let (mut w, bob) = pendulum(settings, l, r, a0);
     let mut samples = Vec::new();
     let mut gap: f64 = 0.0;
-    let diverged = !run_steps(
-        &mut w,
-        dt,
-        steps_for(10.0, dt),
-        Breakdown::BlownUp(1e3),
-        |w, _| {
-            let p = w.body(bob).expect("the bob").position();
-            samples.push((w.time(), p.x as f64));
-            gap = gap.max((p.length() - l).abs() as f64);
-        },
-    );
+    let diverged = diverges(&mut w, dt, 10.0, |w| {
+        let p = w.body(bob).expect("the bob").position();
+        samples.push((w.time(), p.x as f64));
+        gap = gap.max((p.length() - l).abs() as f64);
+    });
     let expected = pendulum_period_closed_form(l as f64, r as f64, a0 as f64);
     let period = mean_period(&samples);
     measured(
@@ -119,17 +113,11 @@ pub fn pendulum_energy(settings: &Settings, dt: Real) -> Measurement {
     let scale = (w.body(bob).expect("the bob").mass() * G) as f64;
     let e0 = energy(&w);
     let (mut gained, mut lost): (f64, f64) = (0.0, 0.0);
-    let diverged = !run_steps(
-        &mut w,
-        dt,
-        steps_for(10.0, dt),
-        Breakdown::BlownUp(1e3),
-        |w, _| {
-            let e = energy(w);
-            gained = gained.max(e - e0);
-            lost = lost.max(e0 - e);
-        },
-    );
+    let diverged = diverges(&mut w, dt, 10.0, |w| {
+        let e = energy(w);
+        gained = gained.max(e - e0);
+        lost = lost.max(e0 - e);
+    });
     measured(
         (
             "pendulum_energy",
@@ -164,22 +152,28 @@ pub fn spring_frequency(settings: &Settings, dt: Real) -> Measurement {
     let omega = 2.0 * PI * hertz;
     let rest = -1.0 - G / (omega * omega);
     let mut samples = Vec::new();
-    let diverged = !run_steps(
-        &mut w,
-        dt,
-        steps_for(4.0, dt),
-        Breakdown::BlownUp(1e3),
-        |w, _| {
-            let y = w.body(b).expect("the box").position().y - rest;
-            samples.push((w.time(), y as f64));
-        },
-    );
+    let diverged = diverges(&mut w, dt, 4.0, |w| {
+        let y = w.body(b).expect("the box").position().y - rest;
+        samples.push((w.time(), y as f64));
+    });
     let f = 1.0 / mean_period(&samples);
     measured(
         ("spring_frequency", "Hz", "|f - 2 Hz|"),
         (&w, diverged),
         (f - hertz as f64).abs(),
         vec![("frequency (Hz)", f)],
+    )
+}
+
+/// Step `w` by `dt` for `seconds`, calling `each` after every step, until it blows up
+/// ([`Breakdown::BlownUp`] at 1 km); whether it did.
+fn diverges(w: &mut World, dt: Real, seconds: f64, mut each: impl FnMut(&World)) -> bool {
+    !run_steps(
+        w,
+        dt,
+        steps_for(seconds, dt),
+        Breakdown::BlownUp(1e3),
+        |w, _| each(w),
     )
 }
 

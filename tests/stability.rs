@@ -238,13 +238,10 @@ fn a_car_on_wheel_joints_drives_over_hills_without_tipping() {
     check(extreme::car);
 }
 
-/// The ragdoll pile is in the suite and docs/accuracy.md, one bound at rest not met: under the
-/// pile a hinge rests 0.16 rad past its limit (bound 0.05; one ragdoll alone: 0.006 rad); its
-/// joints close to 0.93 cm (bound 1 cm). What does hold is asserted: the pile comes to rest,
-/// and no joint comes apart on the way (its anchors never a third of a thigh, 10 cm, apart).
+/// Thirty of Box2D's ragdolls dropped into a box come to rest with every joint closed within
+/// 1 cm and no hinge 0.05 rad past its limit (an island whose joints carry its load gets the
+/// heavy tier's stiffer springs).
 #[test]
-fn a_pile_of_ragdolls_comes_to_rest_with_its_joints_together() {
-    let v = extreme::ragdoll_pile(&Settings::default());
-    assert!(measured(&v, "fastest bone at 10 s (m/s)") < 0.05);
-    assert!(measured(&v, "widest joint gap while falling (m)") < 0.1);
+fn a_pile_of_ragdolls_comes_to_rest_within_its_limits() {
+    check(extreme::ragdoll_pile);
 }

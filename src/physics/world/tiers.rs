@@ -22,7 +22,8 @@ pub(super) enum Tier {
     /// A stack under [`LOADED_RANGE`] times the load (a tall stack), or an island joining
     /// masses `stiff_load_ratio` apart.
     TallStack,
-    /// A loaded braced island at least [`HEAVY_DEPTH`] bodies deep (a pyramid of base 200).
+    /// A loaded braced island at least [`HEAVY_DEPTH`] bodies deep (a pyramid of base 200),
+    /// or one whose joints carry its load (a pile of ragdolls).
     HeavyBraced,
     /// An island joining masses `extreme_mass_ratio` apart.
     Extreme,
@@ -170,6 +171,10 @@ pub(super) struct TierScratch {
     pub tier_bodies: Vec<u32>,
     /// A body of each joint that asks for [`Tier::Extreme`].
     pub joint_needs: Vec<u32>,
+    /// A body of each joint that carries `stiff_load_ratio` times its lighter body's weight.
+    pub joint_loaded: Vec<u32>,
+    /// Each island's, at its root: whether a joint of it is loaded (sized only when one is).
+    pub island_joint_loaded: Vec<bool>,
     /// The joints (indices of this step's joint constraints) of the tier being solved.
     pub tier_joints: Vec<u32>,
 }
@@ -181,7 +186,8 @@ impl World {
     /// island braced sideways (less than [`SLENDER`] times as tall as it is wide, along
     /// gravity, with at least `stiff_load_ratio` moving bodies, and not driven by a moving
     /// kinematic body) is [`Tier::Braced`], or [`Tier::HeavyBraced`] from [`HEAVY_DEPTH`]
-    /// bodies deep; any other a stack tier. Masses `stiff_load_ratio` apart ask for [`Tier::TallStack`] (braced if the
+    /// bodies deep or where a joint carries `stiff_load_ratio` times its lighter body's
+    /// weight; any other a stack tier. Masses `stiff_load_ratio` apart ask for [`Tier::TallStack`] (braced if the
     /// island is), `extreme_mass_ratio` apart for [`Tier::Extreme`]. Fills `contact_tier` and
     /// `body_tier`; returns the highest tier.
     pub(super) fn assign_tiers(&mut self) -> Tier {
@@ -195,15 +201,23 @@ impl World {
     /// What the joints ask: their pairs of dynamic bodies join islands (appended to
     /// `islands.contact_bodies`, so that no tier splits jointed bodies), and a joint joining
     /// masses `extreme_mass_ratio` apart asks for [`Tier::Extreme`], as a contact does
-    /// (`joint_needs`). A joint's load asks for nothing: the tiers' loads are contacts'.
+    /// (`joint_needs`). A joint whose last force was `stiff_load_ratio` times its lighter
+    /// body's weight or more is noted (`joint_loaded`): it asks nothing by itself, but makes
+    /// a braced island that its contacts load [`Tier::HeavyBraced`] (see `island_tiers`).
     fn joint_needs(&mut self) -> Tier {
         self.tiers.joint_needs.clear();
+        self.tiers.joint_loaded.clear();
         if self.joints.constraints.is_empty() {
             return Tier::Base;
         }
-        let extreme = self.settings.extreme_mass_ratio;
+        let (extreme, stiff) = (
+            self.settings.extreme_mass_ratio,
+            self.settings.stiff_load_ratio,
+        );
+        let g = self.gravity.length();
+        let set = &self.joints.constraints;
         let mut top = Tier::Base;
-        for k in &self.joints.constraints.constraints {
+        for (k, cold) in set.constraints.iter().zip(&set.cold) {
             let inv_mass = |i: u32| self.solver.bodies[i as usize].inv_mass;
             let (ma, mb) = (inv_mass(k.a), inv_mass(k.b));
             if ma == 0.0 || mb == 0.0 {
@@ -213,6 +227,12 @@ impl World {
             if ma.max(mb) / ma.min(mb) >= extreme {
                 self.tiers.joint_needs.push(k.b);
                 top = Tier::Extreme;
+            }
+            let joint = self.joints.slots[cold.slot as usize].joint.as_ref();
+            let force = joint.map_or(0.0, |j| j.force.length());
+            // The lighter body's weight is g / its inverse mass.
+            if g > 1e-3 && force * ma.max(mb) >= stiff * g {
+                self.tiers.joint_loaded.push(k.b);
             }
         }
         top
@@ -336,6 +356,14 @@ impl World {
             let root = find(parent, b) as usize;
             tiers.body_tier[root] = Tier::Extreme;
         }
+        let joint_loaded = !tiers.joint_loaded.is_empty();
+        if joint_loaded {
+            tiers.island_joint_loaded.clear();
+            tiers.island_joint_loaded.resize(n, false);
+            for &b in &tiers.joint_loaded {
+                tiers.island_joint_loaded[find(parent, b) as usize] = true;
+            }
+        }
         let stiff = self.settings.stiff_load_ratio;
         // Depth stands for weight only where there is gravity.
         let weighed = self.gravity.length() > 1e-3;
@@ -347,7 +375,12 @@ impl World {
             let braced = tiers.island_bodies[i] as Real >= stiff
                 && !tiers.island_extent[i].slender()
                 && !tiers.island_driven[i];
-            let heavy = weighed && tiers.island_extent[i].depth() >= HEAVY_DEPTH;
+            // A braced island whose load its joints carry (a pile of ragdolls) needs the
+            // heavy tier's stiffer springs: on the braced tier's, a limb under the pile rests
+            // 0.16 rad past its hinge's limit; on the heavy tier's, 0.04.
+            let heavy = weighed
+                && (tiers.island_extent[i].depth() >= HEAVY_DEPTH
+                    || joint_loaded && tiers.island_joint_loaded[i]);
             tiers.body_tier[i] = island_tier(tiers.body_tier[i], braced, heavy);
             top = top.max(tiers.body_tier[i]);
         }

@@ -62,7 +62,7 @@ fn main() {
             })
             .fold(0.0f32, f32::max);
         worst = worst.max(gap);
-        if i % 120 == 119 {
+        if i % 60 == 59 {
             let b = w.body(block).unwrap();
             println!(
                 "t={} gap={:.4} worst={:.4} block={} v={:.3}",

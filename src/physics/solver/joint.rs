@@ -340,6 +340,10 @@ impl JointConstraint {
     }
 }
 
+/// The stiffest a joint is by default, as a fraction of the substep rate (Box2D's quarter:
+/// a stiffer spring is not resolved by the substep).
+pub(crate) const JOINT_CAP: Real = 0.25;
+
 /// How a solve steps its joints.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct JointStep {
@@ -355,6 +359,8 @@ pub(crate) struct JointStep {
     /// What the stiffness tier multiplies the joints' `constraint_hertz` by, as it does the
     /// contacts' (1 at the base tier and in the sequential solver).
     pub hertz_scale: Real,
+    /// The stiffest a joint may be, as a fraction of the substep rate.
+    pub cap: Real,
 }
 
 /// Prepare: springs and impulse caps for this solve; last step's impulses made per substep.
@@ -377,7 +383,7 @@ pub(crate) fn prepare(set: &mut JointSet, selected: Selected, step: JointStep) {
             }
         } else {
             Softness::new(
-                (step.hertz_scale * c.hertz).min(0.25 / step.h),
+                (step.hertz_scale * c.hertz).min(step.cap / step.h),
                 c.zeta,
                 step.h,
             )

@@ -53,6 +53,8 @@ pub(crate) struct Effort {
     pub contact_hertz: Real,
     /// How much of last step's compression the springs creep by (see [`creep`]; 0: none).
     pub creep: Real,
+    /// The stiffest a joint may be, as a fraction of the substep rate.
+    pub joint_cap: Real,
 }
 
 /// What the stages of one solve share.
@@ -138,7 +140,9 @@ impl Plan {
                 substeps,
                 baumgarte: 0.0,
                 warm_starting: settings.warm_starting,
-                hertz_scale: effort.contact_hertz / settings.contact_hertz,
+                hertz_scale: effort.contact_hertz / settings.contact_hertz * effort.joint_cap
+                    / joint::JOINT_CAP,
+                cap: effort.joint_cap,
             },
         }
     }

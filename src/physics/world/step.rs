@@ -72,6 +72,7 @@ impl World {
             baumgarte: JOINT_BAUMGARTE,
             warm_starting: self.settings.warm_starting,
             hertz_scale: 1.0,
+            cap: joint::JOINT_CAP,
         };
         joint::prepare(joints, Selected::All, step);
         joint::warm_start(joints, Selected::All, bodies);

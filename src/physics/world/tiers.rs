@@ -6,6 +6,7 @@
 use super::islands::{find, unite_islands};
 use super::*;
 use crate::physics::shape::Aabb;
+use crate::physics::solver::joint::JOINT_CAP;
 use crate::physics::solver::soft_step::Effort;
 
 /// A stiffness tier, in order of the work it does.
@@ -42,6 +43,9 @@ pub(super) struct TierSpec {
     pub normal_relax_scale: u32,
     /// How much of last step's compression the springs creep by (`soft_step::creep`).
     pub creep: Real,
+    /// The stiffest a joint may be, as a fraction of the substep rate; the tier's joints are
+    /// stiffened by as much again as its contacts, up to it.
+    pub joint_cap: Real,
 }
 
 /// The tiers' work, indexed by [`Tier`]. Why each row is what it is:
@@ -59,7 +63,12 @@ pub(super) struct TierSpec {
 ///   compression, with the braced tier's passes and creep.
 /// - **Extreme** (100:1 masses) needs four times the substeps and stiffness and eight times
 ///   the relax passes; its islands are small. Creep would leave its springs softer at rest,
-///   which it cannot afford.
+///   which it cannot afford. Its joints go to half the substep rate, eight times their base
+///   stiffness: a joint's give under a load W on a light link of mass m is
+///   2 W / (m omega^2), and at a quarter of the rate a 900 kg block on 0.5 kg links opened
+///   each joint 15.5 mm, at half 3.9 mm (the heavy rope case). Joints may go where contacts
+///   may not: a contact at half the rate switches on and off as it rocks (a leaning plank
+///   rocked at 4 Hz), an equality row never switches.
 ///
 /// docs/benchmarks.md and docs/design.md have the measurements behind each number.
 pub(super) const TIERS: [TierSpec; 6] = [
@@ -69,6 +78,7 @@ pub(super) const TIERS: [TierSpec; 6] = [
         relax_scale: 1,
         normal_relax_scale: 0,
         creep: 0.0,
+        joint_cap: JOINT_CAP,
     },
     // Braced
     TierSpec {
@@ -76,6 +86,7 @@ pub(super) const TIERS: [TierSpec; 6] = [
         relax_scale: 1,
         normal_relax_scale: 1,
         creep: 0.5,
+        joint_cap: JOINT_CAP,
     },
     // Stack
     TierSpec {
@@ -83,6 +94,7 @@ pub(super) const TIERS: [TierSpec; 6] = [
         relax_scale: 1,
         normal_relax_scale: 0,
         creep: 0.5,
+        joint_cap: JOINT_CAP,
     },
     // TallStack
     TierSpec {
@@ -90,6 +102,7 @@ pub(super) const TIERS: [TierSpec; 6] = [
         relax_scale: 1,
         normal_relax_scale: 0,
         creep: 0.5,
+        joint_cap: JOINT_CAP,
     },
     // HeavyBraced
     TierSpec {
@@ -97,6 +110,7 @@ pub(super) const TIERS: [TierSpec; 6] = [
         relax_scale: 1,
         normal_relax_scale: 1,
         creep: 0.5,
+        joint_cap: JOINT_CAP,
     },
     // Extreme
     TierSpec {
@@ -104,6 +118,7 @@ pub(super) const TIERS: [TierSpec; 6] = [
         relax_scale: 8,
         normal_relax_scale: 0,
         creep: 0.0,
+        joint_cap: 0.5,
     },
 ];
 
@@ -143,6 +158,7 @@ impl Tier {
             normal_relax_passes: relax * spec.normal_relax_scale,
             contact_hertz,
             creep: spec.creep,
+            joint_cap: spec.joint_cap,
         }
     }
 }

@@ -21,6 +21,7 @@ pub mod joint;
 pub mod math;
 pub mod part;
 pub(crate) mod part_tree;
+pub mod query;
 pub mod ragdoll;
 pub mod segment;
 pub mod settings;
@@ -39,8 +40,9 @@ pub use joint::{
 };
 pub use math::{vec2, Real, Rot, Transform, Vec2};
 pub use part::PartDef;
+pub use query::{QueryFilter, RayHit, ShapeRef};
 pub use segment::Segment;
 pub use settings::{Mixing, Settings, SolverKind};
 pub use shape::{Aabb, Shape};
 pub use world::snapshot::{StateError, WorldState};
-pub use world::World;
+pub use world::{Query, World};

@@ -127,7 +127,7 @@ pub fn collide(a: &Shape, xf_a: Transform, b: &Shape, xf_b: Transform, margin: R
 
 /// A shape as a convex core and the radius it is grown by (m): a rectangle or polygon is its
 /// own core with radius 0, a capsule is its segment, a circle is its centre.
-fn core(shape: &Shape) -> (Cow<'_, Polygon>, Real) {
+pub(crate) fn core(shape: &Shape) -> (Cow<'_, Polygon>, Real) {
     match shape {
         Shape::Rect { half_extents } => (Cow::Owned(Polygon::rect(*half_extents)), 0.0),
         Shape::Polygon(p) => (Cow::Borrowed(p), 0.0),

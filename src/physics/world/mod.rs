@@ -25,10 +25,15 @@ use super::solver::{clamp_speed, Kinematic, SolverBody};
 /// Export and import of the full state (checkpoints); a child module so it reads private fields.
 pub mod snapshot;
 
+pub use queries::Query;
+
 mod contacts;
 mod continuous;
 mod islands;
 mod joints;
+mod queries;
+#[cfg(test)]
+mod query_tests;
 mod step;
 #[cfg(test)]
 mod tests;
@@ -60,6 +65,8 @@ pub struct World {
     tiers: tiers::TierScratch,
     islands: islands::IslandScratch,
     joints: joints::Joints,
+    /// The query tree, built at the first query (`queries.rs`).
+    queries: queries::QueryIndex,
 }
 
 /// The bodies: a slot array with a free list.
@@ -157,6 +164,7 @@ impl World {
             tiers: Default::default(),
             islands: Default::default(),
             joints: Default::default(),
+            queries: Default::default(),
         }
     }
 
@@ -202,6 +210,7 @@ impl World {
     /// Add a body; the definition is validated first and nothing changes on error.
     pub fn add_body(&mut self, def: &BodyDef) -> Result<BodyId, PhysicsError> {
         def.validate()?;
+        self.queries.touch();
         self.check_speed(
             def.linear_velocity,
             def.angular_velocity,
@@ -246,6 +255,7 @@ impl World {
     /// live body, once. One pass over the contacts and the broad phase however many go
     /// (removing them one at a time costs a pass each). Returns the bodies in the order given.
     pub fn remove_bodies(&mut self, ids: &[BodyId]) -> Result<Vec<Body>, PhysicsError> {
+        self.queries.touch();
         // Flags set for the ids only (and cleared again), so a short list costs little.
         let mut gone = std::mem::take(&mut self.bodies.removing);
         gone.resize(self.bodies.slots.len(), false);
@@ -340,6 +350,7 @@ impl World {
     /// Remove every body, joint and contact; settings, gravity and time are kept.
     pub fn clear(&mut self) {
         self.joints = Default::default();
+        self.queries = Default::default();
         self.bodies.slots.clear();
         self.bodies.free.clear();
         self.bodies.count = 0;

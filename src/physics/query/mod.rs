@@ -1,0 +1,173 @@
+//! Queries: what a ray, a swept shape, a point, a box or a shape meets in the World.
+//!
+//! [`crate::physics::World::query`] brings the query tree (`tree.rs`) up to date and returns a
+//! [`Query`](crate::physics::world::Query) view; this module holds what a query answers and the
+//! exact test of one body's shapes (`geometry.rs`). Filters test both ways, as Box2D's
+//! `b2QueryFilter`: a shape is seen when its category is in the query's mask and the query's
+//! category is in the shape's mask.
+
+pub(crate) mod geometry;
+pub(crate) mod tree;
+
+use self::geometry::{Crossing, Rounded};
+use super::body::{Body, BodyId};
+use super::collide::core;
+use super::filter::Filter;
+use super::math::{Real, Transform, Vec2};
+use super::shape::Shape;
+
+/// Which shapes a query sees: those whose category is in `mask` and whose mask holds
+/// `category`. The default (category 1, mask all) sees every shape with a default filter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct QueryFilter {
+    /// The categories the query is in (tested against each shape's mask).
+    pub category: u64,
+    /// The categories it sees (tested against each shape's category).
+    pub mask: u64,
+}
+
+impl QueryFilter {
+    /// Sees every shape whose mask holds category 1 (every shape with a default filter).
+    pub const DEFAULT: QueryFilter = QueryFilter {
+        category: 1,
+        mask: u64::MAX,
+    };
+
+    /// Whether the query sees a shape with filter `shape`.
+    #[inline]
+    pub fn sees(&self, shape: &Filter) -> bool {
+        shape.category & self.mask != 0 && shape.mask & self.category != 0
+    }
+}
+
+impl Default for QueryFilter {
+    fn default() -> Self {
+        QueryFilter::DEFAULT
+    }
+}
+
+/// One shape of one body: the body's own shape is 0, its parts 1, 2, ... in the order given.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ShapeRef {
+    /// The body.
+    pub body: BodyId,
+    /// The shape's index in the body.
+    pub shape: u32,
+}
+
+/// Where a ray or a swept shape first meets a shape.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayHit {
+    /// The shape met.
+    pub shape: ShapeRef,
+    /// The point met, on the shape's surface (m, world).
+    pub point: Vec2,
+    /// The shape's outward unit normal there (zero for a swept shape that starts overlapping).
+    pub normal: Vec2,
+    /// How far along the translation (0 at the start, 1 at its end).
+    pub fraction: Real,
+}
+
+/// Each of `body`'s shapes with its index, its pose in the world and its filter.
+pub(crate) fn shapes_of(body: &Body) -> impl Iterator<Item = (u32, &Shape, Transform, Filter)> {
+    let frame = body.frame();
+    let filter = body.filter();
+    let own = body
+        .compound()
+        .is_none()
+        .then(|| (0, body.shape(), frame, filter));
+    let parts = body.compound().into_iter().flat_map(move |p| {
+        p.all
+            .iter()
+            .enumerate()
+            .map(move |(i, part)| (i as u32, &part.shape, frame.then(part.pose), part.filter))
+    });
+    own.into_iter().chain(parts)
+}
+
+/// A shape's core in the world at `xf`, with its radius.
+pub(crate) fn rounded(shape: &Shape, xf: Transform) -> Rounded {
+    let (core, radius) = core(shape);
+    Rounded {
+        vertices: core.vertices().iter().map(|&v| xf.apply(v)).collect(),
+        radius,
+    }
+}
+
+/// The first of `body`'s shapes that `filter` sees met by `origin + t d`, t in [0, max].
+pub(crate) fn ray_body(
+    body: &Body,
+    (origin, d, max): (Vec2, Vec2, Real),
+    filter: &QueryFilter,
+) -> Option<(u32, Crossing)> {
+    shapes_of(body)
+        .filter(|(_, _, _, f)| filter.sees(f))
+        .filter_map(|(i, shape, xf, _)| {
+            let hit = geometry::ray_rounded(&rounded(shape, xf), origin, d, max)?;
+            Some((i, hit))
+        })
+        .min_by(|a, b| a.1.fraction.total_cmp(&b.1.fraction))
+}
+
+/// The shapes of `body` that `filter` sees and that overlap `probe` (a rounded core in the
+/// world): their cores closer than the two radii, or touching.
+pub(crate) fn overlaps_body<'a>(
+    body: &'a Body,
+    probe: &'a Rounded,
+    filter: &'a QueryFilter,
+) -> impl Iterator<Item = u32> + 'a {
+    shapes_of(body)
+        .filter(|(_, _, _, f)| filter.sees(f))
+        .filter(|(_, shape, xf, _)| {
+            let s = rounded(shape, *xf);
+            let gap = geometry::core_to_core(&probe.vertices, &s.vertices).0;
+            gap == 0.0 || gap < probe.radius + s.radius
+        })
+        .map(|(i, ..)| i)
+}
+
+/// Where `probe` (a rounded core in the world) moved by `d` first meets one of `body`'s
+/// shapes that `filter` sees within [0, max] of `d`: the shape, the fraction, the point on
+/// the shape's surface and its normal.
+pub(crate) fn cast_body(
+    body: &Body,
+    probe: &Rounded,
+    (d, max): (Vec2, Real),
+    filter: &QueryFilter,
+) -> Option<(u32, Real, Vec2, Vec2)> {
+    shapes_of(body)
+        .filter(|(_, _, _, f)| filter.sees(f))
+        .filter_map(|(i, shape, xf, _)| {
+            let target = rounded(shape, xf);
+            let (fraction, point, normal) = cast(probe, &target, d, max)?;
+            Some((i, fraction, point, normal))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// Where `probe` moved by `d` first meets `target` within [0, max]: the fraction, the point on
+/// `target`'s surface, and its normal there (toward the probe). A probe that starts
+/// overlapping meets it at 0 with no normal.
+fn cast(probe: &Rounded, target: &Rounded, d: Vec2, max: Real) -> Option<(Real, Vec2, Vec2)> {
+    let (gap, pa, pb) = geometry::core_to_core(&probe.vertices, &target.vertices);
+    let reach = probe.radius + target.radius;
+    if gap < reach {
+        return Some((
+            0.0,
+            pb + (pa - pb).normalize_or_zero() * target.radius,
+            Vec2::ZERO,
+        ));
+    }
+    let offsets = Rounded {
+        vertices: geometry::difference(&target.vertices, &probe.vertices),
+        radius: reach,
+    };
+    let hit = geometry::ray_rounded(&offsets, Vec2::ZERO, d, max)?;
+    let moved: Vec<Vec2> = probe
+        .vertices
+        .iter()
+        .map(|&v| v + hit.fraction * d)
+        .collect();
+    let (_, _, pb) = geometry::core_to_core(&moved, &target.vertices);
+    Some((hit.fraction, pb + hit.normal * target.radius, hit.normal))
+}

@@ -2,6 +2,7 @@
 
 use super::builder::builder_setters;
 use super::error::{check_material, finite, finite_vec, positive, PhysicsError};
+use super::events::ShapeFlags;
 use super::filter::Filter;
 use super::math::{is_finite_vec, Real, Rot, Transform, Vec2};
 use super::part::{mass_data, placed, Part, PartDef, Parts, MAX_SHAPES};
@@ -56,6 +57,10 @@ pub struct BodyDef {
     /// is shared in proportion to area x density, the body's own shape at density 1.
     #[serde(default)]
     pub parts: Vec<PartDef>,
+    /// What its own shape reports, and whether it is a sensor (default: nothing, not a
+    /// sensor; each part has its own).
+    #[serde(default)]
+    pub flags: ShapeFlags,
 }
 
 impl BodyDef {
@@ -72,6 +77,7 @@ impl BodyDef {
             restitution: 0.0,
             filter: Filter::DEFAULT,
             parts: Vec::new(),
+            flags: ShapeFlags::NONE,
         }
     }
 
@@ -128,6 +134,8 @@ impl BodyDef {
         with_restitution(restitution: Real) => restitution = restitution;
         /// Set the collision filter.
         with_filter(filter: Filter) => filter = filter;
+        /// Set what its own shape reports and whether it is a sensor.
+        with_flags(flags: ShapeFlags) => flags = flags;
     }
 
     /// Add a further shape (see [`BodyDef::parts`]).
@@ -228,13 +236,21 @@ fn usable(field: &'static str, value: Real) -> Result<Real, PhysicsError> {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Extras {
     pub filter: Filter,
+    /// Its own shape's flags.
+    pub flags: ShapeFlags,
     pub parts: Option<Parts>,
 }
 
 impl Extras {
-    /// The extras of a body with this filter and these parts; None when it has neither.
-    pub fn boxed(filter: Filter, parts: Option<Parts>) -> Option<Box<Extras>> {
-        (filter != Filter::DEFAULT || parts.is_some()).then(|| Box::new(Extras { filter, parts }))
+    /// The extras of a body with this filter, flags and parts; None when it has none.
+    pub fn boxed(filter: Filter, flags: ShapeFlags, parts: Option<Parts>) -> Option<Box<Extras>> {
+        (filter != Filter::DEFAULT || flags.any() || parts.is_some()).then(|| {
+            Box::new(Extras {
+                filter,
+                flags,
+                parts,
+            })
+        })
     }
 }
 
@@ -314,7 +330,7 @@ impl Body {
                 None => def.position,
                 Some(p) => def.position + rot.rotate(p.local_center),
             },
-            extras: Extras::boxed(def.filter, parts),
+            extras: Extras::boxed(def.filter, def.flags, parts),
             angle: def.angle,
             rot,
             linear_velocity: if is_static {
@@ -352,6 +368,7 @@ impl Body {
             friction: def.friction,
             restitution: def.restitution,
             filter: def.filter,
+            flags: def.flags,
         };
         let scale = own_density
             / match def.mass {
@@ -407,6 +424,17 @@ impl Body {
     pub fn filter(&self) -> Filter {
         self.extras.as_ref().map_or(Filter::DEFAULT, |e| e.filter)
     }
+    /// What its own shape reports, and whether it is a sensor.
+    pub fn flags(&self) -> ShapeFlags {
+        self.extras.as_ref().map_or(ShapeFlags::NONE, |e| e.flags)
+    }
+    /// Whether any of its shapes reports anything or is a sensor.
+    pub(crate) fn any_flags(&self) -> bool {
+        self.flags().any()
+            || self
+                .compound()
+                .is_some_and(|p| p.all.iter().any(|part| part.flags.any()))
+    }
     /// A body of several shapes: all of them, in the centre-of-mass frame. None for a body of
     /// one shape, whose centre of mass is its origin.
     #[inline]
@@ -420,7 +448,7 @@ impl Body {
         if let Some(own) = extras.parts.as_mut().map(|p| &mut p.all[0]) {
             own.filter = filter;
         }
-        self.extras = Extras::boxed(extras.filter, extras.parts);
+        self.extras = Extras::boxed(extras.filter, extras.flags, extras.parts);
     }
     /// Orientation as a rotation.
     pub fn rotation(&self) -> Rot {
@@ -544,6 +572,7 @@ impl Body {
             restitution: self.restitution,
             filter: self.filter(),
             parts: self.parts().to_vec(),
+            flags: self.flags(),
         }
     }
     /// True when every number in the body's state is finite.

@@ -1,4 +1,4 @@
-//! Body ids: stable, generational handles to the bodies of a World.
+//! Ids: stable, generational handles to the bodies, shapes and joints of a World.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -60,4 +60,13 @@ impl fmt::Display for JointId {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "joint {}v{}", self.index, self.generation)
     }
+}
+
+/// One shape of one body: the body's own shape is 0, its parts 1, 2, ... in the order given.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct ShapeRef {
+    /// The body.
+    pub body: BodyId,
+    /// The shape's index in the body.
+    pub shape: u32,
 }

@@ -14,6 +14,7 @@ pub mod collide;
 pub mod contact;
 pub mod convex;
 pub mod error;
+pub mod events;
 pub mod filter;
 pub(crate) mod hash;
 pub mod id;
@@ -33,14 +34,16 @@ pub use body::{Body, BodyDef, BodyId, MassSpec};
 pub use contact::{ContactInfo, ContactPointInfo};
 pub use convex::Polygon;
 pub use error::PhysicsError;
+pub use events::{ContactEvent, HitEvent, SensorEvent, ShapeFlags, StepEvents};
 pub use filter::Filter;
+pub use id::ShapeRef;
 pub use joint::{
     Distance, Joint, JointDef, JointId, JointKind, Limit, Motor, MotorJoint, Prismatic, Revolute,
     Spring, Target, Weld, Wheel,
 };
 pub use math::{vec2, Real, Rot, Transform, Vec2};
 pub use part::PartDef;
-pub use query::{QueryFilter, RayHit, ShapeRef};
+pub use query::{QueryFilter, RayHit};
 pub use segment::Segment;
 pub use settings::{Mixing, Settings, SolverKind};
 pub use shape::{Aabb, Shape};

@@ -9,6 +9,7 @@
 
 use super::builder::builder_setters;
 use super::error::{check_material, finite, finite_vec, positive, PhysicsError};
+use super::events::ShapeFlags;
 use super::filter::Filter;
 use super::math::{Real, Rot, Transform, Vec2};
 use super::part_tree::{PartTree, TREE_FROM};
@@ -37,6 +38,9 @@ pub struct PartDef {
     /// Which other shapes it collides with (default: all).
     #[serde(default)]
     pub filter: Filter,
+    /// What it reports, and whether it is a sensor (default: nothing, not a sensor).
+    #[serde(default)]
+    pub flags: ShapeFlags,
 }
 
 impl PartDef {
@@ -51,6 +55,7 @@ impl PartDef {
             friction: 0.6,
             restitution: 0.0,
             filter: Filter::DEFAULT,
+            flags: ShapeFlags::NONE,
         }
     }
 
@@ -65,6 +70,8 @@ impl PartDef {
         with_restitution(restitution: Real) => restitution = restitution;
         /// Set the collision filter.
         with_filter(filter: Filter) => filter = filter;
+        /// Set what it reports and whether it is a sensor.
+        with_flags(flags: ShapeFlags) => flags = flags;
     }
 
     /// Refuse what cannot be simulated, naming the field (the caller names the part).
@@ -95,6 +102,7 @@ pub(crate) struct Part {
     pub friction: Real,
     pub restitution: Real,
     pub filter: Filter,
+    pub flags: ShapeFlags,
 }
 
 impl Part {
@@ -178,6 +186,7 @@ impl Parts {
             friction: d.friction,
             restitution: d.restitution,
             filter: d.filter,
+            flags: d.flags,
         }));
         let tree = (all.len() > TREE_FROM).then(|| {
             let boxes: Vec<Aabb> = all.iter().map(|p| p.shape.aabb(p.pose)).collect();

@@ -151,6 +151,9 @@ pub struct Settings {
     pub max_linear_speed: Real,
     /// Largest rotation a body may make in one (sub)step (rad). Default 0.25 pi (Box2D).
     pub max_rotation: Real,
+    /// Approach speed above which a contact of a shape with hit events reports a hit (m/s).
+    /// Default 1 (Box2D's `hitEventThreshold`).
+    pub hit_event_threshold: Real,
 }
 
 impl Default for Settings {
@@ -190,6 +193,7 @@ impl Settings {
             time_to_sleep: 0.5,
             max_linear_speed: 400.0,
             max_rotation: 0.25 * super::math::PI,
+            hit_event_threshold: 1.0,
         }
     }
 
@@ -257,6 +261,7 @@ impl Settings {
             });
         }
         non_negative("restitution_threshold", self.restitution_threshold)?;
+        non_negative("hit_event_threshold", self.hit_event_threshold)?;
         positive("contact_hertz", self.contact_hertz)?;
         non_negative("contact_damping_ratio", self.contact_damping_ratio)?;
         non_negative("max_contact_hertz_ratio", self.max_contact_hertz_ratio)?;

@@ -675,6 +675,7 @@ impl BodyEntry {
                 friction: p.friction.unwrap_or(self.friction),
                 restitution: p.restitution.unwrap_or(self.restitution),
                 filter,
+                flags: Default::default(),
             });
         }
         Ok(parts)

@@ -35,7 +35,8 @@ use std::thread::JoinHandle;
 /// 11: bodies carry their parts (further shapes) and centre of mass, contacts which shapes
 /// touch (solver history version 2).
 /// 12: the solver history carries the joints' colours in the constraint graph (version 3).
-pub const FORMAT_VERSION: u32 = 12;
+/// 13: bodies carry their own shape's flags (events, sensor); parts carry theirs.
+pub const FORMAT_VERSION: u32 = 13;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

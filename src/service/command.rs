@@ -92,6 +92,7 @@ mod compact_def {
             restitution: c.restitution,
             filter: Default::default(),
             parts: Vec::new(),
+            flags: Default::default(),
         })
     }
 }

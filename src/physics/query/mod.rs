@@ -10,9 +10,11 @@ pub(crate) mod geometry;
 pub(crate) mod tree;
 
 use self::geometry::{Crossing, Rounded};
-use super::body::{Body, BodyId};
+use super::body::Body;
 use super::collide::core;
+use super::events::ShapeFlags;
 use super::filter::Filter;
+pub use super::id::ShapeRef;
 use super::math::{Real, Transform, Vec2};
 use super::shape::Shape;
 
@@ -46,15 +48,6 @@ impl Default for QueryFilter {
     }
 }
 
-/// One shape of one body: the body's own shape is 0, its parts 1, 2, ... in the order given.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct ShapeRef {
-    /// The body.
-    pub body: BodyId,
-    /// The shape's index in the body.
-    pub shape: u32,
-}
-
 /// Where a ray or a swept shape first meets a shape.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayHit {
@@ -68,21 +61,29 @@ pub struct RayHit {
     pub fraction: Real,
 }
 
-/// Each of `body`'s shapes with its index, its pose in the world and its filter.
-pub(crate) fn shapes_of(body: &Body) -> impl Iterator<Item = (u32, &Shape, Transform, Filter)> {
+/// Each of `body`'s shapes with its index, its pose in the world, its filter and its flags.
+pub(crate) fn every_shape(
+    body: &Body,
+) -> impl Iterator<Item = (u32, &Shape, Transform, Filter, ShapeFlags)> {
     let frame = body.frame();
-    let filter = body.filter();
     let own = body
         .compound()
         .is_none()
-        .then(|| (0, body.shape(), frame, filter));
+        .then(|| (0, body.shape(), frame, body.filter(), body.flags()));
     let parts = body.compound().into_iter().flat_map(move |p| {
-        p.all
-            .iter()
-            .enumerate()
-            .map(move |(i, part)| (i as u32, &part.shape, frame.then(part.pose), part.filter))
+        p.all.iter().enumerate().map(move |(i, part)| {
+            let pose = frame.then(part.pose);
+            (i as u32, &part.shape, pose, part.filter, part.flags)
+        })
     });
     own.into_iter().chain(parts)
+}
+
+/// The shapes of `body` a query sees (sensors are never seen), as [`every_shape`] gives them.
+pub(crate) fn shapes_of(body: &Body) -> impl Iterator<Item = (u32, &Shape, Transform, Filter)> {
+    every_shape(body)
+        .filter(|s| !s.4.sensor)
+        .map(|(i, shape, xf, filter, _)| (i, shape, xf, filter))
 }
 
 /// A shape's core in the world at `xf`, with its radius.
@@ -109,15 +110,15 @@ pub(crate) fn ray_body(
         .min_by(|a, b| a.1.fraction.total_cmp(&b.1.fraction))
 }
 
-/// The shapes of `body` that `filter` sees and that overlap `probe` (a rounded core in the
-/// world): their cores closer than the two radii, or touching.
+/// The shapes of `body` whose filter `sees` passes and that overlap `probe` (a rounded core in
+/// the world): their cores closer than the two radii, or touching.
 pub(crate) fn overlaps_body<'a>(
     body: &'a Body,
     probe: &'a Rounded,
-    filter: &'a QueryFilter,
+    sees: impl Fn(&Filter) -> bool + 'a,
 ) -> impl Iterator<Item = u32> + 'a {
     shapes_of(body)
-        .filter(|(_, _, _, f)| filter.sees(f))
+        .filter(move |(_, _, _, f)| sees(f))
         .filter(|(_, shape, xf, _)| {
             let s = rounded(shape, *xf);
             let gap = geometry::core_to_core(&probe.vertices, &s.vertices).0;

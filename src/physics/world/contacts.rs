@@ -75,15 +75,16 @@ impl World {
         } = self;
         let pairs = PairInput {
             slots: &bodies.slots,
+            flagged: bodies.flagged > 0,
             settings,
             gravity: *gravity,
             dt,
         };
         tiers.inputs.clear();
         let mut merge = Merge::begin(contacts);
-        // Pairs kept apart by a joint or by their filters keep no contact (any they had ends
-        // here); a World with neither pays one test per step for it.
-        let sorting = joints.keeps_pairs_apart() || bodies.filtered > 0;
+        // Pairs kept apart by a joint, by their filters or by a sensor keep no contact (any
+        // they had ends here); a World with none pays one test per step for it.
+        let sorting = joints.keeps_pairs_apart() || bodies.filtered > 0 || bodies.flagged > 0;
         for &key in &broad_phase.pair_keys {
             if sorting && !(joints.may_collide(key) && filters_allow(key, bodies)) {
                 continue;
@@ -194,21 +195,30 @@ fn shape_pairs(a: &Body, b: &Body, margin: Real, out: &mut Vec<u32>) {
     out.sort_unstable();
 }
 
-/// Whether the filters of pair `key`'s bodies let them collide.
+/// Whether the filters of pair `key`'s bodies let them collide, and neither is a sensor.
 fn filters_allow(key: u64, bodies: &Bodies) -> bool {
-    if bodies.filtered == 0 {
+    if bodies.filtered == 0 && bodies.flagged == 0 {
         return true;
     }
     let (a, b) = pair_of(key);
-    // A body of several shapes has a filter per shape, tested shape by shape.
-    let filter = |i: u32| {
+    // A body of several shapes has a filter and flags per shape, tested shape by shape.
+    let own = |i: u32| {
         let body = bodies.slots[i as usize].body.as_ref()?;
-        body.compound().is_none().then_some(body.filter())
+        body.compound()
+            .is_none()
+            .then(|| (body.filter(), body.flags().sensor))
     };
-    match (filter(a), filter(b)) {
-        (Some(fa), Some(fb)) => fa.should_collide(&fb),
+    match (own(a), own(b)) {
+        (Some((fa, sa)), Some((fb, sb))) => !sa && !sb && fa.should_collide(&fb),
+        (Some((_, true)), _) | (_, Some((_, true))) => false,
         _ => true,
     }
+}
+
+/// Whether shape `i` of a body of several is a sensor.
+fn is_sensor(body: &Body, i: u32) -> bool {
+    body.compound()
+        .map_or_else(|| body.flags().sensor, |p| p.all[i as usize].flags.sensor)
 }
 
 /// Where the merge stands: in place (this step's contacts are `awake[..written]`, last
@@ -347,6 +357,8 @@ impl Merge {
 /// What updating a pair's contact reads.
 struct PairInput<'a> {
     slots: &'a [Slot],
+    /// Whether any body has flags (a sensor among them, maybe).
+    flagged: bool,
     settings: &'a Settings,
     gravity: Vec2,
     dt: Real,
@@ -384,6 +396,9 @@ impl<'a> PairInput<'a> {
         for &ij in found.iter() {
             let ((sa, fa), (sb, fb)) = (Side::of(a, ij >> 16), Side::of(b, ij & 0xffff));
             if !(fa.should_collide(&fb) && sa.aabb().inflated(margin).overlaps(&sb.aabb())) {
+                continue;
+            }
+            if self.flagged && (is_sensor(a, ij >> 16) || is_sensor(b, ij & 0xffff)) {
                 continue;
             }
             if let Some(input) = self.update((key, ij), (sa, sb), merge, contacts, wake) {

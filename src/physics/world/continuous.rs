@@ -17,6 +17,7 @@
 //! a body whose centre starts behind it, as its contacts are.
 
 use super::{Slot, World};
+use crate::physics::body::Body;
 use crate::physics::broad_phase::pair_of;
 use crate::physics::collide::toi::{lies_along_a_face, time_of_impact, Sweep};
 use crate::physics::math::{Real, Rot, Transform, Vec2};
@@ -146,18 +147,25 @@ impl World {
             tree.query(fixed.frame(), &swept, found);
         }
         let mut first: Real = 1.0;
-        for (shape, local) in body.shapes() {
+        let gated = self.bodies.filtered > 0 || self.bodies.flagged > 0;
+        for (i, (shape, local)) in body.shapes().enumerate() {
             let sweep = Sweep { start, end, local };
-            let mut sweep_against = |(fixed_shape, pose): (&Shape, Transform)| {
+            let mut sweep_against = |k: usize, (fixed_shape, pose): (&Shape, Transform)| {
+                if gated && !may_touch((body, i), (fixed, k)) {
+                    return;
+                }
                 let xf = fixed.frame().then(pose);
                 first = first.min(self.shape_impact((fixed_shape, xf), shape, &sweep));
             };
             match near {
-                Some((parts, _)) => found
-                    .iter()
-                    .map(|&k| &parts.all[k as usize])
-                    .for_each(|p| sweep_against((&p.shape, p.pose))),
-                None => fixed.shapes().for_each(&mut sweep_against),
+                Some((parts, _)) => found.iter().for_each(|&k| {
+                    let p = &parts.all[k as usize];
+                    sweep_against(k as usize, (&p.shape, p.pose))
+                }),
+                None => fixed
+                    .shapes()
+                    .enumerate()
+                    .for_each(|(k, s)| sweep_against(k, s)),
             }
         }
         first
@@ -243,6 +251,19 @@ const MIN_SEGMENT: Real = 0.005;
 pub(super) fn moved_more_than(dp: Vec2, dtheta: Real, reach: Real, limit: Real) -> bool {
     let left = limit - dtheta.abs() * reach;
     left < 0.0 || dp.length_squared() > left * left
+}
+
+/// Whether shape `i` of body `a` and shape `k` of body `b` may touch: their filters allow it
+/// and neither is a sensor.
+fn may_touch((a, i): (&Body, usize), (b, k): (&Body, usize)) -> bool {
+    let of = |x: &Body, j: usize| {
+        x.compound().map_or_else(
+            || (x.filter(), x.flags().sensor),
+            |p| (p.all[j].filter, p.all[j].flags.sensor),
+        )
+    };
+    let ((fa, sa), (fb, sb)) = (of(a, i), of(b, k));
+    !sa && !sb && fa.should_collide(&fb)
 }
 
 #[cfg(test)]

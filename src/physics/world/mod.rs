@@ -12,6 +12,7 @@ use super::broad_phase::{pair_of, Proxy, SweepAndPrune};
 use super::collide::collide;
 use super::contact::{Contact, ContactInfo, ContactPoint, ContactPointInfo};
 use super::error::{finite, finite_vec, positive, PhysicsError};
+use super::events::EventState;
 use super::filter::Filter;
 use super::math::{cross, Real, Rot, Vec2};
 use super::settings::{Settings, SolverKind};
@@ -29,6 +30,7 @@ pub use queries::Query;
 
 mod contacts;
 mod continuous;
+mod events;
 mod islands;
 mod joints;
 mod queries;
@@ -67,6 +69,8 @@ pub struct World {
     joints: joints::Joints,
     /// The query tree, built at the first query (`queries.rs`).
     queries: queries::QueryIndex,
+    /// The last step's events and what finding the next ones reads (`events.rs`).
+    events: EventState,
 }
 
 /// The bodies: a slot array with a free list.
@@ -79,6 +83,8 @@ struct Bodies {
     count: usize,
     /// Live bodies whose filter is not the default (none: no pair is filtered).
     filtered: usize,
+    /// Live bodies with a shape that reports events or is a sensor (none: no step looks).
+    flagged: usize,
     /// Scratch for `remove_bodies`: a flag per slot, all false between calls.
     removing: Vec<bool>,
 }
@@ -165,6 +171,7 @@ impl World {
             islands: Default::default(),
             joints: Default::default(),
             queries: Default::default(),
+            events: Default::default(),
         }
     }
 
@@ -239,6 +246,7 @@ impl World {
         let body = Body::from_def(id, def);
         let passive = body.is_static();
         self.bodies.filtered += usize::from(body.filter() != Filter::DEFAULT);
+        self.bodies.flagged += usize::from(body.any_flags());
         slot.body = Some(body);
         self.bodies.count += 1;
         self.broad_phase.sweep.insert(index, passive);
@@ -311,6 +319,7 @@ impl World {
             let slot = &mut self.bodies.slots[id.index as usize];
             let body = slot.body.take().expect("checked above");
             self.bodies.filtered -= usize::from(body.filter() != Filter::DEFAULT);
+            self.bodies.flagged -= usize::from(body.any_flags());
             removed.push(body);
             slot.generation = slot.generation.wrapping_add(1);
             self.bodies.free.push(id.index);
@@ -355,6 +364,8 @@ impl World {
         self.bodies.free.clear();
         self.bodies.count = 0;
         self.bodies.filtered = 0;
+        self.bodies.flagged = 0;
+        self.events = Default::default();
         self.broad_phase.sweep.clear();
         self.contacts.awake.clear();
         self.contacts.previous.clear();

@@ -25,7 +25,7 @@ pub(super) struct QueryIndex {
     leaves: Vec<(u32, u32)>,
     /// The step the tree was last brought up to date at; none: never, or bodies came or went
     /// since.
-    synced_at: Option<u64>,
+    pub synced_at: Option<u64>,
 }
 
 impl QueryIndex {
@@ -46,10 +46,15 @@ impl World {
         Query { world: self }
     }
 
+    /// The query tree, up to date (after [`World::sync_queries`]).
+    pub(super) fn query_tree(&self) -> &Tree {
+        &self.queries.tree
+    }
+
     /// Bring every slot's leaf up to date with its body: leaves of bodies gone come out, bodies
     /// new or outside their leaf's box go (back) in, one by one, or all at once by a fresh
     /// build when they are more than half the bodies (the first query's case).
-    fn sync_queries(&mut self) {
+    pub(super) fn sync_queries(&mut self) {
         let World {
             bodies, queries, ..
         } = self;
@@ -102,7 +107,7 @@ impl World {
         queries.synced_at = Some(self.steps);
     }
 
-    fn body_in_slot(&self, slot: u32) -> Option<&Body> {
+    pub(super) fn body_in_slot(&self, slot: u32) -> Option<&Body> {
         self.bodies.slots.get(slot as usize)?.body.as_ref()
     }
 }
@@ -321,7 +326,7 @@ impl<'a> Query<'a> {
             if let Some(body) = self.world.body_in_slot(slot) {
                 let id = body.id();
                 out.extend(
-                    query::overlaps_body(body, probe, filter)
+                    query::overlaps_body(body, probe, |f| filter.sees(f))
                         .map(|shape| ShapeRef { body: id, shape }),
                 );
             }

@@ -132,7 +132,7 @@ fn brute_overlap(w: &World, probe: &Rounded, filter: &QueryFilter) -> Vec<ShapeR
     let mut out: Vec<ShapeRef> = w
         .bodies()
         .flat_map(|b| {
-            overlaps_body(b, probe, filter).map(|shape| ShapeRef {
+            overlaps_body(b, probe, |f| filter.sees(f)).map(|shape| ShapeRef {
                 body: b.id(),
                 shape,
             })

@@ -22,6 +22,7 @@ use super::super::body::Extras;
 use super::super::body::{Body, BodyId};
 use super::super::contact::{Contact, ContactPoint};
 use super::super::error::PhysicsError;
+use super::super::events::ShapeFlags;
 use super::super::filter::Filter;
 use super::super::hash::Fnv1a;
 use super::super::joint::{JointDef, JointImpulses};
@@ -81,6 +82,9 @@ pub struct BodyState {
     pub local_center: [Real; 2],
     /// The density of the body's own shape (kg/m^2) when it has parts.
     pub own_density: Real,
+    /// What its own shape reports, and whether it is a sensor. Appended: checkpoint format
+    /// version 13 on.
+    pub flags: ShapeFlags,
 }
 
 /// A slot: its generation and its body, if live.
@@ -424,6 +428,7 @@ impl BodyState {
             parts: b.parts().to_vec(),
             local_center: v2(b.local_center()),
             own_density: b.compound().map_or(1.0, |p| p.own_density),
+            flags: b.flags(),
         }
     }
 
@@ -449,6 +454,7 @@ impl BodyState {
             friction: self.friction,
             restitution: self.restitution,
             filter: self.filter,
+            flags: self.flags,
         };
         let mut parts = Parts::new(own, &self.parts, vec(self.local_center));
         parts.own_density = self.own_density;
@@ -489,7 +495,7 @@ impl BodyState {
             min_extent: parts
                 .as_ref()
                 .map_or_else(|| shape.min_extent(), |p| p.min_extent()),
-            extras: Extras::boxed(b.filter, parts),
+            extras: Extras::boxed(b.filter, b.flags, parts),
             shape,
             position: vec(b.position),
             angle: b.angle,
@@ -635,6 +641,7 @@ impl World {
                 self.broad_phase.sweep.insert(id.index, passive);
                 self.bodies.count += 1;
                 self.bodies.filtered += usize::from(b.filter() != Filter::DEFAULT);
+                self.bodies.flagged += usize::from(b.any_flags());
             }
             self.bodies.slots.push(Slot {
                 generation: s.generation,

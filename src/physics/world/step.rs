@@ -25,10 +25,14 @@ impl World {
     /// islands fall asleep. Forces and torques are cleared after the step.
     pub fn step(&mut self, dt: Real) -> Result<(), PhysicsError> {
         positive("dt", dt)?;
+        self.events.begin_step();
         if !self.broad_phase.sweep.active_is_empty() {
             // (Otherwise everything is static or asleep, and anything pushed would have been
             // woken: nothing moves, nothing to find or solve.)
             self.find_contacts(dt);
+            if self.bodies.flagged > 0 {
+                self.find_hit_candidates();
+            }
             self.load_solver_bodies();
             self.joints.constraints.clear();
             if self.joints.count > 0 {
@@ -40,6 +44,9 @@ impl World {
                 SolverKind::SoftStep => self.solve_soft_step(dt),
             }
             self.finalize_bodies();
+            if !self.events.hit_candidates.is_empty() {
+                self.confirm_hits();
+            }
             self.joints.broken.clear();
             if !self.joints.constraints.is_empty() {
                 self.finish_joints();
@@ -51,6 +58,12 @@ impl World {
         }
         self.time += dt as f64;
         self.steps += 1;
+        if self.bodies.flagged > 0 || !self.events.touching.is_empty() {
+            self.find_contact_events();
+        }
+        if self.bodies.flagged > 0 || !self.events.overlapping.is_empty() {
+            self.find_sensor_events();
+        }
         Ok(())
     }
 

@@ -10,12 +10,15 @@ fn ground(w: &mut World) -> BodyId {
         .unwrap()
 }
 
-/// The step (counted from 0) in which a body falling from rest under semi-implicit Euler
-/// (after k + 1 steps it has fallen g dt^2 (k + 1)(k + 2) / 2) has fallen `h`.
+/// How far a body falls from rest in `k` steps of the default soft step: semi-implicit Euler
+/// over 4 substeps of dt / 4, g dt^2 k (k + 1/4) / 2.
+fn fall(k: usize) -> Real {
+    G * DT * DT * k as Real * (k as Real + 0.25) / 2.0
+}
+
+/// The step (counted from 0) in which a body falling from rest has fallen `h`.
 fn landing_step(h: Real) -> usize {
-    (0..)
-        .find(|&k| G * DT * DT * ((k + 1) * (k + 2)) as Real / 2.0 >= h)
-        .unwrap()
+    (0..).find(|&k| fall(k + 1) >= h).unwrap()
 }
 
 fn flags(contact_events: bool, hit_events: bool, sensor: bool) -> ShapeFlags {
@@ -104,7 +107,10 @@ fn a_hit_reports_the_approach_speed_of_free_fall() {
             .all(|p| p[1].0 == p[0].0 + 1 && p[1].1.approach_speed < p[0].1.approach_speed),
         "one impact, slowing: {hits:?}"
     );
-    assert!(hits.len() <= 3 && first == landing_step(2.0), "{hits:?}");
+    // It is reported in the step the ball comes within the speculative distance (2 cm) of the
+    // ground, where the soft contact starts to push.
+    assert!(hits.len() <= 3, "{hits:?}");
+    assert!(fall(first) < 2.0 && fall(first + 1) >= 2.0 - 0.02, "{hits:?}");
     // Exactly the speed semi-implicit Euler gives at that step's start, g dt k.
     assert!(
         (hit.approach_speed - G * DT * first as Real).abs() < 1e-3,

@@ -13,7 +13,7 @@ use crate::physics::error::{finite, non_negative, positive, unit_interval};
 use crate::physics::segment::chain;
 use crate::physics::{
     BodyDef, Filter, MassSpec, PartDef, PhysicsError, Polygon, Real, Rot, Segment, Settings, Shape,
-    Vec2,
+    ShapeFlags, Vec2,
 };
 use serde::Deserialize;
 use toml::{Spanned, Table};
@@ -270,6 +270,21 @@ entry_table! {
         filter: Option<FilterEntry>,
         #[serde(default)]
         parts: Vec<PartEntry>,
+        #[serde(default)]
+        sensor: bool,
+        #[serde(default)]
+        contact_events: bool,
+        #[serde(default)]
+        hit_events: bool,
+    }
+}
+
+/// A shape's flags from its `sensor`, `contact_events` and `hit_events` keys.
+fn shape_flags(sensor: bool, contact_events: bool, hit_events: bool) -> ShapeFlags {
+    ShapeFlags {
+        contact_events,
+        hit_events,
+        sensor,
     }
 }
 
@@ -288,6 +303,12 @@ struct PartEntry {
     friction: Option<Real>,
     restitution: Option<Real>,
     filter: Option<FilterEntry>,
+    #[serde(default)]
+    sensor: bool,
+    #[serde(default)]
+    contact_events: bool,
+    #[serde(default)]
+    hit_events: bool,
 }
 
 /// A `filter` inline table: `category` and `mask` as integers (bits 0 to 62) or hex strings
@@ -675,7 +696,7 @@ impl BodyEntry {
                 friction: p.friction.unwrap_or(self.friction),
                 restitution: p.restitution.unwrap_or(self.restitution),
                 filter,
-                flags: Default::default(),
+                flags: shape_flags(p.sensor, p.contact_events, p.hit_events),
             });
         }
         Ok(parts)
@@ -786,6 +807,7 @@ impl BodyEntry {
             restitution: self.restitution,
             filter: self.filter(&at)?,
             parts,
+            flags: shape_flags(self.sensor, self.contact_events, self.hit_events),
             ..placed
         };
         def.validate()

@@ -6,7 +6,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use tiltbox::measure::cases::{self, benchmark_setups};
-use tiltbox::physics::{vec2, BodyDef, Real, Settings, World};
+use tiltbox::physics::{vec2, BodyDef, QueryFilter, Real, Settings, Shape, ShapeFlags, World};
 
 struct Counting;
 
@@ -98,5 +98,52 @@ fn a_steady_step_with_joints_does_not_allocate() {
     assert_eq!(
         during, 0,
         "joint_grid(20): {during} allocations in 60 steady steps"
+    );
+}
+
+#[test]
+fn a_steady_step_with_events_and_queries_does_not_allocate() {
+    // A pile whose every shape reports contacts and hits, under a sensor, asked a ray each step:
+    // the event lists and the query tree reuse their buffers.
+    let settings = Settings {
+        enable_sleep: false,
+        ..Settings::soft_step()
+    };
+    let mut world = World::new(settings, vec2(0.0, -9.81)).expect("valid");
+    cases::closed_box(&mut world, 10.0, 10.0, 0.5).expect("valid box");
+    let all = ShapeFlags {
+        contact_events: true,
+        hit_events: true,
+        sensor: false,
+    };
+    for i in 0..60 {
+        let at = vec2(-4.5 + (i % 10) as Real, 0.6 + 1.1 * (i / 10) as Real);
+        let def = BodyDef::dynamic(cases::mixed_shape(i), at).with_flags(all);
+        world.add_body(&def).expect("valid body");
+    }
+    let zone = ShapeFlags {
+        sensor: true,
+        ..ShapeFlags::default()
+    };
+    let sensor = BodyDef::fixed(Shape::rect(5.0, 3.0), vec2(-2.5, 1.5)).with_flags(zone);
+    world.add_body(&sensor).expect("valid sensor");
+    let mut ray = || {
+        world.step(1.0 / 60.0).expect("valid dt");
+        let q = world.query();
+        let hit = q.ray_closest(vec2(0.0, 9.0), vec2(0.0, -9.0), QueryFilter::DEFAULT);
+        assert!(hit.expect("finite").is_some());
+        world.events().contact_begin.len()
+    };
+    for _ in 0..600 {
+        ray();
+    }
+    let before = allocations();
+    for _ in 0..60 {
+        ray();
+    }
+    let during = allocations() - before;
+    assert_eq!(
+        during, 0,
+        "{during} allocations in 60 steady steps with events"
     );
 }

@@ -110,7 +110,10 @@ fn a_hit_reports_the_approach_speed_of_free_fall() {
     // It is reported in the step the ball comes within the speculative distance (2 cm) of the
     // ground, where the soft contact starts to push.
     assert!(hits.len() <= 3, "{hits:?}");
-    assert!(fall(first) < 2.0 && fall(first + 1) >= 2.0 - 0.02, "{hits:?}");
+    assert!(
+        fall(first) < 2.0 && fall(first + 1) >= 2.0 - 0.02,
+        "{hits:?}"
+    );
     // Exactly the speed semi-implicit Euler gives at that step's start, g dt k.
     assert!(
         (hit.approach_speed - G * DT * first as Real).abs() < 1e-3,

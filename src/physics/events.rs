@@ -118,6 +118,10 @@ pub(crate) struct EventState {
     pub touching: Vec<ContactEvent>,
     /// The shapes overlapping each sensor at the last step, sorted.
     pub overlapping: Vec<SensorEvent>,
+    /// This step's lists while they are found (swapped with the last step's, so a steady step
+    /// allocates nothing).
+    pub touching_now: Vec<ContactEvent>,
+    pub overlapping_now: Vec<SensorEvent>,
     /// Hits found before the solve: the contact's index among the awake ones, its point's,
     /// and the event if that point then pushes.
     pub hit_candidates: Vec<(u32, u8, HitEvent)>,

@@ -12,12 +12,42 @@
 
 use crate::physics::math::{cross, Real, Vec2};
 
+/// The most vertices a core has: a polygon's eight, or the hull of two polygons' difference.
+pub(crate) const MAX_CORE: usize = 16;
+
 /// A convex core in world coordinates: its vertices counter-clockwise (one, two, or three to
-/// sixteen) and the radius it is grown by (m).
-#[derive(Clone, Debug)]
+/// sixteen) and the radius it is grown by (m). Kept inline, so a query allocates nothing.
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct Rounded {
-    pub vertices: Vec<Vec2>,
+    points: [Vec2; MAX_CORE],
+    count: usize,
     pub radius: Real,
+}
+
+impl Rounded {
+    /// The core of `vertices` (at most [`MAX_CORE`]; the rest are dropped) grown by `radius`.
+    pub fn new(vertices: impl IntoIterator<Item = Vec2>, radius: Real) -> Rounded {
+        let mut r = Rounded {
+            points: [Vec2::ZERO; MAX_CORE],
+            count: 0,
+            radius,
+        };
+        for (slot, v) in r.points.iter_mut().zip(vertices) {
+            *slot = v;
+            r.count += 1;
+        }
+        r
+    }
+
+    /// The vertices, counter-clockwise (m).
+    pub fn vertices(&self) -> &[Vec2] {
+        &self.points[..self.count]
+    }
+
+    /// The same core moved by `by` (m).
+    pub fn moved(&self, by: Vec2) -> Rounded {
+        Rounded::new(self.vertices().iter().map(|&v| v + by), self.radius)
+    }
 }
 
 /// Where a ray first meets a surface: the fraction of its translation and the surface's
@@ -150,7 +180,7 @@ fn ray_edge(
 /// The first t in [0, max] at which `origin + t d` enters the rounded core; none when the
 /// origin starts inside it (a ray does not hit what it starts in) or never reaches it.
 pub(crate) fn ray_rounded(shape: &Rounded, origin: Vec2, d: Vec2, max: Real) -> Option<Crossing> {
-    let v = &shape.vertices;
+    let v = shape.vertices();
     if point_to_core(v, origin).0 <= shape.radius {
         return None;
     }
@@ -164,45 +194,60 @@ pub(crate) fn ray_rounded(shape: &Rounded, origin: Vec2, d: Vec2, max: Real) -> 
         .min_by(|x, y| x.fraction.total_cmp(&y.fraction))
 }
 
-/// The convex hull of `points`, counter-clockwise without collinear points (Andrew's monotone
-/// chain); one or two points when they are all on a point or a line.
-pub(crate) fn hull(mut points: Vec<Vec2>) -> Vec<Vec2> {
+/// The most points [`hull`] takes: every difference of two cores' vertices.
+const MAX_CLOUD: usize = 64;
+
+/// The convex hull of `points` (at most 64; sorted in place), counter-clockwise without
+/// collinear points (Andrew's monotone chain); one or two points when they are all on a point
+/// or a line. Radius 0.
+pub(crate) fn hull(points: &mut [Vec2]) -> Rounded {
+    let keep = points.len().min(MAX_CLOUD);
+    let points = &mut points[..keep];
     points.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    points.dedup();
-    if points.len() < 3 {
-        return points;
-    }
-    let mut out: Vec<Vec2> = Vec::with_capacity(2 * points.len());
-    for pass in 0..2 {
-        let start = out.len();
-        let forward = points.iter().copied();
-        let mut chain = |p: Vec2| {
-            while out.len() >= start + 2 {
-                let (o, a) = (out[out.len() - 2], out[out.len() - 1]);
-                if cross(a - o, p - o) > 0.0 {
-                    break;
-                }
-                out.pop();
-            }
-            out.push(p);
-        };
-        if pass == 0 {
-            forward.for_each(&mut chain);
-        } else {
-            forward.rev().for_each(&mut chain);
+    let mut unique = 0;
+    for i in 0..points.len() {
+        if unique == 0 || points[i] != points[unique - 1] {
+            points[unique] = points[i];
+            unique += 1;
         }
-        out.pop();
     }
-    out
+    let points = &points[..unique];
+    if points.len() < 3 {
+        return Rounded::new(points.iter().copied(), 0.0);
+    }
+    let mut out = [Vec2::ZERO; 2 * MAX_CLOUD + 2];
+    let mut len = 0;
+    for pass in 0..2 {
+        let start = len;
+        let order: &mut dyn Iterator<Item = &Vec2> = match pass {
+            0 => &mut points.iter(),
+            _ => &mut points.iter().rev(),
+        };
+        for &p in order {
+            while len >= start + 2 && cross(out[len - 1] - out[len - 2], p - out[len - 2]) <= 0.0 {
+                len -= 1;
+            }
+            out[len] = p;
+            len += 1;
+        }
+        len -= 1;
+    }
+    Rounded::new(out[..len].iter().copied(), 0.0)
 }
 
 /// The offsets at which core `a` (moved by them) meets core `b`: the hull of b - a.
-pub(crate) fn difference(b: &[Vec2], a: &[Vec2]) -> Vec<Vec2> {
-    hull(
-        b.iter()
-            .flat_map(|&q| a.iter().map(move |&p| q - p))
-            .collect(),
-    )
+pub(crate) fn difference(b: &[Vec2], a: &[Vec2]) -> Rounded {
+    let mut cloud = [Vec2::ZERO; MAX_CLOUD];
+    let mut n = 0;
+    for &q in b {
+        for &p in a {
+            if n < MAX_CLOUD {
+                cloud[n] = q - p;
+                n += 1;
+            }
+        }
+    }
+    hull(&mut cloud[..n])
 }
 
 #[cfg(test)]
@@ -221,26 +266,17 @@ mod tests {
 
     #[test]
     fn a_ray_meets_a_square_a_disc_and_a_capsule_where_the_closed_forms_say() {
-        let sq = Rounded {
-            vertices: square(),
-            radius: 0.0,
-        };
+        let sq = Rounded::new(square(), 0.0);
         let hit = ray_rounded(&sq, vec2(-5.0, 0.5), vec2(10.0, 0.0), 1.0).unwrap();
         assert!((hit.fraction - 0.4).abs() < 1e-6 && hit.normal == vec2(-1.0, 0.0));
-        let disc = Rounded {
-            vertices: vec![vec2(3.0, 0.0)],
-            radius: 2.0,
-        };
+        let disc = Rounded::new(vec![vec2(3.0, 0.0)], 2.0);
         // From (0, 1) along +x the disc x^2 + y^2 = 4 about (3, 0) is entered at x = 3 - sqrt(3).
         let hit = ray_rounded(&disc, vec2(-3.0, 1.0), vec2(6.0, 0.0), 1.0).unwrap();
         let x = 3.0 - (3.0 as Real).sqrt();
         assert!((hit.fraction - (x + 3.0) / 6.0).abs() < 1e-6);
         assert!((hit.normal - vec2(x - 3.0, 1.0) / 2.0).length() < 1e-6);
         // A capsule from (0, 0) to (4, 0) of radius 0.5: its side at y = 0.5, its end at x = 4.5.
-        let cap = Rounded {
-            vertices: vec![vec2(0.0, 0.0), vec2(4.0, 0.0)],
-            radius: 0.5,
-        };
+        let cap = Rounded::new(vec![vec2(0.0, 0.0), vec2(4.0, 0.0)], 0.5);
         let down = ray_rounded(&cap, vec2(2.0, 3.0), vec2(0.0, -10.0), 1.0).unwrap();
         assert!((down.fraction - 0.25).abs() < 1e-6 && down.normal == vec2(0.0, 1.0));
         let left = ray_rounded(&cap, vec2(10.0, 0.0), vec2(-10.0, 0.0), 1.0).unwrap();
@@ -271,24 +307,23 @@ mod tests {
     fn the_hull_of_a_cloud_is_its_convex_rim_counter_clockwise() {
         let mut cloud = square();
         cloud.extend([vec2(0.0, 0.0), vec2(0.5, -0.2), vec2(1.0, 0.0)]);
-        let h = hull(cloud);
+        let h = hull(&mut cloud);
+        let h = h.vertices();
         assert_eq!(h.len(), 4);
         for i in 0..4 {
             let (a, b, c) = (h[i], h[(i + 1) % 4], h[(i + 2) % 4]);
             assert!(cross(b - a, c - b) > 0.0);
         }
         assert_eq!(
-            hull(vec![vec2(0.0, 0.0), vec2(1.0, 1.0), vec2(2.0, 2.0)]).len(),
+            hull(&mut [vec2(0.0, 0.0), vec2(1.0, 1.0), vec2(2.0, 2.0)])
+                .vertices()
+                .len(),
             2
         );
         // Two unit squares 3 m apart meet when the second has moved by the difference's offsets.
         let moved: Vec<Vec2> = square().iter().map(|&p| p + vec2(3.0, 0.0)).collect();
         let diff = difference(&moved, &square());
-        let shape = Rounded {
-            vertices: diff,
-            radius: 0.0,
-        };
-        let hit = ray_rounded(&shape, Vec2::ZERO, vec2(2.0, 0.0), 1.0).unwrap();
+        let hit = ray_rounded(&diff, Vec2::ZERO, vec2(2.0, 0.0), 1.0).unwrap();
         assert!((hit.fraction - 0.5).abs() < 1e-6 && hit.normal == vec2(-1.0, 0.0));
     }
 }

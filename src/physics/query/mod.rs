@@ -89,10 +89,7 @@ pub(crate) fn shapes_of(body: &Body) -> impl Iterator<Item = (u32, &Shape, Trans
 /// A shape's core in the world at `xf`, with its radius.
 pub(crate) fn rounded(shape: &Shape, xf: Transform) -> Rounded {
     let (core, radius) = core(shape);
-    Rounded {
-        vertices: core.vertices().iter().map(|&v| xf.apply(v)).collect(),
-        radius,
-    }
+    Rounded::new(core.vertices().iter().map(|&v| xf.apply(v)), radius)
 }
 
 /// The first of `body`'s shapes that `filter` sees met by `origin + t d`, t in [0, max].
@@ -121,7 +118,7 @@ pub(crate) fn overlaps_body<'a>(
         .filter(move |(_, _, _, f)| sees(f))
         .filter(|(_, shape, xf, _)| {
             let s = rounded(shape, *xf);
-            let gap = geometry::core_to_core(&probe.vertices, &s.vertices).0;
+            let gap = geometry::core_to_core(probe.vertices(), s.vertices()).0;
             gap == 0.0 || gap < probe.radius + s.radius
         })
         .map(|(i, ..)| i)
@@ -150,7 +147,7 @@ pub(crate) fn cast_body(
 /// `target`'s surface, and its normal there (toward the probe). A probe that starts
 /// overlapping meets it at 0 with no normal.
 fn cast(probe: &Rounded, target: &Rounded, d: Vec2, max: Real) -> Option<(Real, Vec2, Vec2)> {
-    let (gap, pa, pb) = geometry::core_to_core(&probe.vertices, &target.vertices);
+    let (gap, pa, pb) = geometry::core_to_core(probe.vertices(), target.vertices());
     let reach = probe.radius + target.radius;
     if gap < reach {
         return Some((
@@ -159,16 +156,10 @@ fn cast(probe: &Rounded, target: &Rounded, d: Vec2, max: Real) -> Option<(Real, 
             Vec2::ZERO,
         ));
     }
-    let offsets = Rounded {
-        vertices: geometry::difference(&target.vertices, &probe.vertices),
-        radius: reach,
-    };
+    let mut offsets = geometry::difference(target.vertices(), probe.vertices());
+    offsets.radius = reach;
     let hit = geometry::ray_rounded(&offsets, Vec2::ZERO, d, max)?;
-    let moved: Vec<Vec2> = probe
-        .vertices
-        .iter()
-        .map(|&v| v + hit.fraction * d)
-        .collect();
-    let (_, _, pb) = geometry::core_to_core(&moved, &target.vertices);
+    let moved = probe.moved(hit.fraction * d);
+    let (_, _, pb) = geometry::core_to_core(moved.vertices(), target.vertices());
     Some((hit.fraction, pb + hit.normal * target.radius, hit.normal))
 }

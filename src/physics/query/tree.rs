@@ -213,7 +213,7 @@ impl Tree {
 
     /// Every slot whose box overlaps `aabb`, to `visit`, until it returns false.
     pub fn query(&self, aabb: &Aabb, mut visit: impl FnMut(u32) -> bool) {
-        let mut stack: Vec<u32> = self.root.into_iter().collect();
+        let mut stack = Stack::new(self.root);
         while let Some(i) = stack.pop() {
             let n = &self.nodes[i as usize];
             if !n.aabb.overlaps(aabb) {
@@ -238,7 +238,7 @@ impl Tree {
         mut max: Real,
         mut visit: impl FnMut(u32, Real) -> Real,
     ) {
-        let mut stack: Vec<u32> = self.root.into_iter().collect();
+        let mut stack = Stack::new(self.root);
         while let Some(i) = stack.pop() {
             let n = &self.nodes[i as usize];
             if !ray_meets_box(origin, d, max, &n.aabb) {
@@ -253,6 +253,47 @@ impl Tree {
                 stack.extend(n.children);
             }
         }
+    }
+}
+
+/// The nodes still to visit: 64 inline (a tree as deep as that holds far more bodies than a
+/// World can), the rest on the heap, so a query allocates nothing.
+struct Stack {
+    inline: [u32; 64],
+    len: usize,
+    spill: Vec<u32>,
+}
+
+impl Stack {
+    fn new(root: Option<u32>) -> Stack {
+        let mut s = Stack {
+            inline: [NONE; 64],
+            len: 0,
+            spill: Vec::new(),
+        };
+        if let Some(r) = root {
+            s.extend([r]);
+        }
+        s
+    }
+
+    fn extend(&mut self, nodes: impl IntoIterator<Item = u32>) {
+        for n in nodes {
+            if self.len < self.inline.len() {
+                self.inline[self.len] = n;
+                self.len += 1;
+            } else {
+                self.spill.push(n);
+            }
+        }
+    }
+
+    fn pop(&mut self) -> Option<u32> {
+        if let Some(n) = self.spill.pop() {
+            return Some(n);
+        }
+        self.len = self.len.checked_sub(1)?;
+        Some(self.inline[self.len])
     }
 }
 

@@ -46,7 +46,8 @@ impl World {
     /// shape asking) against those of the last step.
     pub(super) fn find_contact_events(&mut self) {
         let slop = self.settings.linear_slop;
-        let mut now = Vec::with_capacity(self.events.touching.len());
+        let mut now = std::mem::take(&mut self.events.touching_now);
+        now.clear();
         for c in self.contacts.awake.iter().chain(&self.contacts.sleeping) {
             let Some((a, b)) = self.pair_of_contact(c) else {
                 continue;
@@ -66,7 +67,7 @@ impl World {
             &mut step.contact_begin,
             &mut step.contact_end,
         );
-        self.events.touching = now;
+        self.events.touching_now = std::mem::replace(&mut self.events.touching, now);
     }
 
     /// Hits, before the solve: this step's contacts whose shapes ask, with the point that
@@ -131,7 +132,8 @@ impl World {
         if self.queries.synced_at != Some(self.steps) {
             self.sync_queries();
         }
-        let mut now = Vec::with_capacity(self.events.overlapping.len());
+        let mut now = std::mem::take(&mut self.events.overlapping_now);
+        now.clear();
         for body in self.bodies() {
             for (i, shape, xf, filter, _) in every_shape(body).filter(|s| s.4.sensor) {
                 let sensor = ShapeRef {
@@ -163,6 +165,6 @@ impl World {
             &mut step.sensor_begin,
             &mut step.sensor_end,
         );
-        self.events.overlapping = now;
+        self.events.overlapping_now = std::mem::replace(&mut self.events.overlapping, now);
     }
 }

@@ -26,6 +26,8 @@ pub(super) struct QueryIndex {
     /// The step the tree was last brought up to date at; none: never, or bodies came or went
     /// since.
     pub synced_at: Option<u64>,
+    /// Scratch: the bodies to put (back) in, kept so that a steady sync allocates nothing.
+    pending: Vec<(u32, Aabb)>,
 }
 
 impl QueryIndex {
@@ -58,9 +60,14 @@ impl World {
         let World {
             bodies, queries, ..
         } = self;
-        let QueryIndex { tree, leaves, .. } = queries;
+        let QueryIndex {
+            tree,
+            leaves,
+            pending,
+            ..
+        } = queries;
+        pending.clear();
         leaves.resize(bodies.slots.len(), (NO_LEAF, 0));
-        let mut pending: Vec<(u32, Aabb)> = Vec::new();
         for (slot, (entry, s)) in leaves.iter_mut().zip(&bodies.slots).enumerate() {
             let (leaf, held) = *entry;
             match &s.body {
@@ -97,7 +104,7 @@ impl World {
                 leaves[slot as usize] = (leaf, bodies.slots[slot as usize].generation);
             }
         }
-        for (slot, aabb) in pending {
+        for &(slot, aabb) in pending.iter() {
             leaves[slot as usize] = (
                 tree.insert(slot, aabb),
                 bodies.slots[slot as usize].generation,
@@ -260,10 +267,7 @@ impl<'a> Query<'a> {
         filter: QueryFilter,
     ) -> Result<Vec<ShapeRef>, PhysicsError> {
         check(["point.x", "point.y"], point)?;
-        let probe = Rounded {
-            vertices: vec![point],
-            radius: 0.0,
-        };
+        let probe = Rounded::new([point], 0.0);
         Ok(self.overlapping_probe(
             &probe,
             Aabb {
@@ -290,15 +294,8 @@ impl<'a> Query<'a> {
             }
         }
         let (lo, hi) = (aabb.min, aabb.max);
-        let probe = Rounded {
-            vertices: query::geometry::hull(vec![
-                lo,
-                Vec2::new(hi.x, lo.y),
-                hi,
-                Vec2::new(lo.x, hi.y),
-            ]),
-            radius: 0.0,
-        };
+        let probe =
+            query::geometry::hull(&mut [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)]);
         Ok(self.overlapping_probe(&probe, aabb, &filter))
     }
 

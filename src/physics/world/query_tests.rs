@@ -162,10 +162,7 @@ fn check_queries(w: &mut World, dice: &mut Dice) {
                 q.ray_all(origin, d, f, 3).unwrap(),
                 expected[..expected.len().min(3)]
             );
-            let point = Rounded {
-                vertices: vec![p],
-                radius: 0.0,
-            };
+            let point = Rounded::new([p], 0.0);
             assert_eq!(q.at_point(p, f).unwrap(), brute_overlap(w, &point, &f));
             let probe = rounded(&probe_shape, pose);
             let found = w.query().overlapping(&probe_shape, pose, f).unwrap();
@@ -279,7 +276,7 @@ fn a_swept_shape_stops_where_it_first_touches() {
         let body = w.body(hit.shape.body).unwrap();
         let (_, s, xf, _) = shapes_of(body).find(|x| x.0 == hit.shape.shape).unwrap();
         let target = rounded(s, xf);
-        let gap = point_to_core(&target.vertices, hit.point).0 - target.radius;
+        let gap = point_to_core(target.vertices(), hit.point).0 - target.radius;
         assert!(
             gap.abs() < 1e-3,
             "point {} is {gap} m off the surface",

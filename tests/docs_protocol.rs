@@ -90,6 +90,36 @@ fn set_gravity_tilt_remove_and_reset_examples_are_the_encoded_bytes() {
 }
 
 #[test]
+fn drag_examples_are_the_encoded_bytes_and_their_sizes_are_stated() {
+    let (lines, prose) = block_after("### Drag");
+    let id = BodyRef {
+        index: 3,
+        generation: 0,
+    };
+    let messages = [
+        Drag::Grab {
+            hand: 7,
+            id,
+            point: Vector::new(1.0, 2.0),
+        },
+        Drag::Move {
+            hand: 7,
+            target: Vector::new(1.5, 2.0),
+        },
+        Drag::Release { hand: 7 },
+    ];
+    for (line, m) in lines.iter().zip(messages) {
+        assert_eq!(line, &encode(&m).unwrap(), "{m:?}");
+    }
+    for (n, line) in [13, 11, 3].iter().zip(&lines) {
+        assert!(
+            prose.contains(&format!("({n} bytes)")) && line.len() == *n,
+            "{line:02x?}"
+        );
+    }
+}
+
+#[test]
 fn spawn_examples_are_the_encoded_bytes_of_the_bodies_described() {
     let (bytes, prose) = payload_after("A 0.5 m crate named \"crate\"");
     let crate_body = SpawnBody {

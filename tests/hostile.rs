@@ -159,6 +159,22 @@ fn valid(rng: &mut Rng, key: CommandKey) -> Vec<u8> {
             velocity: Vector::new(edgy(rng), edgy(rng)),
             angular_velocity: edgy(rng),
         }),
+        CommandKey::Drag => {
+            let hand = rng.pick(&[0u64, 1, 7, u64::MAX]);
+            let at = Vector::new(edgy(rng), edgy(rng));
+            encode(&match rng.next() % 3 {
+                0 => Drag::Grab {
+                    hand,
+                    id: BodyRef {
+                        index: rng.pick(&[0u32, 1, 5, 40, u32::MAX]),
+                        generation: rng.pick(&[0u32, 1, u32::MAX]),
+                    },
+                    point: at,
+                },
+                1 => Drag::Move { hand, target: at },
+                _ => Drag::Release { hand },
+            })
+        }
     }
     .unwrap()
 }

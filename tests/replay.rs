@@ -69,6 +69,23 @@ fn command(rng: &mut Rng, ids: &[BodyRef]) -> (CommandKey, Vec<u8>) {
             )
         }
         7 if rng.next() % 8 == 0 => (CommandKey::Reset, encode(&Reset).unwrap()),
+        // Hands grab, move and let go (some of them refused: static bodies, empty hands);
+        // the ones left silent are let go by the daemon's time-out, which a replay must
+        // reproduce at the same frame.
+        8 if !ids.is_empty() => {
+            let hand = rng.next() % 3;
+            let at = Vector::new(rng.f(-3.5, 3.5), rng.f(0.5, 5.0));
+            let drag = match rng.next() % 3 {
+                0 => Drag::Grab {
+                    hand,
+                    id: ids[(rng.next() % ids.len() as u64) as usize],
+                    point: at,
+                },
+                1 => Drag::Move { hand, target: at },
+                _ => Drag::Release { hand },
+            };
+            (CommandKey::Drag, encode(&drag).unwrap())
+        }
         _ => (CommandKey::Gravity, vec![1, 0xff, 0xff]), // malformed: recorded as rejected
     }
 }

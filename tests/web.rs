@@ -792,7 +792,10 @@ async fn the_page_decodes_every_documented_example() {
             same(&got, &want),
             "{section} example {bytes:02x?}:\n page {got}\n rust {want}"
         );
-        if matches!(ty, "SetGravity" | "Tilt" | "Spawn" | "Remove" | "Reset") {
+        if matches!(
+            ty,
+            "SetGravity" | "Tilt" | "Spawn" | "Remove" | "Reset" | "Drag"
+        ) {
             let enc = page
                 .eval(&format!("Array.from(tiltbox.encodeMessage('{ty}', {got}))"))
                 .await;
@@ -960,6 +963,7 @@ fn tag_type(tag: tiltbox::client::web::wire::Tag) -> &'static str {
         Tag::Remove => "Remove",
         Tag::Reset => "Reset",
         Tag::Velocity => "SetVelocity",
+        Tag::Drag => "Drag",
     }
 }
 
@@ -977,6 +981,7 @@ fn rust_json(ty: &str, bytes: &[u8]) -> Value {
         "Spawn" => j::<Spawn>(bytes),
         "Remove" => j::<Remove>(bytes),
         "Reset" => j::<Reset>(bytes),
+        "Drag" => j::<Drag>(bytes),
         _ => panic!("no message {ty}"),
     }
 }
@@ -1029,9 +1034,8 @@ fn hex_examples(doc: &str) -> Vec<(String, Vec<u8>)> {
             if in_block {
                 let msg_ty = match section.as_str() {
                     "frame" | "Frames" => Some("frame"),
-                    "Snapshot" | "Event" | "SetGravity" | "Tilt" | "Spawn" | "Remove" | "Reset" => {
-                        Some(section.as_str())
-                    }
+                    "Snapshot" | "Event" | "SetGravity" | "Tilt" | "Spawn" | "Remove" | "Reset"
+                    | "Drag" => Some(section.as_str()),
                     _ => None,
                 };
                 let is_hex = |t: &str| t.len() == 2 && t.chars().all(|c| c.is_ascii_hexdigit());

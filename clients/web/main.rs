@@ -33,11 +33,13 @@ struct Cli {
     /// pages only).
     #[arg(long, conflicts_with_all = ["tls_cert", "tls_key"])]
     no_tls: bool,
-    /// Commands pages may send: any of gravity, tilt, spawn, remove, reset, velocity, or none.
-    #[arg(long, default_value = "tilt,spawn", value_parser = Allow::parse)]
+    /// Commands pages may send: any of gravity, tilt, spawn, remove, reset, velocity, drag, or
+    /// none.
+    #[arg(long, default_value = "tilt,spawn,drag", value_parser = Allow::parse)]
     allow: Allow,
-    /// Per-page limit on commands a second (a phone tilts at 30 Hz).
-    #[arg(long, value_name = "N", default_value_t = 60)]
+    /// Per-page limit on commands a second (a phone tilts at 30 Hz, a dragging finger moves at
+    /// 30 Hz).
+    #[arg(long, value_name = "N", default_value_t = 120)]
     rate: u32,
     /// Zenoh configuration file (JSON5) for the gateway's session, e.g. with the user and
     /// password of config/zenoh/acl-client.json5; --connect endpoints are added to it.

@@ -9,7 +9,7 @@
 //! put on Zenoh; anything else is refused with a reason and changes nothing.
 
 use crate::protocol::{
-    self, CommandKey, DecodeError, Remove, Reset, SetGravity, SetVelocity, Spawn, Tilt,
+    self, CommandKey, DecodeError, Drag, Remove, Reset, SetGravity, SetVelocity, Spawn, Tilt,
 };
 use std::fmt;
 use std::time::Instant;
@@ -38,6 +38,8 @@ pub enum Tag {
     Reset = 9,
     /// `…/velocity` (page → gateway): a `SetVelocity` (drive a kinematic body).
     Velocity = 10,
+    /// `…/drag` (page → gateway): a `Drag` (grab, move, release a body).
+    Drag = 11,
 }
 
 impl Tag {
@@ -54,6 +56,7 @@ impl Tag {
             8 => Tag::Remove,
             9 => Tag::Reset,
             10 => Tag::Velocity,
+            11 => Tag::Drag,
             _ => return None,
         })
     }
@@ -67,6 +70,7 @@ impl Tag {
             Tag::Remove => CommandKey::Remove,
             Tag::Reset => CommandKey::Reset,
             Tag::Velocity => CommandKey::Velocity,
+            Tag::Drag => CommandKey::Drag,
             _ => return None,
         })
     }
@@ -90,7 +94,10 @@ impl Allow {
 
     /// The default: tilt and spawn.
     pub fn default_set() -> Allow {
-        Allow::NONE.with(CommandKey::Tilt).with(CommandKey::Spawn)
+        Allow::NONE
+            .with(CommandKey::Tilt)
+            .with(CommandKey::Spawn)
+            .with(CommandKey::Drag)
     }
 
     /// This set plus `key`.
@@ -217,6 +224,7 @@ pub fn check_upstream(bytes: &[u8], allow: &Allow) -> Result<Checked, Refusal> {
         CommandKey::Remove => recode::<Remove>(key, payload),
         CommandKey::Reset => recode::<Reset>(key, payload),
         CommandKey::Velocity => recode::<SetVelocity>(key, payload),
+        CommandKey::Drag => recode::<Drag>(key, payload),
     }
 }
 
@@ -274,7 +282,7 @@ mod tests {
             check_upstream(&frame(Tag::Reset, &[1]), &allow),
             Err(Refusal::NotAllowed(
                 CommandKey::Reset,
-                "tilt,spawn".to_string()
+                "tilt,spawn,drag".to_string()
             ))
         );
         let all = Allow::parse("gravity, tilt,spawn,remove,reset").unwrap();

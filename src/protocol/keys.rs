@@ -53,6 +53,8 @@ command_keys! {
     Reset => reset,
     /// `…/velocity` (a kinematic body's velocity)
     Velocity => velocity,
+    /// `…/drag` (grab, move and release bodies)
+    Drag => drag,
 }
 
 impl CommandKey {

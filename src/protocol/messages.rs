@@ -369,6 +369,36 @@ pub struct SetVelocity {
     pub angular_velocity: f32,
 }
 
+/// `…/drag`: a hand (a client's finger or pointer, named by an id the client picks) takes hold
+/// of a dynamic body, moves, and lets go. The daemon holds the body's grabbed point to the
+/// hand's target with a spring (a target joint: 5 Hz, damping ratio 0.7, at most 100 times the
+/// body's weight at standard gravity), so a body released while moving flies on.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Drag {
+    /// 0: take hold of body `id` at `point` (m, world), which also becomes the target. A hand
+    /// that holds a body lets it go first.
+    Grab {
+        /// The client's own id for this hand.
+        hand: u64,
+        /// The body (dynamic).
+        id: BodyRef,
+        /// The point taken hold of (m, world).
+        point: Vector,
+    },
+    /// 1: move the hand's target to `target` (m, world).
+    Move {
+        /// The hand.
+        hand: u64,
+        /// Where the grabbed point is pulled (m, world).
+        target: Vector,
+    },
+    /// 2: let go.
+    Release {
+        /// The hand.
+        hand: u64,
+    },
+}
+
 /// `…/stats`: once a second. Durations are microseconds over the last second.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Stats {

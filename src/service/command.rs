@@ -5,7 +5,7 @@
 use super::config::Limits;
 use super::wire::parse_command;
 use crate::physics::BodyDef;
-use crate::protocol::{BodyRef, Colour, CommandKey, Tilt, Vector};
+use crate::protocol::{BodyRef, Colour, CommandKey, Drag, Tilt, Vector};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{SyncSender, TrySendError};
 use std::sync::Arc;
@@ -33,6 +33,8 @@ pub enum Command {
         /// Angular velocity (rad/s).
         angular_velocity: f32,
     },
+    /// Grab, move or release a body (finite numbers within the limits' coordinates). Appended.
+    Drag(Drag),
 }
 
 /// A body to add, validated.

@@ -167,12 +167,18 @@ const MESSAGES = {
   Spawn: r => ({ bodies: r.seq(spawnBody) }),
   Remove: r => ({ ids: r.seq(bodyRef) }),
   Reset: () => null,
+  Drag: r => {
+    const v = r.variant(3, 'Drag'), hand = r.u64();
+    if (v === 0) return { Grab: { hand, id: bodyRef(r), point: vector(r) } };
+    if (v === 1) return { Move: { hand, target: vector(r) } };
+    return { Release: { hand } };
+  },
 };
 
 // The WebSocket frame tags (docs/protocol.md, "WebSocket gateway").
 const TAGS = { 1: ['poses', 'Snapshot'], 2: ['events', 'Event'], 3: ['stats', 'Stats'],
   4: ['scene', 'SceneState'], 5: ['gravity', 'SetGravity'], 6: ['tilt', 'Tilt'],
-  7: ['spawn', 'Spawn'], 8: ['remove', 'Remove'], 9: ['reset', 'Reset'] };
+  7: ['spawn', 'Spawn'], 8: ['remove', 'Remove'], 9: ['reset', 'Reset'], 11: ['drag', 'Drag'] };
 const TAG_OF = {};
 for (const t in TAGS) TAG_OF[TAGS[t][1]] = +t;
 
@@ -235,6 +241,11 @@ function encodeMessage(type, m) {
       break;
     case 'Remove': w.u32(m.ids.length); m.ids.forEach(id => { w.u32(id.index); w.u32(id.generation); }); break;
     case 'Reset': break;
+    case 'Drag':
+      if (m.Grab) { w.u32(0); w.u32(m.Grab.hand); w.u32(m.Grab.id.index); w.u32(m.Grab.id.generation); w.vector(m.Grab.point); }
+      else if (m.Move) { w.u32(1); w.u32(m.Move.hand); w.vector(m.Move.target); }
+      else { w.u32(2); w.u32(m.Release.hand); }
+      break;
     default: throw new Error('not a command: ' + type);
   }
   return w.bytes();
@@ -308,7 +319,7 @@ const state = {
 
 const metrics = {
   fps: 0, framesDrawn: 0, framesIn: 0, bytesIn: 0, rtt: null, errors: [], rejected: [],
-  tilts: 0, spawns: 0, tiltToSnapshot: [], tiltToVisible: [], connected: false,
+  tilts: 0, spawns: 0, drags: 0, tiltToSnapshot: [], tiltToVisible: [], connected: false,
 };
 let pendingTilt = null;  // { sentAt, g0, seenAt, t }
 
@@ -745,10 +756,70 @@ const KINDS = [
   { Polygon: { vertices: [{ x: -0.2, y: -0.15 }, { x: 0.4, y: -0.15 }, { x: -0.2, y: 0.3 }] } },
 ];
 let spawnCount = 0;
+
+// Dragging: a finger (or the mouse) that comes down on a dynamic body takes hold of it over
+// `…/drag` (one hand per pointer, named by a random id of this page's), pulls it along as it
+// moves and lets go as it lifts, so a flick throws; one that comes down on empty space spawns.
+// Moves go out at most 30 times a second a hand (the gateway allows a page 120 commands a
+// second, a phone tilts at 30), and again every second while a finger rests, so the daemon
+// does not let go of a hand it has not heard from for 3 s.
+const PAGE_HANDS = Math.floor(Math.random() * 0x3fffffff) * 1024;
+const hands = new Map();  // pointerId -> { hand, target, sent }
+const MOVE_EVERY_MS = 1000 / 30, KEEPALIVE_MS = 1000;
+
+function insideShape(s, lx, ly, slop) {
+  if (s.Rect) return Math.abs(lx) <= s.Rect.width / 2 + slop && Math.abs(ly) <= s.Rect.height / 2 + slop;
+  if (s.Circle) return Math.hypot(lx, ly) <= s.Circle.radius + slop;
+  if (s.Capsule) {
+    const h = s.Capsule.length / 2 - s.Capsule.radius;
+    return Math.hypot(Math.max(Math.abs(lx) - h, 0), ly) <= s.Capsule.radius + slop;
+  }
+  if (s.Polygon) {
+    const v = s.Polygon.vertices;
+    for (let i = 0; i < v.length; i++) {
+      const a = v[i], b = v[(i + 1) % v.length], ex = b.x - a.x, ey = b.y - a.y;
+      const len = Math.hypot(ex, ey) || 1;
+      if ((ex * (ly - a.y) - ey * (lx - a.x)) / len < -slop) return false;
+    }
+    return true;
+  }
+  return false;
+}
+
+// The dynamic body under world point (x, y) as drawn (within 6 px), if any.
+function bodyAt(x, y) {
+  const slop = 6 / lastView.scale;
+  let found = null;
+  for (const [k, b] of state.bodies) {
+    if (b.info.is_static) continue;
+    const c = Math.cos(-b.angle), s = Math.sin(-b.angle), dx = x - b.x, dy = y - b.y;
+    if (insideShape(b.info.shape, c * dx - s * dy, s * dx + c * dy, slop)) found = { key: k, b };
+  }
+  return found;
+}
+
+function eventPoint(e) {
+  const r = canvas.getBoundingClientRect();
+  return toWorld(e.clientX - r.left, e.clientY - r.top);
+}
+
+function moveHand(h, now) {
+  if (send('Drag', { Move: { hand: h.hand, target: h.target } })) { h.sent = now; metrics.drags++; }
+}
+
 canvas.addEventListener('pointerdown', e => {
   enableMotion();
-  const r = canvas.getBoundingClientRect();
-  const [x, y] = toWorld(e.clientX - r.left, e.clientY - r.top);
+  const [x, y] = eventPoint(e);
+  const hit = bodyAt(x, y);
+  if (hit) {
+    const h = { hand: PAGE_HANDS + (e.pointerId & 1023), target: { x, y }, sent: performance.now() };
+    if (send('Drag', { Grab: { hand: h.hand, id: hit.b.info.id, point: { x, y } } })) {
+      hands.set(e.pointerId, h);
+      metrics.drags++;
+      try { canvas.setPointerCapture(e.pointerId); } catch (_) { /* synthetic pointers */ }
+    }
+    return;
+  }
   const c = PALETTE[spawnCount % PALETTE.length];
   const shape = KINDS[spawnCount % KINDS.length];
   const body = { name: null, shape, position: { x, y }, angle: 0, velocity: { x: 0, y: 0 },
@@ -756,6 +827,32 @@ canvas.addEventListener('pointerdown', e => {
     colour: { r: c[0], g: c[1], b: c[2] } };
   if (send('Spawn', { bodies: [body] })) { spawnCount++; metrics.spawns++; }
 });
+
+canvas.addEventListener('pointermove', e => {
+  const h = hands.get(e.pointerId);
+  if (!h) return;
+  const [x, y] = eventPoint(e);
+  h.target = { x, y };
+  const now = performance.now();
+  if (now - h.sent >= MOVE_EVERY_MS) moveHand(h, now);
+});
+
+function letGo(e) {
+  const h = hands.get(e.pointerId);
+  if (!h) return;
+  hands.delete(e.pointerId);
+  const [x, y] = eventPoint(e);
+  h.target = { x, y };
+  moveHand(h, performance.now());
+  send('Drag', { Release: { hand: h.hand } });
+}
+canvas.addEventListener('pointerup', letGo);
+canvas.addEventListener('pointercancel', letGo);
+
+setInterval(() => {
+  const now = performance.now();
+  for (const h of hands.values()) if (now - h.sent >= KEEPALIVE_MS) moveHand(h, now);
+}, 250);
 
 // Everything a test or a curious user may look at, from the console.
 window.tiltbox = {
@@ -769,6 +866,7 @@ window.tiltbox = {
     return [d[0], d[1], d[2]];
   },
   hello: () => hello,
+  hands: () => hands.size,
 };
 
 // Listen at once where no permission is asked (older Android browsers, desktops) or where it is

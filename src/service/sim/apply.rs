@@ -61,6 +61,7 @@ impl Simulation {
             } => self
                 .set_velocity(id, velocity, angular_velocity)
                 .map(|()| None),
+            Command::Drag(d) => self.drag(d).map(|()| None),
         };
         match result {
             Ok(kind) => {

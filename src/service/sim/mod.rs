@@ -6,6 +6,7 @@
 //! - `bodies.rs`: each live body's name, colour and wire shape;
 //! - `apply.rs`: applying commands (gravity, tilt, spawn, remove, reset, velocity), all or
 //!   nothing;
+//! - `hands.rs`: bodies held over `…/drag` (grab, move, let go, time out);
 //! - `poses.rs`: the `…/poses` message of each frame, keyframes and deltas;
 //! - [`SimState`] and [`StartError`] (`state.rs`): what a checkpoint stores, and why a
 //!   simulation cannot start.
@@ -14,6 +15,7 @@
 
 mod apply;
 mod bodies;
+mod hands;
 mod poses;
 mod source;
 mod state;
@@ -51,6 +53,8 @@ pub struct Simulation {
     spawn_window: u64,
     applied: u64,
     rejected: u64,
+    /// Bodies held over `…/drag`.
+    hands: hands::Hands,
 }
 
 impl Simulation {
@@ -85,6 +89,7 @@ impl Simulation {
             spawn_window: config.tick_hz.round().max(1.0) as u64,
             applied: 0,
             rejected: 0,
+            hands: hands::Hands::default(),
         }
     }
 
@@ -153,7 +158,11 @@ impl Simulation {
             spawn_frames: self.spawn_frames.iter().copied().collect(),
             applied: self.applied,
             rejected: self.rejected,
-            world: self.world.export_state(),
+            world: if self.hands.joints().next().is_none() {
+                self.world.export_state()
+            } else {
+                self.world_without_hands().export_state()
+            },
         }
     }
 
@@ -168,6 +177,7 @@ impl Simulation {
         }
         let (world, ids) = scene.build_world()?;
         self.world = world;
+        self.hands.clear();
         self.bodies.clear();
         self.poses.restart();
         for (body, id) in scene.bodies.iter().zip(ids) {
@@ -267,6 +277,7 @@ impl Simulation {
 
     /// Step the World once (frame += 1); returns how long `World::step` took.
     pub fn step(&mut self) -> Result<Duration, PhysicsError> {
+        self.expire_hands();
         let t0 = Instant::now();
         self.world.step(self.dt)?;
         let took = t0.elapsed();

@@ -17,8 +17,8 @@ use super::command::Command;
 use super::config::Limits;
 use crate::physics::{Body, Real, Shape, Vec2};
 use crate::protocol::{
-    decode, BodyInfo, CommandKey, DecodeError, Remove, Reset, SetGravity, SetVelocity, ShapeSpec,
-    Spawn, Tilt, Vector,
+    decode, BodyInfo, CommandKey, DecodeError, Drag, Remove, Reset, SetGravity, SetVelocity,
+    ShapeSpec, Spawn, Tilt, Vector,
 };
 
 /// Decode and validate a payload that arrived on `key`: the command to apply, or the reason
@@ -93,6 +93,28 @@ pub fn parse_command(key: CommandKey, payload: &[u8], limits: &Limits) -> Result
                 velocity: v.velocity,
                 angular_velocity: v.angular_velocity,
             })
+        }
+        CommandKey::Drag => {
+            let d: Drag = decode(payload).map_err(bad)?;
+            let at = match d {
+                Drag::Grab { point, .. } => Some(("point", point)),
+                Drag::Move { target, .. } => Some(("target", target)),
+                Drag::Release { .. } => None,
+            };
+            if let Some((field, p)) = at {
+                for (axis, v) in [("x", p.x), ("y", p.y)] {
+                    let name = format!("{field}.{axis}");
+                    finite(&name, v)?;
+                    if v.abs() > limits.max_coordinate {
+                        return Err(format!(
+                            "{name} = {v} is out of range: must be within +-{} m \
+                             (limits.max_coordinate)",
+                            limits.max_coordinate
+                        ));
+                    }
+                }
+            }
+            Ok(Command::Drag(d))
         }
     }
 }

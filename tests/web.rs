@@ -262,6 +262,11 @@ async fn daemon_and_gateway(port: u16) -> (Server, Gateway) {
 }
 
 async fn gateway(port: u16, allow: &str) -> Gateway {
+    gateway_at_rate(port, allow, 60).await
+}
+
+/// [`gateway`] letting each page send `rate` commands a second.
+async fn gateway_at_rate(port: u16, allow: &str, rate: u32) -> Gateway {
     let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
         .await
         .unwrap();
@@ -271,7 +276,7 @@ async fn gateway(port: u16, allow: &str) -> Gateway {
             listen: "127.0.0.1:0".parse().unwrap(),
             tls: TlsMode::SelfSigned,
             allow: Allow::parse(allow).unwrap(),
-            rate: 60,
+            rate,
             keys: Keys::for_world(DEFAULT_WORLD).unwrap(),
             fixed_prefix: false,
         },
@@ -747,6 +752,95 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
     use std::sync::atomic::Ordering::Relaxed;
     assert!(c.commands.load(Relaxed) >= 10, "{c:?}");
     assert_eq!(c.refused.load(Relaxed), 0, "{c:?}");
+    stop(page, gw, server).await;
+}
+
+/// Two fingers on two bricks in the page drag them at once (touches dispatched to headless
+/// Chromium, the bricks' poses read from the daemon's own scene): 200 ms after the fingers stop,
+/// each brick's grabbed point is within 5 cm of its finger; let go, both fall.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn two_fingers_drag_two_bricks_in_chromium() {
+    let _lock = BROWSER_LOCK.lock().await;
+    let port = 17497;
+    let server = daemon(port).await;
+    let gw = gateway_at_rate(port, "tilt,spawn,drag", 120).await;
+    let keys = server.keys().clone();
+    let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
+        .await
+        .unwrap();
+    let (_browser, mut page) = browser_page("drag").await;
+    page.call(
+        "Emulation.setTouchEmulationEnabled",
+        json!({"enabled": true, "maxTouchPoints": 5}),
+    )
+    .await
+    .unwrap();
+    page.navigate(gw.url()).await;
+    page.wait_for(
+        "!!(window.tiltbox && tiltbox.state.joined && tiltbox.state.frame > 0)",
+        20,
+    )
+    .await;
+    // The bricks have landed by 2 s (they drop at most 4.6 m).
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    let sc = scene(&s, &keys).await;
+    let size = page
+        .eval("[document.getElementById('world').clientWidth, document.getElementById('world').clientHeight]")
+        .await;
+    let to_px = fit(&sc, size[0].as_f64().unwrap(), size[1].as_f64().unwrap());
+    let brick = |name: &str| sc.bodies.iter().find(|b| b.name == name).unwrap().clone();
+    let (red, blue) = (brick("red brick"), brick("blue brick"));
+    let targets = [(-2.0f32, 4.5f32), (2.0, 4.5)];
+    let starts = [red.position, blue.position];
+    let touch = |t: f32| -> Value {
+        let points: Vec<Value> = (0..2)
+            .map(|i| {
+                let (x0, y0) = (starts[i].x, starts[i].y);
+                let (x1, y1) = targets[i];
+                let (px, py) = to_px(x0 + (x1 - x0) * t, y0 + (y1 - y0) * t);
+                json!({"x": px, "y": py, "id": i})
+            })
+            .collect();
+        Value::Array(points)
+    };
+    let send = |kind: &str, points: Value| json!({"type": kind, "touchPoints": points});
+    page.call("Input.dispatchTouchEvent", send("touchStart", touch(0.0)))
+        .await
+        .unwrap();
+    page.wait_for("tiltbox.hands() === 2", 5).await;
+    for k in 1..=20 {
+        page.call(
+            "Input.dispatchTouchEvent",
+            send("touchMove", touch(k as f32 / 20.0)),
+        )
+        .await
+        .unwrap();
+        tokio::time::sleep(Duration::from_millis(25)).await;
+    }
+    // The page sends the last position within a frame of the last move; 200 ms after that.
+    tokio::time::sleep(Duration::from_millis(260)).await;
+    let sc = scene(&s, &keys).await;
+    for (b, (x, y)) in [&red, &blue].iter().zip(targets) {
+        let now = sc.bodies.iter().find(|n| n.id == b.id).unwrap().position;
+        // The finger landed on the brick's centre to within a pixel; 5 cm is the bound.
+        let pixel = 1.0 / (to_px(1.0, 0.0).0 - to_px(0.0, 0.0).0) as f32;
+        let off = ((now.x - x).powi(2) + (now.y - y).powi(2)).sqrt();
+        assert!(
+            off < 0.05 + pixel,
+            "{} at {now:?}, finger at ({x}, {y}): {off} m",
+            b.name
+        );
+    }
+    page.call("Input.dispatchTouchEvent", send("touchEnd", json!([])))
+        .await
+        .unwrap();
+    page.wait_for("tiltbox.hands() === 0", 5).await;
+    tokio::time::sleep(Duration::from_millis(800)).await;
+    let sc = scene(&s, &keys).await;
+    for b in [&red, &blue] {
+        let now = sc.bodies.iter().find(|n| n.id == b.id).unwrap().position;
+        assert!(now.y < 3.5, "{} still held at {now:?}", b.name);
+    }
     stop(page, gw, server).await;
 }
 

@@ -1,6 +1,7 @@
 //! `…/drag`: a hand grabs a brick of Falling Bricks, pulls it, throws it, and is refused what
 //! it may not do, driven through the daemon's own decoding and tick-boundary application.
 #![cfg(feature = "net")]
+#![allow(clippy::unnecessary_cast)] // Real <-> f32 casts matter with the `f64` feature.
 
 mod common;
 

@@ -120,6 +120,44 @@ fn drag_examples_are_the_encoded_bytes_and_their_sizes_are_stated() {
 }
 
 #[test]
+fn world_query_examples_are_the_encoded_bytes_and_their_sizes_are_stated() {
+    let (lines, prose) = block_after("A ray from (0, 5) straight down 10 m");
+    let ray = WorldQuery::RayClosest {
+        origin: Vector::new(0.0, 5.0),
+        translation: Vector::new(0.0, -10.0),
+        filter: QueryFilterSpec::default(),
+    };
+    let bytes = lines.concat();
+    assert_eq!(bytes, encode(&ray).unwrap());
+    assert_eq!(stated_size(&prose), bytes.len());
+    let (lines, prose) = block_after("Its answer after frame 5");
+    let answer = QueryAnswer::Hits {
+        frame: 5,
+        hits: vec![RayHitInfo {
+            hit: ShapeHit {
+                id: BodyRef {
+                    index: 4,
+                    generation: 0,
+                },
+                shape: 0,
+            },
+            point: Vector::new(0.0, 0.4),
+            normal: Vector::new(0.0, 1.0),
+            fraction: 0.46,
+        }],
+    };
+    let bytes = lines.concat();
+    assert_eq!(bytes, encode(&answer).unwrap());
+    assert_eq!(stated_size(&prose), bytes.len());
+    // The default filter's bytes, as the prose spells them out.
+    let filter = encode(&QueryFilterSpec::default()).unwrap();
+    assert_eq!(
+        &filter[1..],
+        &[0x01, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01]
+    );
+}
+
+#[test]
 fn spawn_examples_are_the_encoded_bytes_of_the_bodies_described() {
     let (bytes, prose) = payload_after("A 0.5 m crate named \"crate\"");
     let crate_body = SpawnBody {

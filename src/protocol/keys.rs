@@ -149,6 +149,10 @@ impl Keys {
     pub fn scene(&self) -> String {
         self.key("scene")
     }
+    /// `…/query`: the queryable answering [`super::WorldQuery`]s.
+    pub fn query(&self) -> String {
+        self.key("query")
+    }
     /// `…/server`: the daemon's liveliness token.
     pub fn server(&self) -> String {
         self.key("server")

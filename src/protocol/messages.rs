@@ -399,6 +399,115 @@ pub enum Drag {
     },
 }
 
+/// Which shapes a query sees: those whose category is in `mask` and whose mask holds
+/// `category` (both ways, as Box2D's `b2QueryFilter`; category 1 and mask all see every shape
+/// with the default filter). Sensors are never seen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct QueryFilterSpec {
+    /// The query's categories.
+    pub category: u64,
+    /// The categories it sees.
+    pub mask: u64,
+}
+
+impl Default for QueryFilterSpec {
+    fn default() -> Self {
+        QueryFilterSpec {
+            category: 1,
+            mask: u64::MAX,
+        }
+    }
+}
+
+/// `…/query` request, the payload of a Zenoh `get`: what to look for in the world, answered at
+/// the next tick boundary.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum WorldQuery {
+    /// 0: the closest shape the ray from `origin` along `translation` (m) meets.
+    RayClosest {
+        /// Start (m, world).
+        origin: Vector,
+        /// Direction and length (m).
+        translation: Vector,
+        /// What it sees.
+        filter: QueryFilterSpec,
+    },
+    /// 1: every shape the ray meets, closest first, at most `limit` (and at most 64).
+    RayAll {
+        /// Start (m, world).
+        origin: Vector,
+        /// Direction and length (m).
+        translation: Vector,
+        /// What it sees.
+        filter: QueryFilterSpec,
+        /// The most hits wanted.
+        limit: u32,
+    },
+    /// 2: every shape that holds `point` (m, world).
+    Point {
+        /// The point.
+        point: Vector,
+        /// What it sees.
+        filter: QueryFilterSpec,
+    },
+    /// 3: every shape that overlaps the box from `min` to `max` (m, world).
+    Box {
+        /// Lower-left corner.
+        min: Vector,
+        /// Upper-right corner.
+        max: Vector,
+        /// What it sees.
+        filter: QueryFilterSpec,
+    },
+}
+
+/// One shape a query found: its body, and its index in the body (0: the body's own shape).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShapeHit {
+    /// The body.
+    pub id: BodyRef,
+    /// The shape's index in the body.
+    pub shape: u32,
+}
+
+/// Where a ray met a shape.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RayHitInfo {
+    /// The shape met.
+    pub hit: ShapeHit,
+    /// The point met (m, world).
+    pub point: Vector,
+    /// The shape's outward normal there.
+    pub normal: Vector,
+    /// How far along the translation (0 to 1).
+    pub fraction: f32,
+}
+
+/// `…/query` reply.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum QueryAnswer {
+    /// 0: a ray's hits, closest first (none, or one for `RayClosest`), in the world after
+    /// `frame`.
+    Hits {
+        /// The frame the world was at.
+        frame: u64,
+        /// The hits.
+        hits: Vec<RayHitInfo>,
+    },
+    /// 1: the shapes a point or box query found, by body and shape.
+    Shapes {
+        /// The frame the world was at.
+        frame: u64,
+        /// The shapes.
+        shapes: Vec<ShapeHit>,
+    },
+    /// 2: the query was refused: why, naming the field and value.
+    Refused {
+        /// Why.
+        reason: String,
+    },
+}
+
 /// `…/stats`: once a second. Durations are microseconds over the last second.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Stats {

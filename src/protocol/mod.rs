@@ -19,7 +19,9 @@ pub use messages::{
     BodyInfo, BodyRef, Colour, Event, EventKind, Orientation, Pose, Remove, Reset, SceneState,
     SetGravity, ShapeSpec, Snapshot, Spawn, SpawnBody, Stats, Tilt, Vector,
 };
-pub use messages::{Drag, SetVelocity};
+pub use messages::{
+    Drag, QueryAnswer, QueryFilterSpec, RayHitInfo, SetVelocity, ShapeHit, WorldQuery,
+};
 pub use snapshot::{
     decode_frame, encode_frame, Grid, GridPose, SnapshotDecoder, SnapshotEncoder, SnapshotFrame,
     SNAPSHOT_VERSION,
@@ -43,7 +45,7 @@ macro_rules! messages {
     ($($t:ident),*) => { $(impl Message for $t { const NAME: &'static str = stringify!($t); })* };
 }
 messages!(SetGravity, Tilt, Spawn, Remove, Reset, Event, SceneState, Stats);
-messages!(SetVelocity, Drag);
+messages!(SetVelocity, Drag, WorldQuery, QueryAnswer, QueryFilterSpec);
 
 /// Why a payload could not be decoded.
 #[derive(Clone, Debug, PartialEq, Eq, Error)]

@@ -10,7 +10,8 @@
 //!   commands, snapshot deltas, the full state for late joiners, recovery from engine
 //!   failures.
 //! - `tick`: the fixed-rate loop ([`run_loop`], [`Outputs`]); `scene_query`: late joiners'
-//!   `…/scene` queries, answered by the tick thread only when one waits.
+//!   `…/scene` queries, answered by the tick thread only when one waits; `world_query`:
+//!   `…/query` rays, points and boxes, answered the same way.
 //! - `net`: the Zenoh session, declarations and shutdown ([`Server`]).
 //! - `bench`: the `bench-net` measurement ([`bench_net`]).
 //! - [`checkpoint`] and [`journal`]: the daemon's files (checkpoints and resume; the command
@@ -30,6 +31,7 @@ mod sim;
 mod tick;
 pub mod timeline;
 mod wire;
+mod world_query;
 
 pub use bench::{bench_net, gas_scene, BenchReport};
 pub use command::{Command, DroppedCounts, Incoming, Intake, SpawnDef};
@@ -40,4 +42,5 @@ pub use net::{
 };
 pub use sim::{SceneSource, SimState, Simulation, StartError};
 pub use tick::{run as run_loop, Outputs, Recording, RunSummary, TickConfig};
-pub use wire::{parse_command, BodyMeta};
+pub use wire::{check_query, parse_command, BodyMeta};
+pub use world_query::{MAX_HITS, MAX_PENDING};

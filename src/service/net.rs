@@ -4,11 +4,14 @@
 
 use super::checkpoint::{self, Checkpointer};
 use super::command::{Incoming, Intake};
+use super::config::Limits;
 use super::config::{ConfigError, ServerConfig};
 use super::journal::JournalWriter;
 use super::sim::{SceneSource, StartError};
 use super::tick::{self, Outputs, Recording, RunSummary, Shared, TickConfig};
-use crate::protocol::{encode, CommandKey, Keys};
+use super::wire::check_query;
+use super::world_query::{WorldQueries, MAX_PENDING};
+use crate::protocol::{decode, encode, CommandKey, Keys, QueryAnswer, WorldQuery};
 use std::sync::atomic::AtomicBool;
 use std::sync::mpsc::sync_channel;
 use std::sync::Arc;
@@ -150,6 +153,9 @@ pub struct Server {
     keys: Keys,
     subscribers: Vec<Subscriber<()>>,
     queryable: Queryable<()>,
+    /// `…/query`, and the task that answers it through the tick thread.
+    world_queryable: Queryable<()>,
+    world_query_task: tokio::task::JoinHandle<()>,
     token: LivelinessToken,
     stop: Arc<AtomicBool>,
     tick: std::thread::JoinHandle<(Recording<ZenohOutputs>, RunSummary)>,
@@ -304,6 +310,14 @@ impl Server {
             .await
             .map_err(zerr("scene queryable"))?;
 
+        let (world_queryable, world_query_task) = declare_world_queries(
+            &session,
+            keys.query(),
+            shared.world_queries.clone(),
+            config.limits.clone(),
+        )
+        .await?;
+
         // The command subscribers.
         let intake = Intake::new(tx, config.limits.clone(), shared.dropped.clone());
         shared.received = intake.received();
@@ -351,6 +365,8 @@ impl Server {
             keys,
             subscribers,
             queryable,
+            world_queryable,
+            world_query_task,
             token,
             stop,
             tick,
@@ -377,6 +393,8 @@ impl Server {
         }
         let _ = self.queryable.undeclare().await;
         self.query_task.abort();
+        let _ = self.world_queryable.undeclare().await;
+        self.world_query_task.abort();
         let (session, stop, tick) = (self.session, self.stop, self.tick);
         stop.store(true, std::sync::atomic::Ordering::Relaxed);
         let joined = tokio::task::spawn_blocking(move || tick.join())
@@ -409,6 +427,67 @@ impl Server {
         tracing::info!(frames = summary.frames, "stopped");
         Ok(summary)
     }
+}
+
+/// Declare `…/query`: the callback hands each query to a task, which decodes and checks it,
+/// waits for the tick thread's answer (the World after the last step) and replies. A query
+/// that cannot be decoded or checked, or finds the queue full, is answered `Refused` at once.
+async fn declare_world_queries(
+    session: &Session,
+    key: String,
+    queries: Arc<WorldQueries>,
+    limits: Limits,
+) -> Result<(Queryable<()>, tokio::task::JoinHandle<()>), ServiceError> {
+    let (tx, mut rx) = tokio::sync::mpsc::channel::<Query>(MAX_PENDING);
+    let reply_key = key.clone();
+    let task = tokio::spawn(async move {
+        // Every query that came in meanwhile is asked at once, so they share one tick.
+        while let Some(first) = rx.recv().await {
+            let mut batch = vec![first];
+            while let Ok(q) = rx.try_recv() {
+                batch.push(q);
+            }
+            let asked: Vec<_> = batch
+                .into_iter()
+                .map(|query| {
+                    let bytes = query
+                        .payload()
+                        .map(|p| p.to_bytes().to_vec())
+                        .unwrap_or_default();
+                    let waiting = decode::<WorldQuery>(&bytes)
+                        .map_err(|e| e.to_string())
+                        .and_then(|q| check_query(&q, &limits).map(|()| q))
+                        .and_then(|q| queries.ask(q));
+                    (query, waiting)
+                })
+                .collect();
+            for (query, waiting) in asked {
+                let answer = match waiting {
+                    Ok(rx) => match rx.await {
+                        Ok(a) => a,
+                        Err(_) => return, // the tick loop stopped
+                    },
+                    Err(reason) => QueryAnswer::Refused { reason },
+                };
+                let Ok(payload) = encode(&answer) else {
+                    continue;
+                };
+                if let Err(e) = query.reply(&reply_key, payload).await {
+                    tracing::warn!("cannot reply to a world query: {e}");
+                }
+            }
+        }
+    });
+    let queryable = session
+        .declare_queryable(&key)
+        .callback(move |query: Query| {
+            if tx.try_send(query).is_err() {
+                tracing::warn!("world query dropped: {MAX_PENDING} pending");
+            }
+        })
+        .await
+        .map_err(zerr("query queryable"))?;
+    Ok((queryable, task))
 }
 
 /// The config of each world a daemon serves: `config.world` first, then every name in

@@ -8,6 +8,7 @@ use super::config::ServerConfig;
 use super::journal::JournalWriter;
 use super::scene_query::SceneQueries;
 use super::sim::Simulation;
+use super::world_query::WorldQueries;
 use crate::protocol::{encode, CommandKey, Event, Stats};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Receiver;
@@ -86,6 +87,8 @@ pub(crate) struct Shared {
     pub(crate) received: Arc<std::sync::atomic::AtomicU64>,
     /// Late joiners waiting for the full state.
     pub(crate) scene_queries: Arc<SceneQueries>,
+    /// `…/query` requests waiting for the next tick boundary.
+    pub(crate) world_queries: Arc<WorldQueries>,
 }
 
 /// How the loop runs.
@@ -182,6 +185,7 @@ pub(crate) fn run_shared<O: Outputs>(
         // 0. Late joiners: the state after the last step, built only when one is waiting.
         //    Asked between ticks too: the wait below is sliced into 50 ms.
         shared.scene_queries.answer(|| sim.scene_state());
+        shared.world_queries.answer(|q| sim.answer_query(q));
         let due = deadline(k);
         let now = Instant::now();
         if now < due {

@@ -50,6 +50,14 @@ class AgainstTheDaemon(unittest.TestCase):
         stats = wait_for(self.stats, lambda s: True, timeout=3.0)
         self.assertGreaterEqual(stats["bodies"], 10)
 
+        # A ray down the middle of the box meets something on its way to the floor, facing up.
+        hit = self.c.ray({"x": 0.0, "y": 5.5}, {"x": 0.0, "y": -6.0})
+        self.assertIsNotNone(hit)
+        self.assertGreater(hit["normal"]["y"], 0.0)
+        self.assertLessEqual(hit["point"]["y"], 5.5)
+        refused = self.c.query({"Point": {"point": {"x": float("nan"), "y": 0.0}}})
+        self.assertIn("point.x", refused["Refused"]["reason"])
+
         # Spawn a ball, then find it in the Added event and in the snapshots.
         ball = {"name": "py ball", "shape": {"Circle": {"radius": 0.3}}, "position": {"x": 0.0, "y": 5.0},
                 "colour": {"r": 1, "g": 2, "b": 3}}

@@ -82,6 +82,16 @@ class Documented(unittest.TestCase):
         self.assertEqual(encode("Tilt", {"Orientation": "PortraitUpsideDown"}), upside)
         self.assertEqual(encode("Tilt", {"Accelerometer": {"x": 0.0, "y": f32(9.81), "z": 0.0}}), upright)
 
+    def test_the_world_query_examples_encode_and_decode_as_their_prose_says(self):
+        ray = {"RayClosest": {"origin": {"x": 0.0, "y": 5.0}, "translation": {"x": 0.0, "y": -10.0}}}
+        self.assertEqual(encode("WorldQuery", ray), payload_after("A ray from (0, 5) straight down 10 m"))
+        answer = decode("QueryAnswer", payload_after("Its answer after frame 5"))["Hits"]
+        self.assertEqual(answer["frame"], 5)
+        hit = answer["hits"][0]
+        self.assertEqual(hit["hit"], {"id": {"index": 4, "generation": 0}, "shape": 0})
+        self.assertEqual((hit["point"], hit["normal"]), ({"x": 0.0, "y": f32(0.4)}, {"x": 0.0, "y": 1.0}))
+        self.assertEqual(hit["fraction"], f32(0.46))
+
     def test_garbage_is_an_error_never_a_wrong_value(self):
         for bad in [b"", b"\x02\x00", b"\x01", b"\x01\x01\x02\x03"]:
             with self.assertRaises(DecodeError):

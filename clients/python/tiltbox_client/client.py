@@ -46,6 +46,22 @@ class Client:
                 return decode("SceneState", reply.ok.payload.to_bytes())
         raise TimeoutError("no reply from " + self.key("scene") + " (is the daemon running?)")
 
+    def query(self, q, timeout=5.0):
+        """Ask `…/query` (a WorldQuery dict, see `wire.encode`): the QueryAnswer dict, {"Hits":
+        ...}, {"Shapes": ...} or {"Refused": {"reason"}}."""
+        for reply in self.session.get(self.key("query"), payload=encode("WorldQuery", q), timeout=timeout):
+            if reply.ok is not None:
+                return decode("QueryAnswer", reply.ok.payload.to_bytes())
+        raise TimeoutError("no reply from " + self.key("query") + " (is the daemon running?)")
+
+    def ray(self, origin, translation):
+        """The closest hit of the ray from `origin` along `translation` ({x, y} m), or None."""
+        answer = self.query({"RayClosest": {"origin": origin, "translation": translation}})
+        if "Refused" in answer:
+            raise ValueError(answer["Refused"]["reason"])
+        hits = answer["Hits"]["hits"]
+        return hits[0] if hits else None
+
     def on_poses(self, callback):
         """Call `callback(snapshot)` for every `…/poses` sample that gives poses: keyframes and
         deltas are decoded into {"frame", "time", "gravity", "keyframe", "poses"} with poses in

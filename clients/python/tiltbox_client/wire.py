@@ -264,7 +264,30 @@ def stats(r):
     return {name: getattr(r, kind)() for name, kind in STATS_FIELDS}
 
 
-DECODERS = {"Snapshot": snapshot_frame, "Event": event, "SceneState": scene_state, "Stats": stats}
+def shape_hit(r):
+    return {"id": body_ref(r), "shape": r.u32()}
+
+
+def ray_hit(r):
+    return {"hit": shape_hit(r), "point": vector(r), "normal": vector(r), "fraction": r.f32()}
+
+
+def query_answer(r):
+    v = r.variant(3, "QueryAnswer")
+    if v == 0:
+        return {"Hits": {"frame": r.u64(), "hits": r.seq(ray_hit)}}
+    if v == 1:
+        return {"Shapes": {"frame": r.u64(), "shapes": r.seq(shape_hit)}}
+    return {"Refused": {"reason": r.string()}}
+
+
+DECODERS = {
+    "Snapshot": snapshot_frame,
+    "Event": event,
+    "SceneState": scene_state,
+    "Stats": stats,
+    "QueryAnswer": query_answer,
+}
 
 
 def decode(message, data):
@@ -326,7 +349,9 @@ def encode(message, m):
     """Encode a command (version byte + postcard): "SetGravity" {x, y}; "Tilt"
     {"Orientation": name} or {"Accelerometer": {x, y, z}}; "Spawn" {bodies}; "Remove" {ids};
     "Reset" None; "SetVelocity" {id, velocity, angular_velocity}; "Drag" {"Grab": {hand, id,
-    point}}, {"Move": {hand, target}} or {"Release": {hand}}."""
+    point}}, {"Move": {hand, target}} or {"Release": {hand}}; and the `…/query` request
+    "WorldQuery" {"RayClosest": {origin, translation}}, {"RayAll": {..., limit}}, {"Point":
+    {point}} or {"Box": {min, max}}, each with an optional "filter" {category, mask}."""
     w = Writer()
     w.u8(VERSION)
     if message == "SetGravity":
@@ -349,6 +374,8 @@ def encode(message, m):
         pass
     elif message == "SetVelocity":
         _ref(w, m["id"]); w.vector(m["velocity"]); w.f32(m["angular_velocity"])
+    elif message == "WorldQuery":
+        _world_query(w, m)
     elif message == "Drag":
         if "Grab" in m:
             g = m["Grab"]
@@ -360,6 +387,22 @@ def encode(message, m):
     else:
         raise ValueError("not a command: " + message)
     return bytes(w.b)
+
+
+def _world_query(w, m):
+    (name, q), = m.items()
+    f = q.get("filter", {"category": 1, "mask": 2**64 - 1})
+    if name in ("RayClosest", "RayAll"):
+        w.varint(0 if name == "RayClosest" else 1); w.vector(q["origin"]); w.vector(q["translation"])
+    elif name == "Point":
+        w.varint(2); w.vector(q["point"])
+    elif name == "Box":
+        w.varint(3); w.vector(q["min"]); w.vector(q["max"])
+    else:
+        raise ValueError("a WorldQuery is RayClosest, RayAll, Point or Box")
+    w.varint(f["category"]); w.varint(f["mask"])
+    if name == "RayAll":
+        w.varint(q["limit"])
 
 
 def _key(i):

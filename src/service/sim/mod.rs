@@ -7,6 +7,7 @@
 //! - `apply.rs`: applying commands (gravity, tilt, spawn, remove, reset, velocity), all or
 //!   nothing;
 //! - `hands.rs`: bodies held over `…/drag` (grab, move, let go, time out);
+//! - `query.rs`: answering `…/query` (rays, points, boxes);
 //! - `poses.rs`: the `…/poses` message of each frame, keyframes and deltas;
 //! - [`SimState`] and [`StartError`] (`state.rs`): what a checkpoint stores, and why a
 //!   simulation cannot start.
@@ -17,6 +18,7 @@ mod apply;
 mod bodies;
 mod hands;
 mod poses;
+mod query;
 mod source;
 mod state;
 

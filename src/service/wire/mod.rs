@@ -18,7 +18,7 @@ use super::config::Limits;
 use crate::physics::{Body, Real, Shape, Vec2};
 use crate::protocol::{
     decode, BodyInfo, CommandKey, DecodeError, Drag, Remove, Reset, SetGravity, SetVelocity,
-    ShapeSpec, Spawn, Tilt, Vector,
+    ShapeSpec, Spawn, Tilt, Vector, WorldQuery,
 };
 
 /// Decode and validate a payload that arrived on `key`: the command to apply, or the reason
@@ -117,6 +117,39 @@ pub fn parse_command(key: CommandKey, payload: &[u8], limits: &Limits) -> Result
             Ok(Command::Drag(d))
         }
     }
+}
+
+/// Check a `…/query` request: every coordinate finite and within `limits.max_coordinate`
+/// (the box's corners, the ray's origin and translation, the point), a box's corners in order
+/// (the World checks that, naming them, when it answers).
+pub fn check_query(q: &WorldQuery, limits: &Limits) -> Result<(), String> {
+    let fields: &[(&str, Vector)] = match q {
+        WorldQuery::RayClosest {
+            origin,
+            translation,
+            ..
+        }
+        | WorldQuery::RayAll {
+            origin,
+            translation,
+            ..
+        } => &[("origin", *origin), ("translation", *translation)],
+        WorldQuery::Point { point, .. } => &[("point", *point)],
+        WorldQuery::Box { min, max, .. } => &[("min", *min), ("max", *max)],
+    };
+    for &(field, v) in fields {
+        for (axis, value) in [("x", v.x), ("y", v.y)] {
+            let name = format!("{field}.{axis}");
+            finite(&name, value)?;
+            if value.abs() > limits.max_coordinate {
+                return Err(format!(
+                    "{name} = {value} is out of range: must be within +-{} m (limits.max_coordinate)",
+                    limits.max_coordinate
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A number as sent must be finite; the refusal names the field and quotes the value.

@@ -158,6 +158,35 @@ fn world_query_examples_are_the_encoded_bytes_and_their_sizes_are_stated() {
 }
 
 #[test]
+fn the_hits_example_is_the_encoded_event_its_prose_describes() {
+    let (bytes, prose) = payload_after("**Worked example (Hits).**");
+    let shape = |index| ShapeHit {
+        id: BodyRef {
+            index,
+            generation: 0,
+        },
+        shape: 0,
+    };
+    let event = Event {
+        frame: 72,
+        kind: EventKind::Hits {
+            hits: vec![HitInfo {
+                pair: ShapePair {
+                    a: shape(0),
+                    b: shape(10),
+                },
+                point: Vector::new(0.0, 0.05),
+                normal: Vector::new(0.0, 1.0),
+                approach_speed: 6.05,
+            }],
+            dropped: 0,
+        },
+    };
+    assert_eq!(bytes, encode(&event).unwrap());
+    assert_eq!(stated_size(&prose), bytes.len());
+}
+
+#[test]
 fn spawn_examples_are_the_encoded_bytes_of_the_bodies_described() {
     let (bytes, prose) = payload_after("A 0.5 m crate named \"crate\"");
     let crate_body = SpawnBody {

@@ -90,6 +90,9 @@ async fn the_python_client_passes_its_tests_against_a_real_daemon() {
         .and_then(|n| n.parse().ok())
         .expect("unittest's summary");
     let passed = out.lines().filter(|l| l.ends_with("... ok")).count();
-    assert!(ran >= 6 && passed == ran && !out.contains("skipped"), "{out}");
+    assert!(
+        ran >= 6 && passed == ran && !out.contains("skipped"),
+        "{out}"
+    );
     server.shutdown().await.unwrap();
 }

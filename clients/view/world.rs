@@ -235,6 +235,8 @@ impl WorldView {
             EventKind::Rejected { key, reason } => {
                 self.last_rejected = Some(format!("{key}: {reason}"));
             }
+            // What touched or entered what changes nothing the viewer draws.
+            EventKind::Contacts { .. } | EventKind::Hits { .. } | EventKind::Sensors { .. } => {}
         }
     }
 

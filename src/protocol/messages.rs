@@ -328,6 +328,54 @@ pub enum EventKind {
         /// Why, naming the field and value where there is one.
         reason: String,
     },
+    /// 4: pairs of shapes that began or stopped touching in the step of `frame` (shapes whose
+    /// scene asked, `contact_events`). Appended.
+    Contacts {
+        /// Pairs that began touching.
+        begin: Vec<ShapePair>,
+        /// Pairs that stopped touching (or whose body was removed).
+        end: Vec<ShapePair>,
+        /// How many more there were than the per-frame cap let through.
+        dropped: u32,
+    },
+    /// 5: hits in the step of `frame` (`hit_events`). Appended.
+    Hits {
+        /// The hits.
+        hits: Vec<HitInfo>,
+        /// How many more there were than the per-frame cap let through.
+        dropped: u32,
+    },
+    /// 6: shapes that entered or left a sensor in the step of `frame`. Appended.
+    Sensors {
+        /// (sensor, visitor) pairs that began overlapping.
+        begin: Vec<ShapePair>,
+        /// Pairs that stopped overlapping (or whose body was removed).
+        end: Vec<ShapePair>,
+        /// How many more there were than the per-frame cap let through.
+        dropped: u32,
+    },
+}
+
+/// Two shapes: a contact's (A's body has the lower slot) or a sensor and what overlaps it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShapePair {
+    /// Shape A (or the sensor).
+    pub a: ShapeHit,
+    /// Shape B (or the visitor).
+    pub b: ShapeHit,
+}
+
+/// A hit: two shapes that met faster than the World's `hit_event_threshold`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HitInfo {
+    /// The shapes (A's body has the lower slot).
+    pub pair: ShapePair,
+    /// The point that approached fastest (m, world).
+    pub point: Vector,
+    /// The contact normal, from A to B.
+    pub normal: Vector,
+    /// How fast that point approached (m/s).
+    pub approach_speed: f32,
 }
 
 /// `…/events`: what changed, stamped with the frame of the step it preceded.

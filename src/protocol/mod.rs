@@ -20,7 +20,8 @@ pub use messages::{
     SetGravity, ShapeSpec, Snapshot, Spawn, SpawnBody, Stats, Tilt, Vector,
 };
 pub use messages::{
-    Drag, QueryAnswer, QueryFilterSpec, RayHitInfo, SetVelocity, ShapeHit, WorldQuery,
+    Drag, HitInfo, QueryAnswer, QueryFilterSpec, RayHitInfo, SetVelocity, ShapeHit, ShapePair,
+    WorldQuery,
 };
 pub use snapshot::{
     decode_frame, encode_frame, Grid, GridPose, SnapshotDecoder, SnapshotEncoder, SnapshotFrame,

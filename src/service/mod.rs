@@ -40,7 +40,7 @@ pub use files::FileError;
 pub use net::{
     shutdown_worlds, start_worlds, world_configs, PublishHook, Server, ServerOptions, ServiceError,
 };
-pub use sim::{SceneSource, SimState, Simulation, StartError};
+pub use sim::{SceneSource, SimState, Simulation, StartError, MAX_PHYSICS_EVENTS};
 pub use tick::{run as run_loop, Outputs, Recording, RunSummary, TickConfig};
 pub use wire::{check_query, parse_command, BodyMeta};
 pub use world_query::{MAX_HITS, MAX_PENDING};

@@ -238,7 +238,12 @@ pub(crate) fn run_shared<O: Outputs>(
             }
         };
 
-        // 3. Snapshot out, encoded once into a buffer of last frame's size and handed over.
+        // 3. What touched, hit or entered what (only where the scene's shapes asked).
+        for ev in sim.physics_events() {
+            publish_event(&mut out, &ev);
+        }
+
+        // 4. Snapshot out, encoded once into a buffer of last frame's size and handed over.
         let frame = sim.frame();
         let mut payload = Vec::with_capacity(last_payload);
         sim.snapshot_into(&mut payload);
@@ -246,7 +251,7 @@ pub(crate) fn run_shared<O: Outputs>(
         out.poses(frame, payload);
         out.stepped(&sim);
 
-        // 4. Bookkeeping and stats once a second.
+        // 5. Bookkeeping and stats once a second.
         let (late_us, step_us) = (micros(late), micros(step_time));
         window.step_us.push(step_us);
         window.worst_lateness_us = window.worst_lateness_us.max(late_us);

@@ -67,6 +67,14 @@ class Documented(unittest.TestCase):
         self.assertEqual(rejected["key"], "tiltbox/bricks/gravity")
         self.assertEqual(rejected["reason"], "truncated SetGravity: the payload ended in the middle of a field")
 
+    def test_the_hits_example_says_what_its_prose_says(self):
+        e = decode("Event", payload_after("**Worked example (Hits).**"))
+        self.assertEqual(e["frame"], 72)
+        hit = e["kind"]["Hits"]["hits"][0]
+        self.assertEqual((hit["pair"]["a"]["id"]["index"], hit["pair"]["b"]["id"]["index"]), (0, 10))
+        self.assertEqual((hit["point"]["y"], hit["approach_speed"]), (f32(0.05), f32(6.05)))
+        self.assertEqual(e["kind"]["Hits"]["dropped"], 0)
+
     def test_commands_encode_to_the_documented_bytes(self):
         self.assertEqual(encode("SetGravity", {"x": 0.0, "y": -9.81}), payload_after("### SetGravity"))
         ref = {"index": 3, "generation": 0}

@@ -227,17 +227,35 @@ def snapshot_frame(r):
     return {"frame": frame, "time": time, "gravity": gravity, "reference": reference, "grid": grid, "poses": poses, "gone": gone}
 
 
+def shape_hit(r):
+    return {"id": body_ref(r), "shape": r.u32()}
+
+
+def shape_pair(r):
+    return {"a": shape_hit(r), "b": shape_hit(r)}
+
+
+def hit_info(r):
+    return {"pair": shape_pair(r), "point": vector(r), "normal": vector(r), "approach_speed": r.f32()}
+
+
 def event(r):
     frame = r.u64()
-    v = r.variant(4, "EventKind")
+    v = r.variant(7, "EventKind")
     if v == 0:
         kind = {"Added": {"bodies": r.seq(body_info)}}
     elif v == 1:
         kind = {"Removed": {"ids": r.seq(body_ref)}}
     elif v == 2:
         kind = {"Reset": {"scene": r.string(), "gravity": vector(r), "bodies": r.seq(body_info)}}
-    else:
+    elif v == 3:
         kind = {"Rejected": {"key": r.string(), "reason": r.string()}}
+    elif v == 4:
+        kind = {"Contacts": {"begin": r.seq(shape_pair), "end": r.seq(shape_pair), "dropped": r.u32()}}
+    elif v == 5:
+        kind = {"Hits": {"hits": r.seq(hit_info), "dropped": r.u32()}}
+    else:
+        kind = {"Sensors": {"begin": r.seq(shape_pair), "end": r.seq(shape_pair), "dropped": r.u32()}}
     return {"frame": frame, "kind": kind}
 
 
@@ -262,10 +280,6 @@ STATS_FIELDS = [
 
 def stats(r):
     return {name: getattr(r, kind)() for name, kind in STATS_FIELDS}
-
-
-def shape_hit(r):
-    return {"id": body_ref(r), "shape": r.u32()}
 
 
 def ray_hit(r):

@@ -129,6 +129,9 @@ function snapshotFrame(r) {
   }
   return { frame, time, gravity, reference, grid, poses, gone };
 }
+const shapeHit = r => ({ id: bodyRef(r), shape: r.u32() });
+const shapePair = r => ({ a: shapeHit(r), b: shapeHit(r) });
+const hitInfo = r => ({ pair: shapePair(r), point: vector(r), normal: vector(r), approach_speed: r.f32() });
 const bodyInfo = r => ({
   id: bodyRef(r), name: r.string(), shape: shapeSpec(r), is_static: r.bool(),
   colour: colour(r), position: vector(r), angle: r.f32(), velocity: vector(r),
@@ -145,11 +148,14 @@ const MESSAGES = {
   Event: r => {
     const frame = r.u64();
     let kind;
-    switch (r.variant(4, 'EventKind')) {
+    switch (r.variant(7, 'EventKind')) {
       case 0: kind = { Added: { bodies: r.seq(bodyInfo) } }; break;
       case 1: kind = { Removed: { ids: r.seq(bodyRef) } }; break;
       case 2: kind = { Reset: { scene: r.string(), gravity: vector(r), bodies: r.seq(bodyInfo) } }; break;
-      default: kind = { Rejected: { key: r.string(), reason: r.string() } };
+      case 3: kind = { Rejected: { key: r.string(), reason: r.string() } }; break;
+      case 4: kind = { Contacts: { begin: r.seq(shapePair), end: r.seq(shapePair), dropped: r.u32() } }; break;
+      case 5: kind = { Hits: { hits: r.seq(hitInfo), dropped: r.u32() } }; break;
+      default: kind = { Sensors: { begin: r.seq(shapePair), end: r.seq(shapePair), dropped: r.u32() } };
     }
     return { frame, kind };
   },

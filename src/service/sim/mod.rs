@@ -7,6 +7,7 @@
 //! - `apply.rs`: applying commands (gravity, tilt, spawn, remove, reset, velocity), all or
 //!   nothing;
 //! - `hands.rs`: bodies held over `…/drag` (grab, move, let go, time out);
+//! - `physics_events.rs`: the World's contact, hit and sensor events as `…/events`;
 //! - `query.rs`: answering `…/query` (rays, points, boxes);
 //! - `poses.rs`: the `…/poses` message of each frame, keyframes and deltas;
 //! - [`SimState`] and [`StartError`] (`state.rs`): what a checkpoint stores, and why a
@@ -17,11 +18,13 @@
 mod apply;
 mod bodies;
 mod hands;
+mod physics_events;
 mod poses;
 mod query;
 mod source;
 mod state;
 
+pub use physics_events::MAX_PHYSICS_EVENTS;
 pub use source::SceneSource;
 pub use state::{SimState, StartError};
 

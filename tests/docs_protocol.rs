@@ -187,6 +187,50 @@ fn the_hits_example_is_the_encoded_event_its_prose_describes() {
 }
 
 #[test]
+fn a_segment_shape_spec_takes_24_to_40_bytes_as_the_tables_say() {
+    let segment = |ends: Option<Vector>| ShapeSpec::Segment {
+        a: Vector::new(0.0, 0.0),
+        b: Vector::new(1.0, 0.0),
+        radius: 0.0,
+        prev: ends,
+        next: ends,
+        one_sided: false,
+    };
+    // A ShapeSpec alone is no message; inside a one-body Spawn it follows a fixed prefix.
+    let size = |s: ShapeSpec| {
+        let bodies = vec![SpawnBody::at(s, Vector::new(0.0, 0.0))];
+        let circle = vec![SpawnBody::at(
+            ShapeSpec::Circle { radius: 1.0 },
+            Vector::default(),
+        )];
+        encode(&Spawn { bodies }).unwrap().len() - encode(&Spawn { bodies: circle }).unwrap().len()
+            + 5
+    };
+    assert_eq!(size(segment(None)), 24);
+    assert_eq!(size(segment(Some(Vector::new(2.0, 0.0)))), 40);
+    let doc = read_repo_file("docs/protocol.md");
+    assert_eq!(
+        doc.matches("24 to 40").count(),
+        2,
+        "both tables state 24 to 40"
+    );
+    assert!(!doc.contains("23 to 39"));
+}
+
+#[test]
+fn the_checkpoint_version_reliability_md_states_is_the_builds() {
+    let doc = read_repo_file("docs/reliability.md");
+    let stated = format!(
+        "writes and reads format version {} only",
+        tiltbox::service::checkpoint::FORMAT_VERSION
+    );
+    assert!(
+        doc.contains(&stated),
+        "docs/reliability.md lacks {stated:?}"
+    );
+}
+
+#[test]
 fn spawn_examples_are_the_encoded_bytes_of_the_bodies_described() {
     let (bytes, prose) = payload_after("A 0.5 m crate named \"crate\"");
     let crate_body = SpawnBody {

@@ -376,7 +376,7 @@ async fn scene(s: &zenoh::Session, keys: &Keys) -> SceneState {
         .expect("scene reply")
 }
 
-/// The page's documented fit (clients/web/page/app.js, docs/clients.md): the static bodies'
+/// The page's documented fit (clients/web/page/app.js, `view`): the static bodies'
 /// bounding box fitted into the canvas at 94 % of the tighter side, centred.
 fn fit(scene: &SceneState, w: f64, h: f64) -> impl Fn(f32, f32) -> (f64, f64) {
     let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
@@ -676,6 +676,10 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
     let mut spawned = Vec::new();
     for (x, y) in spots {
         let (px, py) = to_px(x, y);
+        // A press on a brick grabs it instead: wait for the spot to be clear (the bricks
+        // flung about by the tilts above land within a second or two).
+        page.wait_for(&format!("tiltbox.bodyAt({x}, {y}) === null"), 10)
+            .await;
         for t in ["mousePressed", "mouseReleased"] {
             page.call(
                 "Input.dispatchMouseEvent",
@@ -967,7 +971,9 @@ async fn garbage_frames_are_refused_and_the_gateway_keeps_serving() {
   while (errors.length < 12 && performance.now() < end) await new Promise(r => setTimeout(r, 20));
   // the same socket still works: a good tilt, upside down
   s.send(tiltbox.encodeFrame('Tilt', { Orientation: 'PortraitUpsideDown' }));
-  await new Promise(r => setTimeout(r, 300));
+  // (until the page's own view shows it applied: a fixed wait lost the race on a loaded machine)
+  const end1 = performance.now() + 5000;
+  while (tiltbox.state.gravity.y < 9 && performance.now() < end1) await new Promise(r => setTimeout(r, 20));
   // a flood: 200 tilts at once, past the 60 per second limit
   for (let i = 0; i < 200; i++) s.send(tiltbox.encodeFrame('Tilt', { Accelerometer: { x: 0, y: 9.81, z: 0 } }));
   const end2 = performance.now() + 5000;

@@ -32,8 +32,12 @@ use wire::Allow;
 
 /// The page, embedded.
 pub const PAGE_HTML: &str = include_str!("page/index.html");
-/// The page's script: the protocol decoder, the late join, the drawing and the controls.
+/// The page's main module: the connection, the drawing and the controls.
 pub const PAGE_JS: &str = include_str!("page/app.js");
+/// The page's protocol module: decoders, encoders, the snapshot decoder, frame tags.
+pub const PAGE_WIRE_JS: &str = include_str!("page/wire.js");
+/// The page's world module: the world as the page knows it (the late join).
+pub const PAGE_WORLD_JS: &str = include_str!("page/world.js");
 /// The page's style sheet.
 pub const PAGE_CSS: &str = include_str!("page/style.css");
 
@@ -213,6 +217,14 @@ impl Gateway {
             .route(
                 "/app.js",
                 get(|| async { page(PAGE_JS, "text/javascript; charset=utf-8") }),
+            )
+            .route(
+                "/wire.js",
+                get(|| async { page(PAGE_WIRE_JS, "text/javascript; charset=utf-8") }),
+            )
+            .route(
+                "/world.js",
+                get(|| async { page(PAGE_WORLD_JS, "text/javascript; charset=utf-8") }),
             )
             .route(
                 "/style.css",
@@ -400,6 +412,8 @@ mod tests {
     #[test]
     fn the_page_is_embedded_and_names_its_parts() {
         assert!(PAGE_HTML.contains("app.js") && PAGE_HTML.contains("style.css"));
-        assert!(PAGE_JS.contains("decodeFrame"));
+        assert!(PAGE_JS.contains("from './wire.js'") && PAGE_JS.contains("from './world.js'"));
+        assert!(PAGE_WIRE_JS.contains("function decodeFrame"));
+        assert!(PAGE_WORLD_JS.contains("function applyScene"));
     }
 }

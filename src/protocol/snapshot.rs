@@ -621,6 +621,38 @@ mod tests {
             assert!(err <= Grid::angle_step() / 2.0 + 1e-6, "{a}: {err}");
         }
         assert_eq!(Grid::new(25), None);
+        // Halves round away from zero, as docs/protocol.md says.
+        assert_eq!(g.quantize(1.5 / 1024.0), 2);
+        assert_eq!(g.quantize(-1.5 / 1024.0), -2);
+        assert_eq!(Grid::quantize_angle(1.5 * Grid::angle_step()), 2);
+    }
+
+    /// A body spawned since the keyframe is listed even at grid (0, 0, 0), and decoded there.
+    #[test]
+    fn a_body_new_since_the_keyframe_is_listed_even_at_the_origin() {
+        let mut enc = SnapshotEncoder::new(Grid::default());
+        let mut dec = SnapshotDecoder::new();
+        let (old, new) = (id(1, 0), id(2, 0));
+        let mut out = Vec::new();
+        let g = Vector::new(0.0, -9.81);
+        enc.encode((1, 1.0 / 60.0, g), true, [(old, [1.0, 1.0, 0.0])], &mut out);
+        dec.decode(&out).unwrap();
+        let bodies = [(old, [1.0, 1.0, 0.0]), (new, [0.0, 0.0, 0.0])];
+        let f = enc
+            .encode((2, 2.0 / 60.0, g), false, bodies, &mut out)
+            .clone();
+        assert_eq!(
+            f.poses.len(),
+            1,
+            "the resting body is left out, the new one listed"
+        );
+        assert_eq!(
+            (f.poses[0].id, f.poses[0].x, f.poses[0].y, f.poses[0].angle),
+            (new, 0, 0, 0)
+        );
+        let s = dec.decode(&out).unwrap().unwrap();
+        assert_eq!(s.poses.len(), 1);
+        assert_eq!((s.poses[0].id, s.poses[0].x, s.poses[0].y), (new, 0.0, 0.0));
     }
 
     /// A world of bodies moving on a random walk, spawned and removed now and then.

@@ -45,6 +45,20 @@ fn send(sim: &mut Simulation, config: &ServerConfig, d: Drag) -> Option<String> 
     }
 }
 
+/// Hand `hand` grabs body `id` at its centre of mass; the point grabbed (it must be accepted).
+fn grab_centre(sim: &mut Simulation, config: &ServerConfig, hand: u64, id: BodyRef) -> Vector {
+    let c = body(sim, id).center_of_mass();
+    let point = v(c.x as f32, c.y as f32);
+    assert_eq!(send(sim, config, Drag::Grab { hand, id, point }), None);
+    point
+}
+
+/// Apply a command on `key` as the tick thread does.
+fn apply(sim: &mut Simulation, config: &ServerConfig, key: CommandKey, payload: Vec<u8>) {
+    let command = parse_command(key, &payload, &config.limits);
+    sim.apply(Incoming { key, command });
+}
+
 fn steps(sim: &mut Simulation, n: usize) {
     for _ in 0..n {
         sim.step().unwrap();
@@ -66,12 +80,7 @@ fn settled() -> (ServerConfig, Simulation, BodyRef) {
 fn a_grabbed_brick_follows_the_finger_to_within_5_cm_200_ms_after_it_stops() {
     let (config, mut sim, red) = settled();
     let start = body(&sim, red).center_of_mass();
-    let grab = Drag::Grab {
-        hand: 7,
-        id: red,
-        point: v(start.x as f32, start.y as f32),
-    };
-    assert_eq!(send(&mut sim, &config, grab), None);
+    grab_centre(&mut sim, &config, 7, red);
     // The finger lifts it 2 m and carries it 1 m right over half a second, then stops.
     let end = start + Vec2::new(1.0, 2.0);
     for k in 1..=30 {
@@ -102,19 +111,7 @@ fn a_grabbed_brick_follows_the_finger_to_within_5_cm_200_ms_after_it_stops() {
 fn a_brick_let_go_while_moving_leaves_at_the_fingers_speed() {
     let (config, mut sim, red) = settled();
     let start = body(&sim, red).center_of_mass();
-    let point = v(start.x as f32, start.y as f32);
-    assert_eq!(
-        send(
-            &mut sim,
-            &config,
-            Drag::Grab {
-                hand: 1,
-                id: red,
-                point
-            }
-        ),
-        None
-    );
+    grab_centre(&mut sim, &config, 1, red);
     // Up 1 m, then a flick to the right at 3 m/s for 0.5 s, let go while moving.
     let lift = start + Vec2::new(0.0, 1.0);
     for _ in 0..30 {
@@ -267,26 +264,13 @@ fn a_silent_hand_is_let_go_after_3_s_and_a_checkpoint_holds_none() {
 #[test]
 fn a_reset_or_a_removed_body_empties_the_hand() {
     let (config, mut sim, red) = settled();
-    let p = body(&sim, red).center_of_mass();
-    let point = v(p.x as f32, p.y as f32);
-    assert_eq!(
-        send(
-            &mut sim,
-            &config,
-            Drag::Grab {
-                hand: 2,
-                id: red,
-                point
-            }
-        ),
-        None
+    let point = grab_centre(&mut sim, &config, 2, red);
+    apply(
+        &mut sim,
+        &config,
+        CommandKey::Remove,
+        encode(&Remove { ids: vec![red] }).unwrap(),
     );
-    let payload = encode(&Remove { ids: vec![red] }).unwrap();
-    let command = parse_command(CommandKey::Remove, &payload, &config.limits);
-    sim.apply(Incoming {
-        key: CommandKey::Remove,
-        command,
-    });
     let reason = send(
         &mut sim,
         &config,
@@ -297,25 +281,13 @@ fn a_reset_or_a_removed_body_empties_the_hand() {
     );
     assert!(reason.is_some_and(|r| r.contains("holds no body")));
     let other = named(&sim, "blue brick");
-    let p = body(&sim, other).center_of_mass();
-    let point = v(p.x as f32, p.y as f32);
-    assert_eq!(
-        send(
-            &mut sim,
-            &config,
-            Drag::Grab {
-                hand: 2,
-                id: other,
-                point
-            }
-        ),
-        None
+    grab_centre(&mut sim, &config, 2, other);
+    apply(
+        &mut sim,
+        &config,
+        CommandKey::Reset,
+        encode(&Reset).unwrap(),
     );
-    let command = parse_command(CommandKey::Reset, &encode(&Reset).unwrap(), &config.limits);
-    sim.apply(Incoming {
-        key: CommandKey::Reset,
-        command,
-    });
     assert_eq!(sim.world().joint_count(), 0);
     let reason = send(&mut sim, &config, Drag::Release { hand: 2 });
     assert!(reason.is_some_and(|r| r.contains("holds no body")));

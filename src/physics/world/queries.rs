@@ -125,6 +125,13 @@ pub struct Query<'a> {
     world: &'a World,
 }
 
+/// Refuse a ray whose origin or translation is not finite, naming the field.
+fn check_ray(origin: Vec2, translation: Vec2) -> Result<(), PhysicsError> {
+    check(["origin.x", "origin.y"], origin)?;
+    check(["translation.x", "translation.y"], translation)?;
+    Ok(())
+}
+
 /// Refuse a query input that is not finite, naming it.
 fn check(field: [&'static str; 2], v: Vec2) -> Result<Vec2, PhysicsError> {
     finite_vec(field, v)
@@ -145,8 +152,7 @@ impl<'a> Query<'a> {
         translation: Vec2,
         filter: QueryFilter,
     ) -> Result<Option<RayHit>, PhysicsError> {
-        check(["origin.x", "origin.y"], origin)?;
-        check(["translation.x", "translation.y"], translation)?;
+        check_ray(origin, translation)?;
         let mut best: Option<RayHit> = None;
         self.world
             .queries
@@ -180,8 +186,7 @@ impl<'a> Query<'a> {
         filter: QueryFilter,
         limit: usize,
     ) -> Result<Vec<RayHit>, PhysicsError> {
-        check(["origin.x", "origin.y"], origin)?;
-        check(["translation.x", "translation.y"], translation)?;
+        check_ray(origin, translation)?;
         let mut hits = Vec::new();
         self.world
             .queries

@@ -5,7 +5,7 @@
 
 use super::world::WorldView;
 use crate::client::tilt::keyboard::{KeyCommand, KeyboardTilt};
-use crate::protocol::{encode, Colour, Keys, Reset, ShapeSpec, Spawn, SpawnBody, Vector};
+use crate::protocol::{encode, Colour, Drag, Keys, Reset, ShapeSpec, Spawn, SpawnBody, Vector};
 
 pub use crate::client::tilt::keyboard::{key_command, Key, KEY_HELP};
 
@@ -21,12 +21,33 @@ pub struct Put {
     pub block: bool,
 }
 
-/// The virtual device the arrows turn, and how many bricks were dropped.
+/// The virtual device the arrows turn, how many bricks were dropped, and the body the mouse
+/// holds.
 #[derive(Debug, Default)]
 pub struct Control {
     /// The device, as `tiltbox-tilt`'s keyboard has it.
     pub device: KeyboardTilt,
     spawned: u32,
+    /// The mouse's hand on `…/drag` while its button holds a body, its target, and when the
+    /// target was last sent.
+    holding: Option<(u64, Vector, std::time::Instant)>,
+}
+
+/// What the mouse did, at a world point (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mouse {
+    /// The left button went down.
+    Down((f32, f32)),
+    /// It moved with the button down.
+    Drag((f32, f32)),
+    /// The button came up.
+    Up((f32, f32)),
+}
+
+/// The mouse's hand id on `…/drag`: this process's id in the high bits, so two viewers on one
+/// world do not share a hand.
+fn mouse_hand() -> u64 {
+    (std::process::id() as u64) << 16 | 1
 }
 
 /// Brick colours, in turn.
@@ -101,6 +122,64 @@ impl Control {
     }
 }
 
+impl Control {
+    /// What to put for a mouse action on the world of `keys`, seen as `view`: the button down
+    /// on a dynamic body grabs it there (within half a metre's tenth of its outline), a drag
+    /// moves the grab's target, the button up lets go (so a flick throws). Down on empty
+    /// space, or a drag or release holding nothing: nothing.
+    pub fn mouse(&mut self, action: Mouse, keys: &Keys, view: Option<&WorldView>) -> Option<Put> {
+        let at = |(x, y): (f32, f32)| Vector::new(x, y);
+        let now = std::time::Instant::now();
+        let drag = match action {
+            Mouse::Down(p) => {
+                let id = super::render::body_at(view?, p, 0.05)?;
+                let hand = mouse_hand();
+                self.holding = Some((hand, at(p), now));
+                Drag::Grab {
+                    hand,
+                    id,
+                    point: at(p),
+                }
+            }
+            Mouse::Drag(p) => {
+                let (hand, _, _) = self.holding?;
+                self.holding = Some((hand, at(p), now));
+                Drag::Move {
+                    hand,
+                    target: at(p),
+                }
+            }
+            Mouse::Up(_) => Drag::Release {
+                hand: self.holding.take()?.0,
+            },
+        };
+        Some(Put {
+            key: keys.drag(),
+            payload: encode(&drag).ok()?,
+            block: true,
+        })
+    }
+
+    /// While the button holds a body still: its target again once a second, so the daemon
+    /// does not let go of a hand it has not heard from for 3 s.
+    pub fn keepalive(&mut self, keys: &Keys) -> Option<Put> {
+        let (hand, target, sent) = self.holding.as_mut()?;
+        if sent.elapsed() < std::time::Duration::from_secs(1) {
+            return None;
+        }
+        *sent = std::time::Instant::now();
+        let drag = Drag::Move {
+            hand: *hand,
+            target: *target,
+        };
+        Some(Put {
+            key: keys.drag(),
+            payload: encode(&drag).ok()?,
+            block: true,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -162,5 +241,69 @@ mod tests {
         let mut c = Control::default();
         assert_eq!(c.put(KeyCommand::Spawn, &keys, None), None);
         assert_eq!(c.put(KeyCommand::Quit, &keys, None), None);
+    }
+
+    #[test]
+    fn the_mouse_grabs_the_brick_under_it_drags_it_and_lets_go() {
+        let keys = Keys::for_world("bricks").unwrap();
+        let mut view = walls();
+        let brick = BodyInfo {
+            is_static: false,
+            mass: 0.32,
+            ..BodyInfo::wall(
+                BodyRef {
+                    index: 7,
+                    generation: 0,
+                },
+                ShapeSpec::Rect {
+                    width: 0.8,
+                    height: 0.4,
+                },
+                Vector::new(1.0, 2.0),
+            )
+        };
+        view.bodies.insert(
+            brick.id,
+            crate::client::view::world::ViewBody::from_info(brick),
+        );
+        // The screen point over the brick, through the mapping the drawing uses.
+        let area = ratatui::layout::Rect::new(0, 0, 80, 24);
+        let over = (0..80u16)
+            .flat_map(|c| (0..24u16).map(move |r| (c, r)))
+            .filter_map(|(c, r)| super::super::render::cell_to_world(&view, area, c, r))
+            .find(|&(x, y)| (x - 1.0).abs() < 0.3 && (y - 2.0).abs() < 0.2)
+            .expect("a cell over the brick");
+        let mut c = Control::default();
+        let put = c.mouse(Mouse::Down(over), &keys, Some(&view)).unwrap();
+        assert_eq!((put.key.as_str(), put.block), ("tiltbox/bricks/drag", true));
+        let Drag::Grab { hand, id, point } = decode(&put.payload).unwrap() else {
+            panic!("not a grab");
+        };
+        assert_eq!((id.index, point), (7, Vector::new(over.0, over.1)));
+        let moved: Drag = decode(
+            &c.mouse(Mouse::Drag((2.0, 3.0)), &keys, Some(&view))
+                .unwrap()
+                .payload,
+        )
+        .unwrap();
+        assert_eq!(
+            moved,
+            Drag::Move {
+                hand,
+                target: Vector::new(2.0, 3.0)
+            }
+        );
+        let up: Drag = decode(
+            &c.mouse(Mouse::Up((2.0, 3.0)), &keys, Some(&view))
+                .unwrap()
+                .payload,
+        )
+        .unwrap();
+        assert_eq!(up, Drag::Release { hand });
+        // Empty space or a wall grabs nothing; nothing held, nothing to move or let go.
+        assert_eq!(c.mouse(Mouse::Down((-2.0, 5.0)), &keys, Some(&view)), None);
+        assert_eq!(c.mouse(Mouse::Down((5.0, 4.0)), &keys, Some(&view)), None);
+        assert_eq!(c.mouse(Mouse::Drag((0.0, 1.0)), &keys, Some(&view)), None);
+        assert_eq!(c.mouse(Mouse::Up((0.0, 1.0)), &keys, Some(&view)), None);
     }
 }

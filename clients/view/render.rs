@@ -13,7 +13,7 @@
 //! last row is the status line.
 
 use super::world::{capsule_half_core, ViewBody, WorldView};
-use crate::protocol::{ShapeSpec, Vector};
+use crate::protocol::{BodyRef, ShapeSpec, Vector};
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Rect, Size};
 use ratatui::style::{Color, Modifier, Style};
@@ -352,6 +352,41 @@ pub fn status_text(view: Option<&WorldView>, status: &Status) -> String {
         status.rate_hz,
         v.scene,
     )
+}
+
+/// The world point (m) at the middle of terminal cell (`column`, `row`) of a screen of `area`
+/// drawn by [`render`] (the canvas above the status line). None off the canvas or before the
+/// scene is known.
+pub fn cell_to_world(view: &WorldView, area: Rect, column: u16, row: u16) -> Option<(f32, f32)> {
+    let canvas = Rect {
+        height: area.height.checked_sub(1)?,
+        ..area
+    };
+    let inside = column >= canvas.x && column < canvas.x + canvas.width;
+    if !inside || row < canvas.y || row >= canvas.y + canvas.height {
+        return None;
+    }
+    let vp = Viewport::fit(view.bounds()?, canvas.as_size());
+    let fx = ((column - canvas.x) as f64 + 0.5) / canvas.width as f64;
+    let fy = ((row - canvas.y) as f64 + 0.5) / canvas.height as f64;
+    let x = vp.x_bounds[0] + fx * (vp.x_bounds[1] - vp.x_bounds[0]);
+    let y = vp.y_bounds[1] - fy * (vp.y_bounds[1] - vp.y_bounds[0]);
+    Some((x as f32, y as f32))
+}
+
+/// The dynamic body of `view` under world point (`x`, `y`), within `slop` metres, if any (the
+/// last drawn, so the one on top).
+pub fn body_at(view: &WorldView, (x, y): (f32, f32), slop: f32) -> Option<BodyRef> {
+    let mut found = None;
+    for b in view.bodies.values().filter(|b| !b.info.is_static) {
+        let (s, c) = (-(b.angle as f64)).sin_cos();
+        let (dx, dy) = ((x - b.x) as f64, (y - b.y) as f64);
+        let (lx, ly) = (c * dx - s * dy, s * dx + c * dy);
+        if Fill::of(&b.info.shape).contains(lx, ly, slop as f64, slop as f64) {
+            found = Some(b.info.id);
+        }
+    }
+    found
 }
 
 /// Draw the view (or a waiting message) and the status line into `area` of `buf`.

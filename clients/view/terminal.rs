@@ -3,9 +3,9 @@
 //! line with rate and latency, keys to quit (and with `--control` to drive the world). The terminal is put
 //! back on `q`, Esc, Ctrl-C, SIGTERM and on panic (ratatui's hook).
 
-use super::control::{key_command, Control, Key, Put, KEY_HELP};
+use super::control::{key_command, Control, Key, Mouse, Put, KEY_HELP};
 use super::playout::{Playout, Xya};
-use super::render::{render, Status};
+use super::render::{cell_to_world, render, Status};
 use super::world::{Applied, Join, Received, WorldView};
 use super::{query_scene, Msg};
 use crate::client::tilt::keyboard::KeyCommand;
@@ -78,11 +78,29 @@ impl Meter {
 
 /// Puts the terminal back when dropped (normal exit and errors; panics go through ratatui's
 /// hook).
-struct TerminalGuard;
+struct TerminalGuard {
+    /// Whether mouse capture was turned on (and must be turned off).
+    mouse: bool,
+}
 
 impl Drop for TerminalGuard {
     fn drop(&mut self) {
+        if self.mouse {
+            let _ = crossterm::execute!(std::io::stdout(), crossterm::event::DisableMouseCapture);
+        }
         ratatui::restore();
+    }
+}
+
+/// The drag a mouse event makes at world point `at` (None: off the canvas), if any (left
+/// button only; letting go counts anywhere).
+fn mouse_action(kind: crossterm::event::MouseEventKind, at: Option<(f32, f32)>) -> Option<Mouse> {
+    use crossterm::event::{MouseButton::Left, MouseEventKind as K};
+    match kind {
+        K::Down(Left) => at.map(Mouse::Down),
+        K::Drag(Left) => at.map(Mouse::Drag),
+        K::Up(Left) => Some(Mouse::Up(at.unwrap_or_default())),
+        _ => None,
     }
 }
 
@@ -140,7 +158,11 @@ pub(super) fn show(
     let mut playout = Playout::new(args.playout);
     let mut snap_next = false;
     let mut terminal = ratatui::try_init()?;
-    let _guard = TerminalGuard;
+    let _guard = TerminalGuard { mouse: control };
+    if control {
+        // The mouse drags bodies (left button), as a finger does on the web page.
+        crossterm::execute!(std::io::stdout(), crossterm::event::EnableMouseCapture)?;
+    }
     let stop = Arc::new(AtomicBool::new(false));
     let input = {
         let (tx, stop) = (tx.clone(), stop.clone());
@@ -256,12 +278,25 @@ pub(super) fn show(
                         _ => {}
                     }
                 }
+                Msg::Input(crossterm::event::Event::Mouse(m)) if control => {
+                    let area = terminal.get_frame().area();
+                    let at = join
+                        .view()
+                        .and_then(|v| cell_to_world(v, area, m.column, m.row));
+                    let action = mouse_action(m.kind, at);
+                    if let Some(put) = action.and_then(|a| driver.mouse(a, keys, join.view())) {
+                        send(rt, session, put);
+                    }
+                }
                 Msg::Input(_) => dirty = true, // resize and the like: redraw
                 Msg::Quit => quit = true,
             }
         }
         if quit {
             break Ok(());
+        }
+        if let Some(put) = driver.keepalive(keys) {
+            send(rt, session, put);
         }
         if status.alive && join.view().is_none() && !asking && Instant::now() >= retry_at {
             asking = true;

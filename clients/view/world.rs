@@ -32,6 +32,12 @@ pub struct ViewBody {
 }
 
 impl ViewBody {
+    /// For tests: a body as the scene reply gives it.
+    #[cfg(test)]
+    pub(crate) fn from_info(info: BodyInfo) -> ViewBody {
+        ViewBody::new(info, 0)
+    }
+
     fn new(info: BodyInfo, since: u64) -> ViewBody {
         ViewBody {
             x: info.position.x,

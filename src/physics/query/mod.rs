@@ -125,22 +125,30 @@ pub(crate) fn overlaps_body<'a>(
 }
 
 /// Where `probe` (a rounded core in the world) moved by `d` first meets one of `body`'s
-/// shapes that `filter` sees within [0, max] of `d`: the shape, the fraction, the point on
-/// the shape's surface and its normal.
+/// shapes that `filter` sees within [0, max] of `d`.
 pub(crate) fn cast_body(
     body: &Body,
     probe: &Rounded,
-    (d, max): (Vec2, Real),
+    d: Vec2,
+    max: Real,
     filter: &QueryFilter,
-) -> Option<(u32, Real, Vec2, Vec2)> {
+) -> Option<RayHit> {
     shapes_of(body)
         .filter(|(_, _, _, f)| filter.sees(f))
         .filter_map(|(i, shape, xf, _)| {
-            let target = rounded(shape, xf);
-            let (fraction, point, normal) = cast(probe, &target, d, max)?;
-            Some((i, fraction, point, normal))
+            let (fraction, point, normal) = cast(probe, &rounded(shape, xf), d, max)?;
+            let shape = ShapeRef {
+                body: body.id(),
+                shape: i,
+            };
+            Some(RayHit {
+                shape,
+                point,
+                normal,
+                fraction,
+            })
         })
-        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .min_by(|a, b| a.fraction.total_cmp(&b.fraction))
 }
 
 /// Where `probe` moved by `d` first meets `target` within [0, max]: the fraction, the point on

@@ -244,20 +244,9 @@ impl<'a> Query<'a> {
                 return true;
             };
             let max = best.map_or(1.0, |b| b.fraction);
-            if let Some((i, fraction, point, normal)) =
-                query::cast_body(body, &probe, (translation, max), &filter)
-            {
-                if better(&best, fraction, body, i) {
-                    let shape = ShapeRef {
-                        body: body.id(),
-                        shape: i,
-                    };
-                    best = Some(RayHit {
-                        shape,
-                        point,
-                        normal,
-                        fraction,
-                    });
+            if let Some(hit) = query::cast_body(body, &probe, translation, max, &filter) {
+                if better(&best, hit.fraction, body, hit.shape.shape) {
+                    best = Some(hit);
                 }
             }
             true

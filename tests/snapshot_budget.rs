@@ -85,10 +85,15 @@ fn measure(scene: &str, frames: u64) -> Bytes {
     b
 }
 
+/// Bytes a body that moved since the previous frame, in deltas, headers left out.
+fn per_moved(b: &Bytes) -> f64 {
+    b.delta_entry_bytes as f64 / b.moving.max(1) as f64
+}
+
 /// Keyframe bytes a body and delta bytes a listed body, headers left out.
 fn report(scene: &str, b: &Bytes) -> (f64, f64) {
     let per_key = b.keyframe_entry_bytes as f64 / b.keyframe_bodies as f64;
-    let per_moving = b.delta_entry_bytes as f64 / b.moving.max(1) as f64;
+    let per_moving = per_moved(b);
     let per_listed = b.delta_entry_bytes as f64 / b.listed.max(1) as f64;
     println!(
         "{scene}: keyframes {per_key:.2} B/body ({:.2} with the header, {} keyframes); \
@@ -141,4 +146,26 @@ fn a_settling_pyramid_fits_the_byte_budget_and_rest_costs_nothing() {
         .quiet_delta_bytes
         .iter()
         .all(|&n| n <= 1 + 2 + 8 + 8 + 1 + 1 + 1 + 1));
+}
+
+/// docs/protocol.md's "What it costs" and the README state these runs' figures, to the
+/// hundredth.
+#[test]
+fn the_byte_figures_the_docs_state_are_the_measured_ones() {
+    let shapes = measure("shapes.toml", 600);
+    let (key, carried) = report("shapes", &shapes);
+    let pyramid = measure("pyramid.toml", 1200);
+    let (pkey, pcarried) = report("pyramid", &pyramid);
+    let protocol = common::read_repo_file("docs/protocol.md").replace('\n', " ");
+    let stated = [
+        format!("takes {key:.2} bytes a body in keyframes and {carried:.2} bytes per body a delta carries"),
+        format!("({:.2} per body whose pose changed", per_moved(&shapes)),
+        format!("the 210-box `pyramid.toml` (20 s) {pkey:.2} and {pcarried:.2}."),
+    ];
+    for s in &stated {
+        assert!(protocol.contains(s), "docs/protocol.md does not say {s:?}");
+    }
+    let readme = common::read_repo_file("README.md").replace('\n', " ");
+    let s = format!("{key:.2} bytes a body in keyframes and {carried:.2} per body a delta carries");
+    assert!(readme.contains(&s), "README.md does not say {s:?}");
 }

@@ -28,7 +28,7 @@ pub mod render;
 mod terminal;
 pub mod world;
 
-use crate::protocol::{decode, SceneState};
+use crate::protocol::{decode, Message, SceneState, SceneWithJoints};
 use std::time::Duration;
 use zenoh::Session;
 #[cfg(feature = "tui")]
@@ -101,7 +101,7 @@ enum Msg {
     Snapshot(SnapshotFrame, Instant, Option<Duration>),
     Event(Event),
     Alive(bool),
-    Scene(Result<SceneState, String>),
+    Scene(Result<SceneWithJoints, String>),
     Input(crossterm::event::Event),
     Quit,
 }
@@ -181,16 +181,28 @@ pub fn run(
 
 /// Ask `…/scene` once; the first good reply wins.
 pub async fn query_scene(session: &Session, key: String) -> Result<SceneState, String> {
+    query_one(session, key).await
+}
+
+/// Ask `…/scene?joints` once (the state and every joint); the first good reply wins.
+pub async fn query_scene_with_joints(
+    session: &Session,
+    key: String,
+) -> Result<SceneWithJoints, String> {
+    query_one(session, format!("{key}?joints")).await
+}
+
+/// Ask `selector` once and decode the first good reply as `M`.
+async fn query_one<M: Message>(session: &Session, selector: String) -> Result<M, String> {
     let replies = session
-        .get(key)
+        .get(selector)
         .timeout(Duration::from_secs(2))
         .await
         .map_err(|e| e.to_string())?;
     while let Ok(reply) = replies.recv_async().await {
         match reply.into_result() {
             Ok(sample) => {
-                return decode::<SceneState>(&sample.payload().to_bytes())
-                    .map_err(|e| e.to_string())
+                return decode::<M>(&sample.payload().to_bytes()).map_err(|e| e.to_string())
             }
             Err(e) => tracing::debug!("scene reply error: {e:?}"),
         }

@@ -90,6 +90,11 @@ enum Fill {
     /// Any other polygon (not convex, winding round more than once, no area, under three
     /// vertices): even-odd inside, or within the tolerance of an edge.
     General { vertices: Vec<(f64, f64)> },
+    /// Several shapes, each with its place in the body's frame: `(x, y, cos, sin)` of its
+    /// offset and angle.
+    Compound {
+        parts: Vec<((f64, f64, f64, f64), Fill)>,
+    },
 }
 
 impl Fill {
@@ -117,6 +122,16 @@ impl Fill {
                 a: (a.x as f64, a.y as f64),
                 b: (b.x as f64, b.y as f64),
                 r: *radius as f64,
+            },
+            ShapeSpec::Compound { parts } => Fill::Compound {
+                parts: parts
+                    .iter()
+                    .map(|p| {
+                        let (s, c) = (p.angle as f64).sin_cos();
+                        let place = (p.offset.x as f64, p.offset.y as f64, c, s);
+                        (place, Fill::of(&p.shape))
+                    })
+                    .collect(),
             },
         }
     }
@@ -156,6 +171,10 @@ impl Fill {
             Fill::General { vertices } => {
                 point_in_polygon(vertices, x, y) || near_outline(vertices, x, y, tol)
             }
+            Fill::Compound { parts } => parts.iter().any(|&((ox, oy, c, s), ref fill)| {
+                let (dx, dy) = (x - ox, y - oy);
+                fill.contains(c * dx + s * dy, -s * dx + c * dy, tol, dot)
+            }),
         }
     }
 }

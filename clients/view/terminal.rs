@@ -7,7 +7,7 @@ use super::control::{key_command, Control, Key, Mouse, Put, KEY_HELP};
 use super::playout::{Playout, Xya};
 use super::render::{cell_to_world, render, Status};
 use super::world::{Applied, Join, Received, WorldView};
-use super::{query_scene, Msg};
+use super::{query_scene_with_joints, Msg};
 use crate::client::tilt::keyboard::KeyCommand;
 use crate::client::ClientError;
 use crate::protocol::snapshot::Decoded;
@@ -258,7 +258,7 @@ pub(super) fn show(
                 }
                 Msg::Scene(Ok(state)) => {
                     asking = false;
-                    join.scene(state);
+                    join.scene_with_joints(state);
                     playout.clear();
                     dirty = true;
                 }
@@ -302,7 +302,7 @@ pub(super) fn show(
             asking = true;
             let (session, key, tx) = (session.clone(), keys.scene(), tx.clone());
             rt.spawn(async move {
-                let _ = tx.send(Msg::Scene(query_scene(&session, key).await));
+                let _ = tx.send(Msg::Scene(query_scene_with_joints(&session, key).await));
             });
         }
         if dirty && last_draw.elapsed() >= FRAME {

@@ -5,7 +5,8 @@
 //! `Added` event of its body is kept until the event comes.
 
 use crate::protocol::{
-    BodyInfo, BodyRef, Event, EventKind, Pose, SceneState, ShapeSpec, Snapshot, Vector,
+    BodyInfo, BodyRef, Event, EventKind, JointEnd, JointInfo, JointRef, JointSpec, Pose,
+    SceneState, SceneWithJoints, ShapeSpec, Snapshot, Vector,
 };
 use std::collections::{BTreeMap, VecDeque};
 
@@ -53,8 +54,16 @@ impl ViewBody {
     /// corners, a disc, a capsule's two end discs, a polygon's vertices). `None` when there is
     /// nothing to bound (a polygon without vertices) or a number is not finite.
     pub fn aabb(&self) -> Option<(f32, f32, f32, f32)> {
-        let (s, c) = self.angle.sin_cos();
-        let (hx, hy) = match &self.info.shape {
+        shape_aabb(&self.info.shape, self.x, self.y, self.angle)
+    }
+}
+
+/// The bounding box of `shape` placed at `(x, y)` turned by `angle` (m, rad): see
+/// [`ViewBody::aabb`]; a compound's is the union of its parts'.
+fn shape_aabb(shape: &ShapeSpec, x: f32, y: f32, angle: f32) -> Option<(f32, f32, f32, f32)> {
+    {
+        let (s, c) = angle.sin_cos();
+        let (hx, hy) = match shape {
             ShapeSpec::Rect { width, height } => {
                 let (hw, hh) = (width * 0.5, height * 0.5);
                 (hw * c.abs() + hh * s.abs(), hw * s.abs() + hh * c.abs())
@@ -67,7 +76,7 @@ impl ViewBody {
             ShapeSpec::Polygon { vertices } => {
                 let mut it = vertices
                     .iter()
-                    .map(|v| (self.x + c * v.x - s * v.y, self.y + s * v.x + c * v.y));
+                    .map(|v| (x + c * v.x - s * v.y, y + s * v.x + c * v.y));
                 let (x0, y0) = it.next()?;
                 let b = it.fold((x0, y0, x0, y0), |(a, b, c, d), (x, y)| {
                     (a.min(x), b.min(y), c.max(x), d.max(y))
@@ -75,9 +84,8 @@ impl ViewBody {
                 return finite(b);
             }
             ShapeSpec::Segment { a, b, radius, .. } => {
-                let at = |v: &crate::protocol::Vector| {
-                    (self.x + c * v.x - s * v.y, self.y + s * v.x + c * v.y)
-                };
+                let at =
+                    |v: &crate::protocol::Vector| (x + c * v.x - s * v.y, y + s * v.x + c * v.y);
                 let ((ax, ay), (bx, by)) = (at(a), at(b));
                 return finite((
                     ax.min(bx) - radius,
@@ -86,8 +94,20 @@ impl ViewBody {
                     ay.max(by) + radius,
                 ));
             }
+            ShapeSpec::Compound { parts } => {
+                let mut boxes = parts.iter().map(|p| {
+                    let (px, py) = (p.offset.x, p.offset.y);
+                    let at = (x + c * px - s * py, y + s * px + c * py);
+                    shape_aabb(&p.shape, at.0, at.1, angle + p.angle)
+                });
+                let first = boxes.next()??;
+                return boxes.try_fold(first, |(a, b, c, d), next| {
+                    let (e, f, g, h) = next?;
+                    Some((a.min(e), b.min(f), c.max(g), d.max(h)))
+                });
+            }
         };
-        finite((self.x - hx, self.y - hy, self.x + hx, self.y + hy))
+        finite((x - hx, y - hy, x + hx, y + hy))
     }
 }
 
@@ -109,6 +129,7 @@ pub fn describe_shape(shape: &ShapeSpec) -> String {
             let length = (b.x - a.x).hypot(b.y - a.y);
             format!("segment l={length} r={radius}")
         }
+        ShapeSpec::Compound { parts } => format!("compound of {} shapes", parts.len()),
     }
 }
 
@@ -143,6 +164,8 @@ pub struct WorldView {
     pub gravity: Vector,
     /// Every body, static ones included.
     pub bodies: BTreeMap<BodyRef, ViewBody>,
+    /// Every joint (from a `…/scene?joints` reply and the events after it).
+    pub joints: BTreeMap<JointRef, JointSpec>,
     /// The reason of the latest `Rejected` event, if any.
     pub last_rejected: Option<String>,
     /// Events at or before this frame are already included.
@@ -168,6 +191,7 @@ impl WorldView {
             time: state.time,
             gravity: state.gravity,
             bodies,
+            joints: BTreeMap::new(),
             last_rejected: None,
             base: state.frame,
             min_frame: 0,
@@ -223,6 +247,25 @@ impl WorldView {
                     self.bodies.remove(id);
                     self.pending.remove(id);
                 }
+                // A body's joints go with it.
+                let gone = |e: &JointEnd| matches!(e, JointEnd::Live(id) if ids.contains(id));
+                self.joints.retain(|_, j| !gone(&j.a) && !gone(&j.b));
+            }
+            EventKind::Built { bodies, joints } => {
+                for info in bodies {
+                    self.insert(info.clone(), e.frame);
+                }
+                self.add_joints(joints);
+            }
+            EventKind::JointsRemoved { ids } => {
+                for id in ids {
+                    self.joints.remove(id);
+                }
+            }
+            EventKind::JointsBroken { joints } => {
+                for j in joints {
+                    self.joints.remove(&j.id);
+                }
             }
             EventKind::Reset {
                 scene,
@@ -232,6 +275,7 @@ impl WorldView {
                 self.scene = scene.clone();
                 self.gravity = *gravity;
                 self.bodies.clear();
+                self.joints.clear();
                 self.min_frame = e.frame;
                 self.pending.retain(|_, (f, _)| *f >= e.frame);
                 for info in bodies {
@@ -244,6 +288,30 @@ impl WorldView {
             // What touched or entered what changes nothing the viewer draws.
             EventKind::Contacts { .. } | EventKind::Hits { .. } | EventKind::Sensors { .. } => {}
         }
+    }
+
+    /// Add joints as a `…/scene?joints` reply or a `Built` event lists them.
+    pub fn add_joints(&mut self, joints: &[JointInfo]) {
+        for j in joints {
+            self.joints.insert(j.id, j.joint.clone());
+        }
+    }
+
+    /// A joint's two anchors in world coordinates (m) at the bodies' current poses; None when
+    /// a body it names is not known.
+    pub fn joint_anchors(&self, j: &JointSpec) -> Option<((f32, f32), (f32, f32))> {
+        let at = |end: &JointEnd, local: Vector| match end {
+            JointEnd::World => Some((local.x, local.y)),
+            JointEnd::Live(id) => self.bodies.get(id).map(|b| {
+                let (s, c) = b.angle.sin_cos();
+                (
+                    b.x + c * local.x - s * local.y,
+                    b.y + s * local.x + c * local.y,
+                )
+            }),
+            JointEnd::New(_) => None,
+        };
+        Some((at(&j.a, j.anchor_a)?, at(&j.b, j.anchor_b)?))
     }
 
     fn insert(&mut self, info: BodyInfo, since: u64) {
@@ -310,7 +378,16 @@ impl Join {
 
     /// The scene reply: start from it and replay what came before it.
     pub fn scene(&mut self, state: SceneState) {
-        let mut view = WorldView::from_scene(state);
+        self.scene_with_joints(SceneWithJoints {
+            scene: state,
+            joints: Vec::new(),
+        });
+    }
+
+    /// The `…/scene?joints` reply: as [`Join::scene`], with the joints.
+    pub fn scene_with_joints(&mut self, state: SceneWithJoints) {
+        let mut view = WorldView::from_scene(state.scene);
+        view.add_joints(&state.joints);
         for r in self.early.drain(..) {
             match r {
                 Received::Snapshot(s) => {

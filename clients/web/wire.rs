@@ -9,7 +9,8 @@
 //! put on Zenoh; anything else is refused with a reason and changes nothing.
 
 use crate::protocol::{
-    self, CommandKey, DecodeError, Drag, Remove, Reset, SetGravity, SetVelocity, Spawn, Tilt,
+    self, Build, CommandKey, DecodeError, Drag, Remove, RemoveJoints, Reset, SetGravity,
+    SetVelocity, Spawn, Tilt,
 };
 use std::fmt;
 use std::time::Instant;
@@ -40,6 +41,13 @@ pub enum Tag {
     Velocity = 10,
     /// `…/drag` (page → gateway): a `Drag` (grab, move, release a body).
     Drag = 11,
+    /// `…/build` (page → gateway): a `Build` (bodies of several shapes, joints).
+    Build = 12,
+    /// `…/remove_joints` (page → gateway): a `RemoveJoints`.
+    RemoveJoints = 13,
+    /// `…/scene?joints` reply (gateway → page): a `SceneWithJoints`, sent where tag 4 was
+    /// before (2026-11-26).
+    SceneWithJoints = 14,
 }
 
 impl Tag {
@@ -57,6 +65,9 @@ impl Tag {
             9 => Tag::Reset,
             10 => Tag::Velocity,
             11 => Tag::Drag,
+            12 => Tag::Build,
+            13 => Tag::RemoveJoints,
+            14 => Tag::SceneWithJoints,
             _ => return None,
         })
     }
@@ -71,6 +82,8 @@ impl Tag {
             Tag::Reset => CommandKey::Reset,
             Tag::Velocity => CommandKey::Velocity,
             Tag::Drag => CommandKey::Drag,
+            Tag::Build => CommandKey::Build,
+            Tag::RemoveJoints => CommandKey::RemoveJoints,
             _ => return None,
         })
     }
@@ -225,6 +238,8 @@ pub fn check_upstream(bytes: &[u8], allow: &Allow) -> Result<Checked, Refusal> {
         CommandKey::Reset => recode::<Reset>(key, payload),
         CommandKey::Velocity => recode::<SetVelocity>(key, payload),
         CommandKey::Drag => recode::<Drag>(key, payload),
+        CommandKey::Build => recode::<Build>(key, payload),
+        CommandKey::RemoveJoints => recode::<RemoveJoints>(key, payload),
     }
 }
 

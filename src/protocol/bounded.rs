@@ -6,9 +6,11 @@
 //! the count refused (and the index of the spawn body being read) is left in a thread-local
 //! for [`super::decode`] to pick up.
 
+use super::build::{PartShape, PartSpec, MAX_PARTS};
 use super::messages::{SpawnBody, Vector};
 use crate::physics::convex::MAX_VERTICES;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::Deserialize;
 use std::cell::Cell;
 
 thread_local! {
@@ -16,12 +18,86 @@ thread_local! {
     static BODY_INDEX: Cell<Option<usize>> = const { Cell::new(None) };
     /// (body index, vertex count) of the polygon the current decode refused.
     static REFUSED: Cell<Option<(Option<usize>, usize)>> = const { Cell::new(None) };
+    /// Set while a compound's parts are read, so a compound inside one is refused at once
+    /// (nesting is never read deeper than that).
+    static IN_COMPOUND: Cell<bool> = const { Cell::new(false) };
+    /// What was wrong with a list of parts the current decode refused.
+    static REFUSED_PARTS: Cell<Option<&'static str>> = const { Cell::new(None) };
 }
 
 /// Forget what an earlier decode on this thread left (call before decoding).
 pub(super) fn reset() {
     BODY_INDEX.with(|c| c.set(None));
     REFUSED.with(|c| c.set(None));
+    IN_COMPOUND.with(|c| c.set(false));
+    REFUSED_PARTS.with(|c| c.set(None));
+}
+
+/// Why the last decode on this thread refused a list of parts, if it did.
+pub(super) fn take_refused_parts() -> Option<&'static str> {
+    REFUSED_PARTS.with(Cell::take)
+}
+
+/// Refuse a list of parts: note why for [`take_refused_parts`].
+fn refuse_parts<E: de::Error>(why: &'static str) -> E {
+    REFUSED_PARTS.with(|c| c.set(Some(why)));
+    E::custom(why)
+}
+
+/// Read up to [`MAX_PARTS`] elements, refusing a longer list by its claimed length before
+/// reading any.
+fn bounded_parts<'de, T: Deserialize<'de>, A: SeqAccess<'de>>(
+    mut seq: A,
+) -> Result<Vec<T>, A::Error> {
+    if seq.size_hint().is_some_and(|n| n > MAX_PARTS) {
+        return Err(refuse_parts("a body holds more than 16 parts (MAX_PARTS)"));
+    }
+    let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(0));
+    while let Some(p) = seq.next_element()? {
+        if out.len() == MAX_PARTS {
+            return Err(refuse_parts("a body holds more than 16 parts (MAX_PARTS)"));
+        }
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// Deserialize `BuildBody.parts`: at most [`MAX_PARTS`].
+pub(super) fn parts<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<PartSpec>, D::Error> {
+    struct Parts;
+    impl<'de> Visitor<'de> for Parts {
+        type Value = Vec<PartSpec>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            write!(f, "1 to {MAX_PARTS} parts")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Vec<PartSpec>, A::Error> {
+            bounded_parts(seq)
+        }
+    }
+    d.deserialize_seq(Parts)
+}
+
+/// Deserialize a compound's parts: at most [`MAX_PARTS`], none of them a compound (refused
+/// as soon as one starts, so a payload cannot nest compounds to exhaust the stack).
+pub(super) fn compound_parts<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<PartShape>, D::Error> {
+    struct Parts;
+    impl<'de> Visitor<'de> for Parts {
+        type Value = Vec<PartShape>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            write!(f, "2 to {MAX_PARTS} parts")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Vec<PartShape>, A::Error> {
+            bounded_parts(seq)
+        }
+    }
+    if IN_COMPOUND.with(|c| c.replace(true)) {
+        return Err(refuse_parts(
+            "a compound's part is itself a compound (parts do not nest)",
+        ));
+    }
+    let parts = d.deserialize_seq(Parts);
+    IN_COMPOUND.with(|c| c.set(false));
+    parts
 }
 
 /// The polygon the last decode on this thread refused, if any: the spawn body's index (when

@@ -55,6 +55,10 @@ command_keys! {
     Velocity => velocity,
     /// `…/drag` (grab, move and release bodies)
     Drag => drag,
+    /// `…/build` (bodies of several shapes, and joints)
+    Build => build,
+    /// `…/remove_joints`
+    RemoveJoints => remove_joints,
 }
 
 impl CommandKey {

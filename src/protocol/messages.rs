@@ -103,6 +103,14 @@ pub enum ShapeSpec {
         /// Push only to the left of a -> b.
         one_sided: bool,
     },
+    /// Variant 5: a body of several shapes, each placed in the body's frame (2 to
+    /// [`super::build::MAX_PARTS`], none itself a compound). The daemon describes every body
+    /// of more than one shape so; it is spawned on `…/build`, never on `…/spawn`. Appended.
+    Compound {
+        /// The shapes.
+        #[serde(deserialize_with = "super::bounded::compound_parts")]
+        parts: Vec<super::build::PartShape>,
+    },
 }
 
 /// One body's pose in a [`Snapshot`], as a client reconstructs it from the quantized wire
@@ -353,6 +361,24 @@ pub enum EventKind {
         end: Vec<ShapePair>,
         /// How many more there were than the per-frame cap let through.
         dropped: u32,
+    },
+    /// 7: bodies and joints were added by one `…/build` command (or, with no bodies, the
+    /// joints of the scene a `Reset` just loaded). Appended.
+    Built {
+        /// The new bodies.
+        bodies: Vec<BodyInfo>,
+        /// The new joints.
+        joints: Vec<super::build::JointInfo>,
+    },
+    /// 8: joints were removed by one `…/remove_joints` command. Appended.
+    JointsRemoved {
+        /// Their ids.
+        ids: Vec<super::build::JointRef>,
+    },
+    /// 9: joints broke in the step of `frame`, in id order. Appended.
+    JointsBroken {
+        /// The joints, with what broke them.
+        joints: Vec<super::build::BrokenJoint>,
     },
 }
 

@@ -9,11 +9,17 @@
 //! [`decode`] never panics: it returns a [`DecodeError`] saying what was wrong.
 
 mod bounded;
+pub mod build;
 pub mod keys;
 pub mod messages;
 pub mod snapshot;
 pub mod tilt;
 
+pub use build::{
+    BrokenJoint, Build, BuildBody, FilterSpec, JointEnd, JointInfo, JointKindSpec, JointRef,
+    JointSpec, LimitSpec, Motion, MotorSpec, PartShape, PartSpec, RemoveJoints, SceneWithJoints,
+    SpringSpec, MAX_PARTS,
+};
 pub use keys::{CommandKey, KeyError, Keys, DEFAULT_WORLD};
 pub use messages::{
     BodyInfo, BodyRef, Colour, Event, EventKind, Orientation, Pose, Remove, Reset, SceneState,
@@ -47,6 +53,7 @@ macro_rules! messages {
 }
 messages!(SetGravity, Tilt, Spawn, Remove, Reset, Event, SceneState, Stats);
 messages!(SetVelocity, Drag, WorldQuery, QueryAnswer, QueryFilterSpec);
+messages!(Build, RemoveJoints, SceneWithJoints);
 
 /// Why a payload could not be decoded.
 #[derive(Clone, Debug, PartialEq, Eq, Error)]
@@ -151,6 +158,9 @@ pub fn decode<M: Message>(bytes: &[u8]) -> Result<M, DecodeError> {
         use postcard::Error as P;
         if let Some((body, count)) = bounded::take_refused() {
             return DecodeError::TooManyVertices { body, count };
+        }
+        if let Some(what) = bounded::take_refused_parts() {
+            return DecodeError::Malformed { message, what };
         }
         let malformed = |what| DecodeError::Malformed { message, what };
         match e {

@@ -5,7 +5,7 @@
 use super::config::Limits;
 use super::wire::parse_command;
 use crate::physics::BodyDef;
-use crate::protocol::{BodyRef, Colour, CommandKey, Drag, Tilt, Vector};
+use crate::protocol::{BodyRef, Build, Colour, CommandKey, Drag, JointRef, Tilt, Vector};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{SyncSender, TrySendError};
 use std::sync::Arc;
@@ -35,6 +35,12 @@ pub enum Command {
     },
     /// Grab, move or release a body (finite numbers within the limits' coordinates). Appended.
     Drag(Drag),
+    /// Add bodies and joints, all or nothing: the message as sent (checked by
+    /// `wire::build::check_build`), turned into the engine's definitions when applied, so the
+    /// journal keeps what arrived. Appended.
+    Build(Build),
+    /// Remove joints, all or nothing: ids as sent, resolved when applied. Appended.
+    RemoveJoints(Vec<JointRef>),
 }
 
 /// A body to add, validated.

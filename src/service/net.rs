@@ -285,14 +285,15 @@ impl Server {
                     let Ok(state) = scene_queries.ask().await else {
                         continue; // the tick loop stopped
                     };
-                    let payload = match encode(&*state) {
-                        Ok(p) => p,
-                        Err(e) => {
-                            tracing::error!("cannot encode the scene: {e}");
-                            continue;
-                        }
+                    // `…/scene?joints` gets the joints too; a plain `…/scene` the state alone.
+                    let (Ok(plain), Ok(with_joints)) = (encode(&state.scene), encode(&*state))
+                    else {
+                        tracing::error!("cannot encode the scene");
+                        continue;
                     };
                     for query in queries {
+                        let joints = query.parameters().contains_key("joints");
+                        let payload = if joints { &with_joints } else { &plain };
                         if let Err(e) = query.reply(&scene_key, payload.clone()).await {
                             tracing::warn!("cannot reply to a scene query: {e}");
                         }

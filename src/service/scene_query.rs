@@ -3,7 +3,7 @@
 //! ([`SceneQueries::answer`]) and never otherwise: the World is never shared or locked, and
 //! a tick with nobody asking costs one atomic load.
 
-use crate::protocol::SceneState;
+use crate::protocol::SceneWithJoints;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use tokio::sync::oneshot;
@@ -13,12 +13,12 @@ use tokio::sync::oneshot;
 pub(crate) struct SceneQueries {
     /// Set by [`SceneQueries::ask`], cleared by [`SceneQueries::answer`].
     asked: AtomicBool,
-    waiting: Mutex<Vec<oneshot::Sender<Arc<SceneState>>>>,
+    waiting: Mutex<Vec<oneshot::Sender<Arc<SceneWithJoints>>>>,
 }
 
 impl SceneQueries {
     /// Wait for the state after the last step. The receiver fails if the tick loop stops first.
-    pub(crate) fn ask(&self) -> oneshot::Receiver<Arc<SceneState>> {
+    pub(crate) fn ask(&self) -> oneshot::Receiver<Arc<SceneWithJoints>> {
         let (tx, rx) = oneshot::channel();
         self.waiting
             .lock()
@@ -29,7 +29,7 @@ impl SceneQueries {
     }
 
     /// On the tick thread: if anyone asked, `build` the state once and hand it to them all.
-    pub(crate) fn answer(&self, build: impl FnOnce() -> SceneState) {
+    pub(crate) fn answer(&self, build: impl FnOnce() -> SceneWithJoints) {
         if !self.asked.swap(false, Ordering::Acquire) {
             return;
         }
@@ -47,20 +47,24 @@ impl SceneQueries {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::Vector;
+    use crate::protocol::{SceneState, Vector};
 
     /// An empty world at `frame`.
-    fn state(frame: u64) -> SceneState {
+    fn state(frame: u64) -> SceneWithJoints {
         let (world, scene) = (String::from("w"), String::from("s"));
         let time = frame as f64 / 60.0;
         let (gravity, bodies) = (Vector::new(0.0, -9.81), Vec::new());
-        SceneState {
+        let scene = SceneState {
             frame,
             time,
             world,
             scene,
             gravity,
             bodies,
+        };
+        SceneWithJoints {
+            scene,
+            joints: Vec::new(),
         }
     }
 
@@ -79,8 +83,8 @@ mod tests {
             state(2)
         });
         assert_eq!(built, 1);
-        assert_eq!(a.blocking_recv().unwrap().frame, 2);
-        assert_eq!(b.blocking_recv().unwrap().frame, 2);
+        assert_eq!(a.blocking_recv().unwrap().scene.frame, 2);
+        assert_eq!(b.blocking_recv().unwrap().scene.frame, 2);
         q.answer(|| {
             built += 1;
             state(3)

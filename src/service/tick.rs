@@ -184,7 +184,7 @@ pub(crate) fn run_shared<O: Outputs>(
     while !stop.load(Ordering::Relaxed) {
         // 0. Late joiners: the state after the last step, built only when one is waiting.
         //    Asked between ticks too: the wait below is sliced into 50 ms.
-        shared.scene_queries.answer(|| sim.scene_state());
+        shared.scene_queries.answer(|| sim.scene_with_joints());
         shared.world_queries.answer(|q| sim.answer_query(q));
         let due = deadline(k);
         let now = Instant::now();

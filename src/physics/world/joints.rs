@@ -36,6 +36,8 @@ pub(super) struct Joints {
     pub sorted_kept: bool,
     /// The joints that broke in the last step, in id order.
     pub broken: Vec<JointId>,
+    /// Their force (N) and torque (N m) in that step, in the same order.
+    pub broken_loads: Vec<(Vec2, Real)>,
 }
 
 impl Joints {
@@ -201,6 +203,13 @@ impl World {
             .and_then(|s| s.joint.as_ref())
     }
 
+    /// The id of the live joint in slot `index` with reuse count `generation`, if there is
+    /// one (how a joint named on the wire by its two numbers is found without a search).
+    pub fn live_joint_id(&self, index: u32, generation: u32) -> Option<JointId> {
+        let id = JointId { index, generation };
+        self.joint(id).map(|_| id)
+    }
+
     /// Every joint, in slot order.
     pub fn joints(&self) -> impl Iterator<Item = &Joint> + '_ {
         self.joints.slots.iter().filter_map(|s| s.joint.as_ref())
@@ -215,6 +224,12 @@ impl World {
     /// or torque), in id order. They are gone from the World.
     pub fn broken_joints(&self) -> &[JointId] {
         &self.joints.broken
+    }
+
+    /// The force (N) and torque (N m) that broke each of [`World::broken_joints`], in the
+    /// same order: the step's mean reaction, as [`Joint::reaction_force`] reads it.
+    pub fn broken_joint_loads(&self) -> &[(Vec2, Real)] {
+        &self.joints.broken_loads
     }
 
     /// Move a target joint's target (world point, m; held in A's frame when A is a body); its
@@ -384,6 +399,7 @@ impl World {
     #[inline(never)]
     pub(super) fn finish_joints(&mut self) {
         self.joints.broken.clear();
+        self.joints.broken_loads.clear();
         let set = &self.joints.constraints;
         for (index, k) in set.cold.iter().enumerate() {
             let j = self.joints.slots[k.slot as usize].joint.as_mut();
@@ -395,8 +411,10 @@ impl World {
             }
         }
         self.joints.broken.sort_unstable();
-        for id in self.joints.broken.clone() {
-            self.remove_joint(id).expect("live");
+        for i in 0..self.joints.broken.len() {
+            let id = self.joints.broken[i];
+            let j = self.remove_joint(id).expect("live");
+            self.joints.broken_loads.push((j.force, j.torque));
         }
     }
 }

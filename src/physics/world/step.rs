@@ -48,6 +48,7 @@ impl World {
                 self.confirm_hits();
             }
             self.joints.broken.clear();
+            self.joints.broken_loads.clear();
             if !self.joints.constraints.is_empty() {
                 self.finish_joints();
             }

@@ -4,9 +4,12 @@
 
 use super::Simulation;
 use crate::physics::PhysicsError;
-use crate::protocol::{BodyRef, CommandKey, Event, EventKind, Vector};
+use crate::physics::{BodyId, JointId};
+use crate::protocol::{
+    BodyInfo, BodyRef, Build, CommandKey, Event, EventKind, JointEnd, JointRef, Motion, Vector,
+};
 use crate::service::command::{Command, Incoming, SpawnDef};
-use crate::service::wire::{body_info, vec2, vector};
+use crate::service::wire::{body_info, build, vec2, vector};
 use std::collections::HashSet;
 
 impl Simulation {
@@ -62,6 +65,8 @@ impl Simulation {
                 .set_velocity(id, velocity, angular_velocity)
                 .map(|()| None),
             Command::Drag(d) => self.drag(d).map(|()| None),
+            Command::Build(b) => self.build(b).map(Some),
+            Command::RemoveJoints(ids) => self.remove_joints(ids).map(Some),
         };
         match result {
             Ok(kind) => {
@@ -77,6 +82,16 @@ impl Simulation {
     }
 
     fn spawn(&mut self, defs: Vec<SpawnDef>) -> Result<EventKind, String> {
+        self.check_spawn_room(defs.len())?;
+        let ids = self.add_bodies(&defs)?;
+        self.spawn_frames.push_back(self.next_frame());
+        let bodies = self.describe_added(defs, &ids);
+        Ok(EventKind::Added { bodies })
+    }
+
+    /// Refuse a spawn or build over the rate limit, or one that would make more than
+    /// `limits.max_bodies` bodies.
+    fn check_spawn_room(&mut self, new_bodies: usize) -> Result<(), String> {
         let frame = self.next_frame();
         while self
             .spawn_frames
@@ -91,14 +106,18 @@ impl Simulation {
                 "rate limit: limits.max_spawns_per_second = {max} spawns already applied in the last second"
             ));
         }
-        let after = self.world.body_count() + defs.len();
+        let after = self.world.body_count() + new_bodies;
         if after > self.limits.max_bodies as usize {
             return Err(format!(
-                "{} bodies would make {after}, more than limits.max_bodies = {}",
-                defs.len(),
+                "{new_bodies} bodies would make {after}, more than limits.max_bodies = {}",
                 self.limits.max_bodies
             ));
         }
+        Ok(())
+    }
+
+    /// Add checked bodies, all or nothing.
+    fn add_bodies(&mut self, defs: &[SpawnDef]) -> Result<Vec<BodyId>, String> {
         let mut ids = Vec::with_capacity(defs.len());
         for (i, d) in defs.iter().enumerate() {
             match self.world.add_body(&d.def) {
@@ -110,14 +129,135 @@ impl Simulation {
                 }
             }
         }
-        self.spawn_frames.push_back(frame);
+        Ok(ids)
+    }
+
+    /// Name and colour the bodies just added, and describe them for the event.
+    fn describe_added(&mut self, defs: Vec<SpawnDef>, ids: &[BodyId]) -> Vec<BodyInfo> {
         let mut bodies = Vec::with_capacity(ids.len());
-        for (d, id) in defs.into_iter().zip(ids) {
+        for (d, &id) in defs.into_iter().zip(ids) {
             self.describe(id, d.name, d.colour);
             let body = self.world.body(id).expect("just added");
             bodies.push(body_info(body, &self.bodies.meta_of(body)));
         }
-        Ok(EventKind::Added { bodies })
+        bodies
+    }
+
+    /// Add a build's bodies and joints, all or nothing. Everything that can be refused is
+    /// checked before anything is added; what is left (a World limit) is undone.
+    fn build(&mut self, b: Build) -> Result<EventKind, String> {
+        let defs = b
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, body)| {
+                build::body_def(body, &self.limits).map_err(|e| format!("bodies[{i}]: {e}"))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        if !defs.is_empty() {
+            self.check_spawn_room(defs.len())?;
+        }
+        let joints = self.world.joint_count() + b.joints.len();
+        if joints > self.limits.max_bodies as usize {
+            return Err(format!(
+                "{} joints would make {joints}, more than limits.max_bodies = {} (which bounds \
+                 joints too)",
+                b.joints.len(),
+                self.limits.max_bodies
+            ));
+        }
+        let ends = self.live_ends(&b)?;
+        let ids = self.add_bodies(&defs)?;
+        let mut joint_ids = Vec::with_capacity(b.joints.len());
+        for (i, (j, &(a, bb))) in b.joints.iter().zip(&ends).enumerate() {
+            let pick = |e: Result<BodyId, u32>| e.unwrap_or_else(|n| ids[n as usize]);
+            let def = build::joint_def(j, a.map(pick), pick(bb));
+            match self.world.add_joint(&def) {
+                Ok(id) => joint_ids.push(id),
+                Err(e) => {
+                    for &id in &joint_ids {
+                        let _ = self.world.remove_joint(id);
+                    }
+                    let _ = self.world.remove_bodies(&ids);
+                    return Err(format!("joints[{i}]: {e}"));
+                }
+            }
+        }
+        if !defs.is_empty() {
+            self.spawn_frames.push_back(self.next_frame());
+        }
+        let bodies = self.describe_added(defs, &ids);
+        let joints = joint_ids
+            .iter()
+            .filter_map(|&id| self.world.joint(id).and_then(build::joint_info))
+            .collect();
+        Ok(EventKind::Built { bodies, joints })
+    }
+
+    /// Each joint's ends: a live body's id (`Ok`), a new body's index (`Err`), or None for the
+    /// world. Refuses a live id that names no body, and a joint whose ends are all static or
+    /// kinematic.
+    #[allow(clippy::type_complexity)]
+    fn live_ends(
+        &self,
+        b: &Build,
+    ) -> Result<Vec<(Option<Result<BodyId, u32>>, Result<BodyId, u32>)>, String> {
+        let end =
+            |i: usize, field: &str, e: JointEnd| -> Result<Option<Result<BodyId, u32>>, String> {
+                Ok(match e {
+                    JointEnd::World => None,
+                    JointEnd::New(n) => Some(Err(n)),
+                    JointEnd::Live(r) => Some(Ok(self
+                        .world
+                        .live_id(r.index, r.generation)
+                        .ok_or_else(|| format!("joints[{i}]: {field}: no body with id {r}"))?)),
+                })
+            };
+        let moves = |e: &Option<Result<BodyId, u32>>| match e {
+            None => false,
+            Some(Err(n)) => b.bodies[*n as usize].motion == Motion::Dynamic,
+            Some(Ok(id)) => self.world.body(*id).is_some_and(|b| b.inv_mass() > 0.0),
+        };
+        let mut out = Vec::with_capacity(b.joints.len());
+        for (i, j) in b.joints.iter().enumerate() {
+            let (a, bb) = (end(i, "a", j.a)?, end(i, "b", j.b)?);
+            let bb = bb.expect("checked when parsed: b is a body");
+            if a == Some(bb) {
+                return Err(format!("joints[{i}]: a and b are the same body"));
+            }
+            if !moves(&a) && !moves(&Some(bb)) {
+                return Err(format!(
+                    "joints[{i}]: neither a nor b is a dynamic body: a joint must move something"
+                ));
+            }
+            out.push((a, bb));
+        }
+        Ok(out)
+    }
+
+    /// Remove joints by wire id, all or nothing (a drag hand's joint is not the client's to
+    /// remove).
+    fn remove_joints(&mut self, refs: Vec<JointRef>) -> Result<EventKind, String> {
+        let mut ids = Vec::with_capacity(refs.len());
+        let mut seen = HashSet::with_capacity(refs.len());
+        let hands: HashSet<JointId> = self.hands.joints().collect();
+        for (i, r) in refs.iter().enumerate() {
+            let found = self
+                .world
+                .live_joint_id(r.index, r.generation)
+                .filter(|id| !hands.contains(id));
+            let Some(id) = found else {
+                return Err(format!("ids[{i}]: no {r}"));
+            };
+            if !seen.insert(id) {
+                return Err(format!("ids[{i}]: {r} is listed twice"));
+            }
+            ids.push(id);
+        }
+        for id in ids {
+            self.world.remove_joint(id).expect("checked above");
+        }
+        Ok(EventKind::JointsRemoved { ids: refs })
     }
 
     /// Remove the bodies the wire ids name, all or nothing. A wire id names a body only if a
@@ -189,6 +329,7 @@ impl Simulation {
         self.load_scene()
             .map_err(|e| format!("cannot reload the scene: {e}"))?;
         tracing::info!(frame = self.next_frame(), scene = %self.scene_name, "reset");
+        self.announce_joints = self.world.joint_count() > 0;
         Ok(EventKind::Reset {
             scene: self.scene_name.clone(),
             gravity: vector(self.world.gravity()),

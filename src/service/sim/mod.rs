@@ -31,7 +31,9 @@ pub use state::{SimState, StartError};
 use super::config::{Limits, ServerConfig};
 use super::wire::{body_info, vector};
 use crate::physics::{PhysicsError, Real, World};
-use crate::protocol::{BodyInfo, Event, Grid, Keys, SceneState, SnapshotFrame};
+use crate::protocol::{
+    BodyInfo, Event, Grid, JointInfo, Keys, SceneState, SceneWithJoints, SnapshotFrame,
+};
 use bodies::BodyRegistry;
 use poses::PoseDeltas;
 use std::collections::VecDeque;
@@ -60,6 +62,8 @@ pub struct Simulation {
     rejected: u64,
     /// Bodies held over `…/drag`.
     hands: hands::Hands,
+    /// A reset loaded a scene with joints: the next step's events list them (`Built`).
+    announce_joints: bool,
 }
 
 impl Simulation {
@@ -95,6 +99,7 @@ impl Simulation {
             applied: 0,
             rejected: 0,
             hands: hands::Hands::default(),
+            announce_joints: false,
         }
     }
 
@@ -310,6 +315,24 @@ impl Simulation {
             gravity: vector(self.world.gravity()),
             bodies: self.body_infos(),
         }
+    }
+
+    /// The `…/scene?joints` reply: [`Simulation::scene_state`] and every joint (drag hands'
+    /// excepted), in slot order.
+    pub fn scene_with_joints(&self) -> SceneWithJoints {
+        SceneWithJoints {
+            scene: self.scene_state(),
+            joints: self.joint_infos(),
+        }
+    }
+
+    /// Every joint as the wire describes it, in slot order (a drag hand's target joint is
+    /// never listed).
+    pub(super) fn joint_infos(&self) -> Vec<JointInfo> {
+        self.world
+            .joints()
+            .filter_map(super::wire::build::joint_info)
+            .collect()
     }
 
     /// Every body, static ones included, in slot order, as the wire describes it.

@@ -5,7 +5,8 @@
 
 use super::Simulation;
 use crate::physics::{ContactEvent, HitEvent, SensorEvent, ShapeRef, StepEvents};
-use crate::protocol::{BodyRef, Event, EventKind, HitInfo, ShapeHit, ShapePair};
+use crate::protocol::{BodyRef, BrokenJoint, Event, EventKind, HitInfo, ShapeHit, ShapePair};
+use crate::service::wire::build::joint_ref;
 use crate::service::wire::vector;
 
 /// The most entries of one kind (begins and ends together) an event carries.
@@ -84,13 +85,42 @@ pub(super) fn physics_events(events: &StepEvents, frame: u64) -> Vec<Event> {
 }
 
 impl Simulation {
-    /// The contact, hit and sensor events of the step just taken (none unless a shape asked).
-    pub fn physics_events(&self) -> Vec<Event> {
+    /// The events of the step just taken: the joints of a scene a reset loaded just before
+    /// it (`Built`, after the `Reset`), the joints that broke, and the contact, hit and sensor
+    /// events (none unless a shape asked).
+    pub fn physics_events(&mut self) -> Vec<Event> {
         let events = self.world.events();
-        if events.is_empty() {
-            return Vec::new();
+        let mut out = if events.is_empty() {
+            Vec::new()
+        } else {
+            physics_events(events, self.frame)
+        };
+        let frame = self.frame;
+        if std::mem::take(&mut self.announce_joints) {
+            let kind = EventKind::Built {
+                bodies: Vec::new(),
+                joints: self.joint_infos(),
+            };
+            out.insert(0, Event { frame, kind });
         }
-        physics_events(events, self.frame)
+        let broken = self.world.broken_joints();
+        if !broken.is_empty() {
+            let loads = self.world.broken_joint_loads();
+            let joints = broken
+                .iter()
+                .zip(loads)
+                .map(|(&id, &(force, torque))| BrokenJoint {
+                    id: joint_ref(id),
+                    force: force.length() as f32,
+                    torque: torque as f32,
+                })
+                .collect();
+            out.push(Event {
+                frame,
+                kind: EventKind::JointsBroken { joints },
+            });
+        }
+        out
     }
 }
 

@@ -11,14 +11,15 @@
 
 #![allow(clippy::unnecessary_cast)] // Real <-> f32 casts matter with the `f64` feature.
 
+pub(crate) mod build;
 pub(crate) mod spawn;
 
 use super::command::Command;
 use super::config::Limits;
 use crate::physics::{Body, Real, Shape, Vec2};
 use crate::protocol::{
-    decode, BodyInfo, CommandKey, DecodeError, Drag, Remove, Reset, SetGravity, SetVelocity,
-    ShapeSpec, Spawn, Tilt, Vector, WorldQuery,
+    decode, BodyInfo, Build, CommandKey, DecodeError, Drag, Remove, RemoveJoints, Reset,
+    SetGravity, SetVelocity, ShapeSpec, Spawn, Tilt, Vector, WorldQuery,
 };
 
 /// Decode and validate a payload that arrived on `key`: the command to apply, or the reason
@@ -115,6 +116,18 @@ pub fn parse_command(key: CommandKey, payload: &[u8], limits: &Limits) -> Result
                 }
             }
             Ok(Command::Drag(d))
+        }
+        CommandKey::Build => {
+            let b: Build = decode(payload).map_err(bad)?;
+            build::check_build(&b, limits)?;
+            Ok(Command::Build(b))
+        }
+        CommandKey::RemoveJoints => {
+            let r: RemoveJoints = decode(payload).map_err(bad)?;
+            if r.ids.is_empty() {
+                return Err("ids is empty: no joint to remove".into());
+            }
+            Ok(Command::RemoveJoints(r.ids))
         }
     }
 }
@@ -240,7 +253,7 @@ impl BodyMeta {
             name,
             colour,
             is_static: body.is_static(),
-            shape: shape_spec(body.shape()),
+            shape: build::body_shape_spec(body),
             // Kinematic bodies too: their mass is infinite.
             mass: if body.inv_mass() == 0.0 {
                 0.0

@@ -49,6 +49,14 @@ pub(crate) fn shape_from_spec(spec: &ShapeSpec) -> Result<(Shape, Vec2), Physics
             let (p, centroid) = Polygon::new(&points)?;
             return Ok((Shape::from(p), centroid));
         }
+        ShapeSpec::Compound { .. } => {
+            return Err(PhysicsError::InvalidShape {
+                field: "shape".into(),
+                reason: "a compound is not one shape: a body of several shapes is built on \
+                         …/build, its shapes listed as parts"
+                    .into(),
+            })
+        }
         ShapeSpec::Segment {
             a,
             b,
@@ -86,7 +94,11 @@ struct Size {
 /// (whose coordinates [`check_vertices_as_sent`] bounded), its extent along x and y at
 /// most `limits.max_coordinate`, and its thickness (its smallest width, measured across
 /// each edge) at least `limits.min_size`. The refusal names the field and the value given.
-fn check_shape_limits(spec: &ShapeSpec, shape: &Shape, limits: &Limits) -> Result<(), String> {
+pub(super) fn check_shape_limits(
+    spec: &ShapeSpec,
+    shape: &Shape,
+    limits: &Limits,
+) -> Result<(), String> {
     let (min, max) = (limits.min_size, limits.max_coordinate);
     let sizes = match *spec {
         ShapeSpec::Rect { width, height } => vec![
@@ -160,6 +172,13 @@ fn check_shape_limits(spec: &ShapeSpec, shape: &Shape, limits: &Limits) -> Resul
                     .into(),
             )
         }
+        ShapeSpec::Compound { .. } => {
+            return Err(
+                "shape = compound: a body of several shapes is built on …/build, \
+                 its shapes listed as parts"
+                    .into(),
+            )
+        }
     };
     for s in sizes {
         let what = s
@@ -202,7 +221,7 @@ fn polygon_thickness(p: &Polygon) -> Option<(usize, Real)> {
 /// quotes the `f32` that was sent, whatever the engine's float width): a vertex coordinate
 /// beyond +-`max` (which the engine would otherwise report as some other vertex "repeating"
 /// it). Non-finite numbers are left to the engine, which names them.
-fn check_vertices_as_sent(spec: &ShapeSpec, max: f32) -> Result<(), String> {
+pub(super) fn check_vertices_as_sent(spec: &ShapeSpec, max: f32) -> Result<(), String> {
     match spec {
         // More than MAX_VERTICES is refused first, by shape_from_spec.
         ShapeSpec::Polygon { vertices } if vertices.len() <= MAX_VERTICES => {
@@ -232,21 +251,7 @@ pub(crate) fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, Strin
     let (shape, centroid) = shape_from_spec(&b.shape).map_err(|e| e.to_string())?;
     check_shape_limits(&b.shape, &shape, limits)?;
     let max = limits.max_coordinate;
-    for (field, v) in [("position.x", b.position.x), ("position.y", b.position.y)] {
-        finite(field, v)?;
-        if v.abs() > max {
-            return Err(format!(
-                "{field} = {v} is out of range: must be within +-{max} (limits.max_coordinate)"
-            ));
-        }
-    }
-    finite("angle", b.angle)?;
-    if b.angle.abs() > MAX_ANGLE {
-        return Err(format!(
-            "angle = {} is out of range: must be within +-{MAX_ANGLE} rad",
-            b.angle
-        ));
-    }
+    check_place(b.position, b.angle, limits)?;
     // A polygon's centre of mass: its centroid, turned with the body (the engine's rule).
     let placed = BodyDef::placed(shape, centroid, vec2(b.position), b.angle as Real)
         .map_err(|e| e.to_string())?;
@@ -280,20 +285,57 @@ pub(crate) fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, Strin
             b.density, limits.min_density, limits.max_density
         ));
     }
-    let speed = b.velocity.x.hypot(b.velocity.y);
+    check_motion(b.velocity, b.angular_velocity, limits)?;
+    Ok(SpawnDef {
+        def,
+        name: checked_name(b.name, limits)?,
+        colour: b.colour,
+    })
+}
+
+/// A body's place as sent: its position finite and within `limits.max_coordinate`, its angle
+/// finite and within [`MAX_ANGLE`].
+pub(super) fn check_place(position: Vector, angle: f32, limits: &Limits) -> Result<(), String> {
+    let max = limits.max_coordinate;
+    for (field, v) in [("position.x", position.x), ("position.y", position.y)] {
+        finite(field, v)?;
+        if v.abs() > max {
+            return Err(format!(
+                "{field} = {v} is out of range: must be within +-{max} (limits.max_coordinate)"
+            ));
+        }
+    }
+    finite("angle", angle)?;
+    if angle.abs() > MAX_ANGLE {
+        return Err(format!(
+            "angle = {angle} is out of range: must be within +-{MAX_ANGLE} rad"
+        ));
+    }
+    Ok(())
+}
+
+/// A body's velocity as sent (already known finite): within `limits.max_speed` and
+/// `limits.max_angular_speed`.
+pub(super) fn check_motion(v: Vector, w: f32, limits: &Limits) -> Result<(), String> {
+    let speed = v.x.hypot(v.y);
     if speed > limits.max_speed {
         return Err(format!(
             "|velocity| = {speed} is out of range: must be <= {} m/s (limits.max_speed)",
             limits.max_speed
         ));
     }
-    if b.angular_velocity.abs() > limits.max_angular_speed {
+    if w.abs() > limits.max_angular_speed {
         return Err(format!(
-            "angular_velocity = {} is out of range: must be within +-{} rad/s (limits.max_angular_speed)",
-            b.angular_velocity, limits.max_angular_speed
+            "angular_velocity = {w} is out of range: must be within +-{} rad/s (limits.max_angular_speed)",
+            limits.max_angular_speed
         ));
     }
-    let name = b.name.unwrap_or_default();
+    Ok(())
+}
+
+/// A name as sent (none: empty), at most `limits.max_name_bytes` long.
+pub(super) fn checked_name(name: Option<String>, limits: &Limits) -> Result<String, String> {
+    let name = name.unwrap_or_default();
     if name.len() > limits.max_name_bytes as usize {
         return Err(format!(
             "name is {} bytes long, more than limits.max_name_bytes = {}",
@@ -301,11 +343,7 @@ pub(crate) fn spawn_def(b: SpawnBody, limits: &Limits) -> Result<SpawnDef, Strin
             limits.max_name_bytes
         ));
     }
-    Ok(SpawnDef {
-        def,
-        name,
-        colour: b.colour,
-    })
+    Ok(name)
 }
 
 #[cfg(test)]

@@ -319,3 +319,120 @@ fn the_event_examples_decode_to_what_their_prose_says() {
     );
     assert_eq!(b.position, Vector::new(0.0, 2.0));
 }
+
+#[test]
+fn build_remove_joints_and_joints_broken_examples_are_the_encoded_bytes() {
+    let (bytes, prose) = payload_after("### Build");
+    let v = Vector::new;
+    let body = |motion, position, colour: &str, shape| BuildBody {
+        name: None,
+        motion,
+        position,
+        angle: 0.0,
+        velocity: v(0.0, 0.0),
+        angular_velocity: 0.0,
+        colour: colour.parse().unwrap(),
+        parts: vec![PartSpec::at(shape, v(0.0, 0.0))],
+    };
+    let pendulum = Build {
+        bodies: vec![
+            body(
+                Motion::Static,
+                v(0.0, 5.0),
+                "#5b5b66",
+                ShapeSpec::Rect {
+                    width: 0.25,
+                    height: 0.25,
+                },
+            ),
+            body(
+                Motion::Dynamic,
+                v(1.5, 5.0),
+                "#d64541",
+                ShapeSpec::Circle { radius: 0.25 },
+            ),
+        ],
+        joints: vec![JointSpec {
+            a: JointEnd::New(0),
+            b: JointEnd::New(1),
+            anchor_a: v(0.0, 0.0),
+            anchor_b: v(-1.5, 0.0),
+            kind: JointKindSpec::Revolute {
+                reference_angle: None,
+                limit: None,
+                motor: None,
+                spring: None,
+            },
+            collide_connected: false,
+            break_force: None,
+            break_torque: None,
+        }],
+    };
+    assert_eq!(bytes, encode(&pendulum).unwrap());
+    assert_eq!(stated_size(&prose), bytes.len());
+    // "With the defaults a part takes its shape's bytes + 39": a rect part is 9 + 39.
+    let part = PartSpec::at(
+        ShapeSpec::Rect {
+            width: 1.0,
+            height: 1.0,
+        },
+        v(0.0, 0.0),
+    );
+    assert!(prose.contains("its shape's bytes + 39"));
+    assert_eq!(postcard::to_allocvec(&part).unwrap().len(), 9 + 39);
+    // and the daemon accepts it
+    assert!(parse_command(CommandKey::Build, &bytes, &Limits::default()).is_ok());
+
+    let (bytes, prose) = payload_after("### RemoveJoints");
+    let ids = vec![JointRef {
+        index: 2,
+        generation: 0,
+    }];
+    assert_eq!(bytes, encode(&RemoveJoints { ids }).unwrap());
+    assert_eq!(stated_size(&prose), bytes.len());
+
+    let (bytes, prose) = payload_after("**Worked example (JointsBroken).**");
+    let broken = Event {
+        frame: 300,
+        kind: EventKind::JointsBroken {
+            joints: vec![BrokenJoint {
+                id: JointRef {
+                    index: 2,
+                    generation: 0,
+                },
+                force: 9.75,
+                torque: 0.0,
+            }],
+        },
+    };
+    assert_eq!(bytes, encode(&broken).unwrap());
+    assert_eq!(stated_size(&prose), bytes.len());
+}
+
+#[test]
+fn a_compound_takes_two_bytes_and_its_parts_as_the_shape_table_says() {
+    // "2 + per part its shape + 12": a rect (9) and a circle (5) part.
+    let c = ShapeSpec::Compound {
+        parts: vec![
+            PartShape {
+                shape: ShapeSpec::Rect {
+                    width: 1.0,
+                    height: 0.25,
+                },
+                offset: Vector::new(0.0, 0.0),
+                angle: 0.0,
+            },
+            PartShape {
+                shape: ShapeSpec::Circle { radius: 0.25 },
+                offset: Vector::new(0.5, 0.0),
+                angle: 0.0,
+            },
+        ],
+    };
+    let doc = read_repo_file("docs/protocol.md");
+    assert!(doc.contains("| 2 + per part its shape + 12 |"));
+    assert_eq!(
+        postcard::to_allocvec(&c).unwrap().len(),
+        2 + (9 + 12) + (5 + 12)
+    );
+}

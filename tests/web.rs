@@ -716,6 +716,7 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
             ShapeSpec::Capsule { .. } => "capsule",
             ShapeSpec::Polygon { .. } => "polygon",
             ShapeSpec::Segment { .. } => "segment",
+            ShapeSpec::Compound { .. } => "compound",
         })
         .collect();
     assert_eq!(kinds, ["rect", "circle", "capsule", "polygon"]);
@@ -892,7 +893,7 @@ async fn the_page_decodes_every_documented_example() {
         );
         if matches!(
             ty,
-            "SetGravity" | "Tilt" | "Spawn" | "Remove" | "Reset" | "Drag"
+            "SetGravity" | "Tilt" | "Spawn" | "Remove" | "Reset" | "Drag" | "RemoveJoints"
         ) {
             let enc = page
                 .eval(&format!("Array.from(tiltbox.encodeMessage('{ty}', {got}))"))
@@ -1064,6 +1065,9 @@ fn tag_type(tag: tiltbox::client::web::wire::Tag) -> &'static str {
         Tag::Reset => "Reset",
         Tag::Velocity => "SetVelocity",
         Tag::Drag => "Drag",
+        Tag::Build => "Build",
+        Tag::RemoveJoints => "RemoveJoints",
+        Tag::SceneWithJoints => "SceneWithJoints",
     }
 }
 
@@ -1082,6 +1086,8 @@ fn rust_json(ty: &str, bytes: &[u8]) -> Value {
         "Remove" => j::<Remove>(bytes),
         "Reset" => j::<Reset>(bytes),
         "Drag" => j::<Drag>(bytes),
+        "RemoveJoints" => j::<RemoveJoints>(bytes),
+        "SceneWithJoints" => j::<SceneWithJoints>(bytes),
         _ => panic!("no message {ty}"),
     }
 }
@@ -1135,7 +1141,7 @@ fn hex_examples(doc: &str) -> Vec<(String, Vec<u8>)> {
                 let msg_ty = match section.as_str() {
                     "frame" | "Frames" => Some("frame"),
                     "Snapshot" | "Event" | "SetGravity" | "Tilt" | "Spawn" | "Remove" | "Reset"
-                    | "Drag" => Some(section.as_str()),
+                    | "Drag" | "RemoveJoints" => Some(section.as_str()),
                     _ => None,
                 };
                 let is_hex = |t: &str| t.len() == 2 && t.chars().all(|c| c.is_ascii_hexdigit());

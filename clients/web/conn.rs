@@ -184,7 +184,7 @@ where
 {
     let Ok(replies) = ctx
         .session
-        .get(keys.scene())
+        .get(format!("{}?joints", keys.scene()))
         .timeout(Duration::from_secs(2))
         .await
     else {
@@ -192,7 +192,7 @@ where
     };
     while let Ok(reply) = replies.recv_async().await {
         if let Ok(sample) = reply.into_result() {
-            let f = wire::frame(Tag::Scene, &sample.payload().to_bytes());
+            let f = wire::frame(Tag::SceneWithJoints, &sample.payload().to_bytes());
             send_frame(sink, &ctx.counters, f).await?;
             return send_text(sink, &json!({"type": "server", "alive": true})).await;
         }

@@ -37,7 +37,10 @@ function connect(world) {
       item.message = snapshots.apply(f.message);
       if (!item.message) return;  // a delta without its keyframe: wait for the next one
     }
-    if (f.type === 'SceneState') { state.world = f.message.world; applyScene(f.message); }
+    if (f.type === 'SceneState' || f.type === 'SceneWithJoints') {
+      state.world = (f.message.scene || f.message).world;
+      applyScene(f.message);
+    }
     else if (f.type === 'Stats') state.stats = f.message;
     else if (!state.joined) state.buffer.push(item);
     else apply(item);
@@ -101,9 +104,19 @@ const canvas = document.getElementById('world');
 const ctx = canvas.getContext('2d');
 const FIT = 0.94;
 
-function shapeExtent(b, x, y, a) {
-  const s = b.info.shape, c = Math.cos(a), sn = Math.sin(a);
+// The bounding box [x0, y0, x1, y1] of shape `s` placed at (x, y) turned by `a`.
+function shapeExtent(s, x, y, a) {
+  const c = Math.cos(a), sn = Math.sin(a);
   const pts = [];
+  if (s.Compound) {
+    let box = null;
+    for (const p of s.Compound.parts) {
+      const e = shapeExtent(p.shape, x + c * p.offset.x - sn * p.offset.y,
+        y + sn * p.offset.x + c * p.offset.y, a + p.angle);
+      box = box ? [Math.min(box[0], e[0]), Math.min(box[1], e[1]), Math.max(box[2], e[2]), Math.max(box[3], e[3])] : e;
+    }
+    return box;
+  }
   if (s.Rect) { const w = s.Rect.width / 2, h = s.Rect.height / 2; pts.push([-w, -h], [w, -h], [w, h], [-w, h]); }
   else if (s.Polygon) s.Polygon.vertices.forEach(v => pts.push([v.x, v.y]));
   else if (s.Segment) {
@@ -126,8 +139,8 @@ function view() {
   const W = canvas.clientWidth, H = canvas.clientHeight;
   let box = null;
   const grow = e => { box = box ? [Math.min(box[0], e[0]), Math.min(box[1], e[1]), Math.max(box[2], e[2]), Math.max(box[3], e[3])] : e; };
-  for (const b of state.bodies.values()) if (b.info.is_static) grow(shapeExtent(b, b.x, b.y, b.angle));
-  if (!box) for (const b of state.bodies.values()) grow(shapeExtent(b, b.x, b.y, b.angle));
+  for (const b of state.bodies.values()) if (b.info.is_static) grow(shapeExtent(b.info.shape, b.x, b.y, b.angle));
+  if (!box) for (const b of state.bodies.values()) grow(shapeExtent(b.info.shape, b.x, b.y, b.angle));
   if (!box) box = [-5, -1, 5, 7];
   const bw = Math.max(box[2] - box[0], 1e-3), bh = Math.max(box[3] - box[1], 1e-3);
   const scale = Math.min(W / bw, H / bh) * FIT;
@@ -143,9 +156,23 @@ function css(c) { return 'rgb(' + c.r + ',' + c.g + ',' + c.b + ')'; }
 function darker(c) { return 'rgb(' + (c.r * 0.55 | 0) + ',' + (c.g * 0.55 | 0) + ',' + (c.b * 0.55 | 0) + ')'; }
 
 function drawBody(b, x, y, a, px) {
-  const s = b.info.shape;
   ctx.save();
   ctx.translate(x, y); ctx.rotate(a);
+  drawShape(b.info.shape, b.info.colour, px);
+  ctx.restore();
+}
+
+// Draw shape `s` in its body's frame (the context already placed there).
+function drawShape(s, colour, px) {
+  if (s.Compound) {
+    for (const p of s.Compound.parts) {
+      ctx.save();
+      ctx.translate(p.offset.x, p.offset.y); ctx.rotate(p.angle);
+      drawShape(p.shape, colour, px);
+      ctx.restore();
+    }
+    return;
+  }
   ctx.beginPath();
   if (s.Rect) ctx.rect(-s.Rect.width / 2, -s.Rect.height / 2, s.Rect.width, s.Rect.height);
   else if (s.Circle) ctx.arc(0, 0, s.Circle.radius, 0, 2 * Math.PI);
@@ -159,9 +186,8 @@ function drawBody(b, x, y, a, px) {
     ctx.moveTo(g.a.x, g.a.y); ctx.lineTo(g.b.x, g.b.y);
     ctx.lineWidth = Math.max(2 * g.radius, 2 * px);
     ctx.lineCap = 'round';
-    ctx.strokeStyle = css(b.info.colour);
+    ctx.strokeStyle = css(colour);
     ctx.stroke();
-    ctx.restore();
     return;
   } else {
     const v = s.Polygon.vertices;
@@ -169,16 +195,39 @@ function drawBody(b, x, y, a, px) {
     for (let i = 1; i < v.length; i++) ctx.lineTo(v[i].x, v[i].y);
     ctx.closePath();
   }
-  ctx.fillStyle = css(b.info.colour);
+  ctx.fillStyle = css(colour);
   ctx.fill();
   ctx.lineWidth = px;
-  ctx.strokeStyle = darker(b.info.colour);
+  ctx.strokeStyle = darker(colour);
   ctx.stroke();
   if (s.Circle) {  // a mark along the body's x axis, so a rolling ball is seen to turn
     ctx.beginPath(); ctx.moveTo(s.Circle.radius * 0.3, 0); ctx.lineTo(s.Circle.radius, 0);
     ctx.lineWidth = 2 * px; ctx.stroke();
   }
-  ctx.restore();
+}
+
+// A joint end's anchor in world coordinates, with each body at the pose `poseOf` gives.
+function anchorAt(end, local, poseOf) {
+  if (end === 'World') return [local.x, local.y];
+  const p = end.Live && poseOf(idKey(end.Live));
+  if (!p) return null;
+  const c = Math.cos(p[2]), s = Math.sin(p[2]);
+  return [p[0] + c * local.x - s * local.y, p[1] + s * local.x + c * local.y];
+}
+
+// The joints: a line between the two anchors and a dot at each.
+let lastJointPixels = [];
+function drawJoints(poseOf, px) {
+  lastJointPixels = [];
+  ctx.lineWidth = 1.5 * px;
+  ctx.strokeStyle = ctx.fillStyle = '#e8e8f0';
+  for (const j of state.joints.values()) {
+    const a = anchorAt(j.a, j.anchor_a, poseOf), b = anchorAt(j.b, j.anchor_b, poseOf);
+    if (!a || !b) continue;
+    lastJointPixels.push([...toPixel(a[0], a[1]), ...toPixel(b[0], b[1])]);
+    ctx.beginPath(); ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]); ctx.stroke();
+    for (const q of [a, b]) { ctx.beginPath(); ctx.arc(q[0], q[1], 2.5 * px, 0, 2 * Math.PI); ctx.fill(); }
+  }
 }
 
 // Where the world is drawn: the simulated time `delay` behind the newest snapshot's expected
@@ -230,11 +279,17 @@ function frame(now) {
   const s = sample(now);
   lastDelay = s.delay;
   for (const b of state.bodies.values()) if (b.info.is_static) drawBody(b, b.x, b.y, b.angle, px);
+  const poseOf = k => {
+    const b = state.bodies.get(k);
+    if (!b) return null;
+    return (!b.info.is_static && s.poses && s.poses.get(k)) || [b.x, b.y, b.angle];
+  };
   for (const [k, b] of state.bodies) {
     if (b.info.is_static) continue;
-    const p = s.poses && s.poses.get(k);
-    if (p) drawBody(b, p[0], p[1], p[2], px); else drawBody(b, b.x, b.y, b.angle, px);
+    const p = poseOf(k);
+    drawBody(b, p[0], p[1], p[2], px);
   }
+  if (state.joints.size) drawJoints(poseOf, px);
   if (probe.tilt && probe.tilt.seenAt && s.t >= probe.tilt.t) {
     metrics.tiltToVisible.push(now - probe.tilt.sentAt);
     probe.tilt = null;
@@ -379,6 +434,12 @@ const hands = new Map();  // pointerId -> { hand, target, sent }
 const MOVE_EVERY_MS = 1000 / 30, KEEPALIVE_MS = 1000;
 
 function insideShape(s, lx, ly, slop) {
+  if (s.Compound) {
+    return s.Compound.parts.some(p => {
+      const c = Math.cos(p.angle), sn = Math.sin(p.angle), dx = lx - p.offset.x, dy = ly - p.offset.y;
+      return insideShape(p.shape, c * dx + sn * dy, -sn * dx + c * dy, slop);
+    });
+  }
   if (s.Rect) return Math.abs(lx) <= s.Rect.width / 2 + slop && Math.abs(ly) <= s.Rect.height / 2 + slop;
   if (s.Circle) return Math.hypot(lx, ly) <= s.Circle.radius + slop;
   if (s.Capsule) {
@@ -478,6 +539,9 @@ window.tiltbox = {
   },
   hello: () => hello,
   hands: () => hands.size,
+  joints: () => state.joints.size,
+  // The anchors of the joints last drawn, in CSS pixels: [[ax, ay, bx, by], ...].
+  jointPixels: () => lastJointPixels,
   bodyAt: (x, y) => { const hit = bodyAt(x, y); return hit ? hit.key : null; },
 };
 

@@ -83,18 +83,57 @@ class Reader {
 const vector = r => ({ x: r.f32(), y: r.f32() });
 const bodyRef = r => ({ index: r.u32(), generation: r.u32() });
 const colour = r => ({ r: r.u8(), g: r.u8(), b: r.u8() });
-function shapeSpec(r) {
-  switch (r.variant(5, 'ShapeSpec')) {
+function shapeSpec(r, inCompound) {
+  switch (r.variant(6, 'ShapeSpec')) {
     case 0: return { Rect: { width: r.f32(), height: r.f32() } };
     case 1: return { Circle: { radius: r.f32() } };
     case 2: return { Capsule: { length: r.f32(), radius: r.f32() } };
     case 3: return { Polygon: { vertices: r.seq(vector) } };
-    default: return { Segment: {
+    case 4: return { Segment: {
       a: vector(r), b: vector(r), radius: r.f32(), prev: r.option(vector), next: r.option(vector),
       one_sided: r.bool(),
     } };
+    default:
+      if (inCompound) throw new DecodeError("a compound's part is itself a compound");
+      return { Compound: { parts: r.seq(partShape) } };
   }
 }
+// One shape of a body of several, placed in the body's frame.
+const partShape = r => ({ shape: shapeSpec(r, true), offset: vector(r), angle: r.f32() });
+// Joints (docs/protocol.md, "Build"): their ends, kinds and descriptions.
+const optF32 = r => r.option(q => q.f32());
+const limitSpec = r => ({ lower: r.f32(), upper: r.f32() });
+const motorSpec = r => ({ speed: r.f32(), max: r.f32() });
+const springSpec = r => ({ hertz: r.f32(), damping_ratio: r.f32() });
+function jointEnd(r) {
+  switch (r.variant(3, 'JointEnd')) {
+    case 0: return 'World';
+    case 1: return { New: r.u32() };
+    default: return { Live: bodyRef(r) };
+  }
+}
+function jointKind(r) {
+  switch (r.variant(6, 'JointKindSpec')) {
+    case 0: return { Revolute: { reference_angle: optF32(r), limit: r.option(limitSpec),
+      motor: r.option(motorSpec), spring: r.option(springSpec) } };
+    case 1: return { Prismatic: { axis: vector(r), reference_angle: optF32(r),
+      limit: r.option(limitSpec), motor: r.option(motorSpec), spring: r.option(springSpec) } };
+    case 2: return { Distance: { length: optF32(r), spring: r.option(springSpec),
+      limit: r.option(limitSpec) } };
+    case 3: return { Weld: { reference_angle: optF32(r), linear_hertz: r.f32(),
+      linear_damping_ratio: r.f32(), angular_hertz: r.f32(), angular_damping_ratio: r.f32() } };
+    case 4: return { Wheel: { axis: vector(r), spring: r.option(springSpec),
+      limit: r.option(limitSpec), motor: r.option(motorSpec) } };
+    default: return { Motor: { angular_offset: r.f32(), max_force: r.f32(), max_torque: r.f32(),
+      correction_factor: r.f32() } };
+  }
+}
+const jointSpec = r => ({
+  a: jointEnd(r), b: jointEnd(r), anchor_a: vector(r), anchor_b: vector(r), kind: jointKind(r),
+  collide_connected: r.bool(), break_force: optF32(r), break_torque: optF32(r),
+});
+const jointInfo = r => ({ id: bodyRef(r), joint: jointSpec(r) });
+const brokenJoint = r => ({ id: bodyRef(r), force: r.f32(), torque: r.f32() });
 // An id in a list sorted by slot: 2 (index - next) + (generation != 0), then the generation.
 function listId(r, at) {
   const head = r.varint(6);
@@ -146,14 +185,17 @@ const MESSAGES = {
   Event: r => {
     const frame = r.u64();
     let kind;
-    switch (r.variant(7, 'EventKind')) {
+    switch (r.variant(10, 'EventKind')) {
       case 0: kind = { Added: { bodies: r.seq(bodyInfo) } }; break;
       case 1: kind = { Removed: { ids: r.seq(bodyRef) } }; break;
       case 2: kind = { Reset: { scene: r.string(), gravity: vector(r), bodies: r.seq(bodyInfo) } }; break;
       case 3: kind = { Rejected: { key: r.string(), reason: r.string() } }; break;
       case 4: kind = { Contacts: { begin: r.seq(shapePair), end: r.seq(shapePair), dropped: r.u32() } }; break;
       case 5: kind = { Hits: { hits: r.seq(hitInfo), dropped: r.u32() } }; break;
-      default: kind = { Sensors: { begin: r.seq(shapePair), end: r.seq(shapePair), dropped: r.u32() } };
+      case 6: kind = { Sensors: { begin: r.seq(shapePair), end: r.seq(shapePair), dropped: r.u32() } }; break;
+      case 7: kind = { Built: { bodies: r.seq(bodyInfo), joints: r.seq(jointInfo) } }; break;
+      case 8: kind = { JointsRemoved: { ids: r.seq(bodyRef) } }; break;
+      default: kind = { JointsBroken: { joints: r.seq(brokenJoint) } };
     }
     return { frame, kind };
   },
@@ -164,6 +206,8 @@ const MESSAGES = {
     commands_dropped: r.u64(),
   }),
   SceneState: r => ({ world: r.string(), scene: r.string(), frame: r.u64(), time: r.f64(), gravity: vector(r), bodies: r.seq(bodyInfo) }),
+  SceneWithJoints: r => ({ scene: MESSAGES.SceneState(r), joints: r.seq(jointInfo) }),
+  RemoveJoints: r => ({ ids: r.seq(bodyRef) }),
   SetGravity: r => ({ x: r.f32(), y: r.f32() }),
   Tilt: r => (r.variant(2, 'Tilt') === 0
     ? { Orientation: ORIENTATIONS[r.variant(6, 'Tilt')] }
@@ -182,7 +226,8 @@ const MESSAGES = {
 // The WebSocket frame tags (docs/protocol.md, "WebSocket gateway").
 const TAGS = { 1: ['poses', 'Snapshot'], 2: ['events', 'Event'], 3: ['stats', 'Stats'],
   4: ['scene', 'SceneState'], 5: ['gravity', 'SetGravity'], 6: ['tilt', 'Tilt'],
-  7: ['spawn', 'Spawn'], 8: ['remove', 'Remove'], 9: ['reset', 'Reset'], 11: ['drag', 'Drag'] };
+  7: ['spawn', 'Spawn'], 8: ['remove', 'Remove'], 9: ['reset', 'Reset'], 11: ['drag', 'Drag'],
+  13: ['remove_joints', 'RemoveJoints'], 14: ['scene', 'SceneWithJoints'] };
 const TAG_OF = {};
 for (const t in TAGS) TAG_OF[TAGS[t][1]] = +t;
 
@@ -245,6 +290,7 @@ function encodeMessage(type, m) {
       break;
     case 'Remove': w.u32(m.ids.length); m.ids.forEach(id => { w.u32(id.index); w.u32(id.generation); }); break;
     case 'Reset': break;
+    case 'RemoveJoints': w.u32(m.ids.length); m.ids.forEach(id => { w.u32(id.index); w.u32(id.generation); }); break;
     case 'Drag':
       if (m.Grab) { w.u32(0); w.u32(m.Grab.hand); w.u32(m.Grab.id.index); w.u32(m.Grab.id.generation); w.vector(m.Grab.point); }
       else if (m.Move) { w.u32(1); w.u32(m.Move.hand); w.vector(m.Move.target); }

@@ -7,6 +7,7 @@ const snapshots = new SnapshotDecoder();
 const state = {
   world: '', scene: '', joined: false, frame: 0, time: 0, gravity: { x: 0, y: 0 },
   bodies: new Map(),   // id -> { info, x, y, angle }
+  joints: new Map(),   // joint id -> JointSpec (ends 'World' or { Live: id })
   early: new Map(),    // poses of bodies whose Added event has not arrived yet
   buffer: [],          // frames received before the scene reply
   history: [],         // { t, poses: Map id -> [x, y, angle] }, oldest first
@@ -24,7 +25,20 @@ const probe = { tilt: null };
 const hooks = { note: () => {} };
 
 function resetWorld() {
-  state.bodies.clear(); state.early.clear(); state.history = []; state.offsets = [];
+  state.bodies.clear(); state.joints.clear(); state.early.clear(); state.history = [];
+  state.offsets = [];
+}
+
+function addJoint(j) { state.joints.set(idKey(j.id), j.joint); }
+
+// Whether a joint end is one of the bodies in `gone` (a set of id keys).
+const endIn = (end, gone) => end.Live !== undefined && gone.has(idKey(end.Live));
+
+function removeBodies(ids) {
+  const gone = new Set(ids.map(idKey));
+  for (const k of gone) state.bodies.delete(k);
+  // a body's joints go with it
+  for (const [k, j] of state.joints) if (endIn(j.a, gone) || endIn(j.b, gone)) state.joints.delete(k);
 }
 
 function addBody(info) {
@@ -35,8 +49,11 @@ function addBody(info) {
   state.bodies.set(k, b);
 }
 
-function applyScene(s) {
+// The scene reply: a SceneState, or (tag 14) a SceneWithJoints.
+function applyScene(reply) {
+  const s = reply.scene || reply;
   resetWorld();
+  (reply.joints || []).forEach(addJoint);
   state.scene = s.scene; state.frame = s.frame; state.time = s.time; state.gravity = s.gravity;
   s.bodies.forEach(addBody);
   state.joined = true;
@@ -77,7 +94,10 @@ function applySnapshot(s, now) {
 function applyEvent(e) {
   const k = e.kind;
   if (k.Added) k.Added.bodies.forEach(addBody);
-  else if (k.Removed) k.Removed.ids.forEach(id => state.bodies.delete(idKey(id)));
+  else if (k.Removed) removeBodies(k.Removed.ids);
+  else if (k.Built) { k.Built.bodies.forEach(addBody); k.Built.joints.forEach(addJoint); }
+  else if (k.JointsRemoved) k.JointsRemoved.ids.forEach(id => state.joints.delete(idKey(id)));
+  else if (k.JointsBroken) k.JointsBroken.joints.forEach(j => state.joints.delete(idKey(j.id)));
   else if (k.Reset) {
     resetWorld();
     state.scene = k.Reset.scene; state.gravity = k.Reset.gravity;

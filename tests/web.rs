@@ -1354,3 +1354,115 @@ fn the_binary_prints_its_url_fingerprint_and_qr_code() {
         "a QR code: {text}"
     );
 }
+
+/// A body of several shapes and a joint built over `…/build` are drawn by the page: the
+/// second shape of a static L in the L's colour where the build put it, and the pendulum's
+/// hinge as a light dot on the pin; a `…/remove_joints` takes the hinge off the page.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_page_draws_compounds_and_joints_built_over_the_wire() {
+    let _lock = BROWSER_LOCK.lock().await;
+    let port = 17498;
+    let (server, gw) = daemon_and_gateway(port).await;
+    let keys = server.keys().clone();
+    let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
+        .await
+        .unwrap();
+    let (_browser, mut page) = browser_page("joints").await;
+    page.navigate(gw.url()).await;
+    page.wait_for(
+        "!!(window.tiltbox && tiltbox.state.joined && tiltbox.state.frame > 0)",
+        20,
+    )
+    .await;
+    let v = Vector::new;
+    let part = |w: f32, h: f32, at: Vector| {
+        PartSpec::at(
+            ShapeSpec::Rect {
+                width: w,
+                height: h,
+            },
+            at,
+        )
+    };
+    let fixed = |at: Vector, colour: &str, parts| BuildBody {
+        name: None,
+        motion: Motion::Static,
+        position: at,
+        angle: 0.0,
+        velocity: v(0.0, 0.0),
+        angular_velocity: 0.0,
+        colour: colour.parse().unwrap(),
+        parts,
+    };
+    let build = Build {
+        bodies: vec![
+            // an L: a 1 x 0.25 bar, and a 0.5 x 1 post above its right end
+            fixed(
+                v(-2.0, 3.0),
+                "#20c020",
+                vec![part(1.0, 0.25, v(0.0, 0.0)), part(0.5, 1.0, v(0.25, 0.625))],
+            ),
+            fixed(v(1.5, 5.0), "#5b5b66", vec![part(0.25, 0.25, v(0.0, 0.0))]),
+            BuildBody {
+                motion: Motion::Dynamic,
+                ..fixed(
+                    v(2.5, 5.0),
+                    "#d64541",
+                    vec![PartSpec::at(ShapeSpec::Circle { radius: 0.2 }, v(0.0, 0.0))],
+                )
+            },
+        ],
+        joints: vec![JointSpec {
+            a: JointEnd::New(1),
+            b: JointEnd::New(2),
+            anchor_a: v(0.0, 0.0),
+            anchor_b: v(-1.0, 0.0),
+            kind: JointKindSpec::Revolute {
+                reference_angle: None,
+                limit: None,
+                motor: None,
+                spring: None,
+            },
+            collide_connected: false,
+            break_force: None,
+            break_torque: None,
+        }],
+    };
+    let mut w = watch(&s, &keys).await;
+    s.put(keys.build(), encode(&build).unwrap()).await.unwrap();
+    let joint = loop {
+        let e = tokio::time::timeout(Duration::from_secs(5), w.events.recv())
+            .await
+            .expect("a Built event")
+            .unwrap();
+        if let EventKind::Built { joints, .. } = e.kind {
+            break joints[0].id;
+        }
+    };
+    page.wait_for("tiltbox.joints() === 1", 10).await;
+    // The post of the L: centre (-2 + 0.25, 3 + 0.625), drawn in the L's green.
+    let green = page
+        .eval(
+            "(() => { const v = tiltbox.view(); \
+             return tiltbox.pixel(v.ox + v.scale * -1.75, v.oy - v.scale * 3.625); })()",
+        )
+        .await;
+    assert_eq!(green, json!([0x20, 0xc0, 0x20]), "the L's second shape");
+    // The hinge's dot, read back from the frame that drew it.
+    let dot = page
+        .eval("(() => { const p = tiltbox.jointPixels()[0]; return tiltbox.pixel(p[0], p[1]); })()")
+        .await;
+    let rgb: Vec<u64> = serde_json::from_value(dot).unwrap();
+    assert!(
+        rgb.iter().all(|&c| c >= 200),
+        "the hinge is drawn as a light dot on the grey pin: {rgb:?}"
+    );
+    s.put(
+        keys.remove_joints(),
+        encode(&RemoveJoints { ids: vec![joint] }).unwrap(),
+    )
+    .await
+    .unwrap();
+    page.wait_for("tiltbox.joints() === 0", 10).await;
+    stop(page, gw, server).await;
+}

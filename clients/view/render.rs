@@ -19,7 +19,7 @@ use ratatui::layout::{Rect, Size};
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::symbols::Marker;
 use ratatui::text::Line;
-use ratatui::widgets::canvas::{Canvas, Painter, Shape};
+use ratatui::widgets::canvas::{Canvas, Line as Segment, Painter, Shape};
 use ratatui::widgets::{Paragraph, Widget};
 use std::time::Duration;
 
@@ -453,6 +453,19 @@ pub fn render(view: Option<&WorldView>, status: &Status, area: Rect, buf: &mut B
         .values()
         .filter_map(|b| Some((b.info.is_static, FilledShape::of(b)?)))
         .collect();
+    // Joints: a white line from anchor to anchor, over the bodies (a hinge is a dot).
+    let joints: Vec<Segment> = view
+        .joints
+        .values()
+        .filter_map(|j| view.joint_anchors(j))
+        .map(|((ax, ay), (bx, by))| Segment {
+            x1: ax as f64,
+            y1: ay as f64,
+            x2: bx as f64,
+            y2: by as f64,
+            color: Color::White,
+        })
+        .collect();
     Canvas::default()
         .marker(Marker::Braille)
         .x_bounds(vp.x_bounds)
@@ -466,6 +479,9 @@ pub fn render(view: Option<&WorldView>, status: &Status, area: Rect, buf: &mut B
             for (_, s) in shapes.iter().filter(|(st, _)| !*st) {
                 ctx.draw(s);
             }
+            for j in &joints {
+                ctx.draw(j);
+            }
         })
         .render(canvas_area, buf);
 }
@@ -478,6 +494,113 @@ mod tests {
         Fill::of(&ShapeSpec::Polygon {
             vertices: v.iter().map(|&(x, y)| Vector::new(x, y)).collect(),
         })
+    }
+
+    /// A 10 m x 5 m box (two static floors, an L-shaped compound on the left, a rod hanging from
+    /// the world at (5, 4.5) to a disc at (5, 2)) rendered into 40 x 13 cells: the joint's line
+    /// is white cells between its anchors, and the L's second shape, 2.5 m above its first, is
+    /// painted in the L's colour.
+    #[test]
+    fn joints_are_white_lines_and_every_shape_of_a_compound_is_painted() {
+        use crate::protocol::{
+            BodyInfo, BodyRef, Colour, JointEnd, JointInfo, JointKindSpec, JointRef, JointSpec,
+            PartShape, SceneState,
+        };
+        let id = |index| BodyRef {
+            index,
+            generation: 0,
+        };
+        let rect = |w, h| ShapeSpec::Rect {
+            width: w,
+            height: h,
+        };
+        let mut l = BodyInfo::wall(
+            id(2),
+            ShapeSpec::Compound {
+                parts: vec![
+                    PartShape {
+                        shape: rect(1.0, 0.5),
+                        offset: Vector::new(0.0, 0.0),
+                        angle: 0.0,
+                    },
+                    PartShape {
+                        shape: rect(1.0, 1.0),
+                        offset: Vector::new(0.0, 2.5),
+                        angle: 0.0,
+                    },
+                ],
+            },
+            Vector::new(1.5, 1.0),
+        );
+        l.colour = Colour::new(0, 200, 0);
+        let mut disc = BodyInfo::wall(
+            id(3),
+            ShapeSpec::Circle { radius: 0.3 },
+            Vector::new(5.0, 2.0),
+        );
+        (disc.is_static, disc.colour) = (false, Colour::new(200, 0, 0));
+        let mut view = WorldView::from_scene(SceneState {
+            world: "w".into(),
+            scene: "s".into(),
+            frame: 1,
+            time: 0.0,
+            gravity: Vector::new(0.0, -9.81),
+            bodies: vec![
+                BodyInfo::wall(id(0), rect(10.0, 0.5), Vector::new(5.0, 0.0)),
+                BodyInfo::wall(id(1), rect(10.0, 0.5), Vector::new(5.0, 5.0)),
+                l,
+                disc,
+            ],
+        });
+        view.add_joints(&[JointInfo {
+            id: JointRef {
+                index: 0,
+                generation: 0,
+            },
+            joint: JointSpec {
+                a: JointEnd::World,
+                b: JointEnd::Live(id(3)),
+                anchor_a: Vector::new(5.0, 4.5),
+                anchor_b: Vector::new(0.0, 0.0),
+                kind: JointKindSpec::Distance {
+                    length: Some(2.5),
+                    spring: None,
+                    limit: None,
+                },
+                collide_connected: false,
+                break_force: None,
+                break_torque: None,
+            },
+        }]);
+        let status = Status {
+            world: "w".into(),
+            endpoint: String::new(),
+            alive: true,
+            rate_hz: 60.0,
+            latency: None,
+            keys: "",
+        };
+        let area = Rect::new(0, 0, 40, 13);
+        let mut buf = Buffer::empty(area);
+        render(Some(&view), &status, area, &mut buf);
+        let vp = Viewport::fit(view.bounds().unwrap(), Rect::new(0, 0, 40, 12).as_size());
+        let cell = |x: f64, y: f64| {
+            let col = (x - vp.x_bounds[0]) / (vp.x_bounds[1] - vp.x_bounds[0]) * 40.0;
+            let row = (vp.y_bounds[1] - y) / (vp.y_bounds[1] - vp.y_bounds[0]) * 12.0;
+            buf[(col as u16, row as u16)].fg
+        };
+        // the rod, half-way between its anchors (the disc is 0.3 m, below 3.5 m)
+        assert_eq!(cell(5.0, 3.5), Color::White, "the joint's line");
+        assert_eq!(
+            cell(1.5, 3.5),
+            Color::Rgb(0, 200, 0),
+            "the L's second shape"
+        );
+        assert_ne!(
+            cell(1.5, 2.1),
+            Color::Rgb(0, 200, 0),
+            "between the L's shapes"
+        );
     }
 
     #[test]

@@ -93,6 +93,25 @@ class AgainstTheDaemon(unittest.TestCase):
         removed = wait_for(self.events, lambda e: "Removed" in e["kind"])["kind"]["Removed"]
         self.assertEqual(removed["ids"], [ball_id])
 
+        # Build an L of two boxes hanging from the world on a hinge: the Built event and the
+        # scene with joints list both, the L is a compound of 1 + 0.5 kg.
+        l_shape = {"position": {"x": -2.0, "y": 4.0}, "parts": [
+            {"shape": {"Rect": {"width": 1.0, "height": 1.0}}},
+            {"shape": {"Rect": {"width": 1.0, "height": 0.5}}, "offset": {"x": 1.0, "y": -0.25}}]}
+        hinge = {"a": "World", "b": {"New": 0}, "anchor_a": {"x": -2.0, "y": 4.5},
+                 "anchor_b": {"x": 0.0, "y": 0.5}, "kind": {"Revolute": {}}}
+        self.c.build([l_shape], [hinge])
+        built = wait_for(self.events, lambda e: "Built" in e["kind"])["kind"]["Built"]
+        body, joint = built["bodies"][0], built["joints"][0]
+        self.assertEqual(len(body["shape"]["Compound"]["parts"]), 2)
+        self.assertAlmostEqual(body["mass"], 1.5, places=5)
+        self.assertEqual((joint["joint"]["a"], joint["joint"]["b"]), ("World", {"Live": body["id"]}))
+        listed = self.c.scene_with_joints()
+        self.assertIn(joint["id"], [j["id"] for j in listed["joints"]])
+        self.c.remove_joints([joint["id"]])
+        gone = wait_for(self.events, lambda e: "JointsRemoved" in e["kind"])["kind"]["JointsRemoved"]
+        self.assertEqual(gone["ids"], [joint["id"]])
+
 
 if __name__ == "__main__":
     unittest.main()

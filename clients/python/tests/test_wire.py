@@ -100,6 +100,22 @@ class Documented(unittest.TestCase):
         self.assertEqual((hit["point"], hit["normal"]), ({"x": 0.0, "y": f32(0.4)}, {"x": 0.0, "y": 1.0}))
         self.assertEqual(hit["fraction"], f32(0.46))
 
+    def test_the_build_remove_joints_and_joints_broken_examples(self):
+        def body(motion, x, colour, shape):
+            return {"motion": motion, "position": {"x": x, "y": 5.0}, "colour": colour,
+                    "parts": [{"shape": shape}]}
+        pin = body("Static", 0.0, {"r": 0x5B, "g": 0x5B, "b": 0x66}, {"Rect": {"width": 0.25, "height": 0.25}})
+        disc = body("Dynamic", 1.5, {"r": 0xD6, "g": 0x45, "b": 0x41}, {"Circle": {"radius": 0.25}})
+        hinge = {"a": {"New": 0}, "b": {"New": 1}, "anchor_a": {"x": 0.0, "y": 0.0},
+                 "anchor_b": {"x": -1.5, "y": 0.0}, "kind": {"Revolute": {}}}
+        self.assertEqual(encode("Build", {"bodies": [pin, disc], "joints": [hinge]}), payload_after("### Build"))
+        self.assertEqual(encode("RemoveJoints", {"ids": [{"index": 2, "generation": 0}]}),
+                         payload_after("### RemoveJoints"))
+        e = decode("Event", payload_after("**Worked example (JointsBroken).**"))
+        self.assertEqual(e["frame"], 300)
+        self.assertEqual(e["kind"]["JointsBroken"]["joints"],
+                         [{"id": {"index": 2, "generation": 0}, "force": 9.75, "torque": 0.0}])
+
     def test_garbage_is_an_error_never_a_wrong_value(self):
         for bad in [b"", b"\x02\x00", b"\x01", b"\x01\x01\x02\x03"]:
             with self.assertRaises(DecodeError):

@@ -46,6 +46,13 @@ class Client:
                 return decode("SceneState", reply.ok.payload.to_bytes())
         raise TimeoutError("no reply from " + self.key("scene") + " (is the daemon running?)")
 
+    def scene_with_joints(self, timeout=5.0):
+        """The state and every joint (`…/scene?joints`): {"scene": SceneState, "joints": [...]}."""
+        for reply in self.session.get(self.key("scene") + "?joints", timeout=timeout):
+            if reply.ok is not None:
+                return decode("SceneWithJoints", reply.ok.payload.to_bytes())
+        raise TimeoutError("no reply from " + self.key("scene") + " (is the daemon running?)")
+
     def query(self, q, timeout=5.0):
         """Ask `…/query` (a WorldQuery dict, see `wire.encode`): the QueryAnswer dict, {"Hits":
         ...}, {"Shapes": ...} or {"Refused": {"reason"}}."""
@@ -113,6 +120,14 @@ class Client:
     def spawn(self, bodies):
         """Add bodies (dicts as `wire.encode("Spawn", ...)` takes them), all or nothing."""
         self.send("spawn", "Spawn", {"bodies": bodies})
+
+    def build(self, bodies, joints=()):
+        """Add bodies of one or more shapes and joints between them (`…/build`), all or nothing;
+        see `wire.encode("Build", ...)`. The daemon answers with a Built or Rejected event."""
+        self.send("build", "Build", {"bodies": list(bodies), "joints": list(joints)})
+
+    def remove_joints(self, ids):
+        self.send("remove_joints", "RemoveJoints", {"ids": ids})
 
     def remove(self, ids):
         self.send("remove", "Remove", {"ids": ids})

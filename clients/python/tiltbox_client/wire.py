@@ -156,8 +156,8 @@ def colour(r):
     return {"r": r.u8(), "g": r.u8(), "b": r.u8()}
 
 
-def shape_spec(r):
-    v = r.variant(5, "ShapeSpec")
+def shape_spec(r, in_compound=False):
+    v = r.variant(6, "ShapeSpec")
     if v == 0:
         return {"Rect": {"width": r.f32(), "height": r.f32()}}
     if v == 1:
@@ -166,9 +166,82 @@ def shape_spec(r):
         return {"Capsule": {"length": r.f32(), "radius": r.f32()}}
     if v == 3:
         return {"Polygon": {"vertices": r.seq(vector)}}
+    if v == 5:
+        if in_compound:
+            raise DecodeError("a compound's part is itself a compound")
+        return {"Compound": {"parts": r.seq(part_shape)}}
     a, b, radius = vector(r), vector(r), r.f32()
     prev, nxt = r.option(vector), r.option(vector)
     return {"Segment": {"a": a, "b": b, "radius": radius, "prev": prev, "next": nxt, "one_sided": r.bool()}}
+
+
+def part_shape(r):
+    """One shape of a body of several: the shape, its offset and angle in the body's frame."""
+    return {"shape": shape_spec(r, True), "offset": vector(r), "angle": r.f32()}
+
+
+def _opt_f32(r):
+    return r.option(lambda q: q.f32())
+
+
+def _limit(r):
+    return {"lower": r.f32(), "upper": r.f32()}
+
+
+def _motor(r):
+    return {"speed": r.f32(), "max": r.f32()}
+
+
+def _spring(r):
+    return {"hertz": r.f32(), "damping_ratio": r.f32()}
+
+
+def joint_end(r):
+    v = r.variant(3, "JointEnd")
+    if v == 0:
+        return "World"
+    if v == 1:
+        return {"New": r.u32()}
+    return {"Live": body_ref(r)}
+
+
+def joint_kind(r):
+    v = r.variant(6, "JointKindSpec")
+    if v == 0:
+        return {"Revolute": {"reference_angle": _opt_f32(r), "limit": r.option(_limit),
+                             "motor": r.option(_motor), "spring": r.option(_spring)}}
+    if v == 1:
+        return {"Prismatic": {"axis": vector(r), "reference_angle": _opt_f32(r),
+                              "limit": r.option(_limit), "motor": r.option(_motor),
+                              "spring": r.option(_spring)}}
+    if v == 2:
+        return {"Distance": {"length": _opt_f32(r), "spring": r.option(_spring),
+                             "limit": r.option(_limit)}}
+    if v == 3:
+        return {"Weld": {"reference_angle": _opt_f32(r), "linear_hertz": r.f32(),
+                         "linear_damping_ratio": r.f32(), "angular_hertz": r.f32(),
+                         "angular_damping_ratio": r.f32()}}
+    if v == 4:
+        return {"Wheel": {"axis": vector(r), "spring": r.option(_spring),
+                          "limit": r.option(_limit), "motor": r.option(_motor)}}
+    return {"Motor": {"angular_offset": r.f32(), "max_force": r.f32(), "max_torque": r.f32(),
+                      "correction_factor": r.f32()}}
+
+
+def joint_spec(r):
+    return {
+        "a": joint_end(r), "b": joint_end(r), "anchor_a": vector(r), "anchor_b": vector(r),
+        "kind": joint_kind(r), "collide_connected": r.bool(), "break_force": _opt_f32(r),
+        "break_torque": _opt_f32(r),
+    }
+
+
+def joint_info(r):
+    return {"id": body_ref(r), "joint": joint_spec(r)}
+
+
+def broken_joint(r):
+    return {"id": body_ref(r), "force": r.f32(), "torque": r.f32()}
 
 
 def body_info(r):
@@ -241,7 +314,7 @@ def hit_info(r):
 
 def event(r):
     frame = r.u64()
-    v = r.variant(7, "EventKind")
+    v = r.variant(10, "EventKind")
     if v == 0:
         kind = {"Added": {"bodies": r.seq(body_info)}}
     elif v == 1:
@@ -254,8 +327,14 @@ def event(r):
         kind = {"Contacts": {"begin": r.seq(shape_pair), "end": r.seq(shape_pair), "dropped": r.u32()}}
     elif v == 5:
         kind = {"Hits": {"hits": r.seq(hit_info), "dropped": r.u32()}}
-    else:
+    elif v == 6:
         kind = {"Sensors": {"begin": r.seq(shape_pair), "end": r.seq(shape_pair), "dropped": r.u32()}}
+    elif v == 7:
+        kind = {"Built": {"bodies": r.seq(body_info), "joints": r.seq(joint_info)}}
+    elif v == 8:
+        kind = {"JointsRemoved": {"ids": r.seq(body_ref)}}
+    else:
+        kind = {"JointsBroken": {"joints": r.seq(broken_joint)}}
     return {"frame": frame, "kind": kind}
 
 
@@ -295,10 +374,15 @@ def query_answer(r):
     return {"Refused": {"reason": r.string()}}
 
 
+def scene_with_joints(r):
+    return {"scene": scene_state(r), "joints": r.seq(joint_info)}
+
+
 DECODERS = {
     "Snapshot": snapshot_frame,
     "Event": event,
     "SceneState": scene_state,
+    "SceneWithJoints": scene_with_joints,
     "Stats": stats,
     "QueryAnswer": query_answer,
 }
@@ -306,7 +390,8 @@ DECODERS = {
 
 def decode(message, data):
     """Decode one payload (version byte included) as `message`: "Snapshot", "Event",
-    "SceneState" or "Stats". Raises DecodeError naming what was wrong."""
+    "SceneState", "SceneWithJoints", "Stats" or "QueryAnswer". Raises DecodeError naming what
+    was wrong."""
     f = DECODERS.get(message)
     if f is None:
         raise DecodeError("no message " + message)
@@ -339,7 +424,7 @@ def _write_shape(w, s):
         for v in vs:
             w.vector(v)
     else:
-        raise ValueError("a spawned shape is a Rect, Circle, Capsule or Polygon")
+        raise ValueError("a spawned or built shape is a Rect, Circle, Capsule or Polygon")
 
 
 def _ref(w, r):
@@ -359,9 +444,87 @@ def _spawn_body(w, b):
     w.u8(c["r"]); w.u8(c["g"]); w.u8(c["b"])
 
 
+def _opt(w, v, f):
+    if v is None:
+        w.u8(0)
+    else:
+        w.u8(1); f(v)
+
+
+MOTIONS = ["Dynamic", "Kinematic", "Static"]
+JOINT_KINDS = ["Revolute", "Prismatic", "Distance", "Weld", "Wheel", "Motor"]
+
+
+def _part(w, p):
+    """A PartSpec: shape, offset, angle, then material, filter and reports (defaults: density 1,
+    friction 0.6, restitution 0, category 1, mask all, group 0, no sensor, no reports)."""
+    _write_shape(w, p["shape"]); w.vector(p.get("offset", {"x": 0.0, "y": 0.0}))
+    w.f32(p.get("angle", 0.0))
+    w.f32(p.get("density", 1.0)); w.f32(p.get("friction", 0.6)); w.f32(p.get("restitution", 0.0))
+    f = p.get("filter", {})
+    w.varint(f.get("category", 1)); w.varint(f.get("mask", 2**64 - 1))
+    g = f.get("group", 0)
+    w.varint(2 * g if g >= 0 else -2 * g - 1)
+    for flag in ("sensor", "contact_events", "hit_events"):
+        w.u8(1 if p.get(flag, False) else 0)
+
+
+def _build_body(w, b):
+    _opt(w, b.get("name"), w.string)
+    w.varint(MOTIONS.index(b.get("motion", "Dynamic")))
+    w.vector(b["position"]); w.f32(b.get("angle", 0.0))
+    w.vector(b.get("velocity", {"x": 0.0, "y": 0.0})); w.f32(b.get("angular_velocity", 0.0))
+    c = b.get("colour", {"r": 128, "g": 128, "b": 128})
+    w.u8(c["r"]); w.u8(c["g"]); w.u8(c["b"])
+    w.varint(len(b["parts"]))
+    for p in b["parts"]:
+        _part(w, p)
+
+
+def _joint_end(w, e):
+    if e == "World":
+        w.varint(0)
+    elif "New" in e:
+        w.varint(1); w.varint(e["New"])
+    else:
+        w.varint(2); _ref(w, e["Live"])
+
+
+def _joint(w, j):
+    """A JointSpec: {a, b, anchor_a, anchor_b, kind: {"Revolute": {...}}, collide_connected,
+    break_force, break_torque}; settings left out of a kind are None."""
+    _joint_end(w, j["a"]); _joint_end(w, j["b"])
+    w.vector(j.get("anchor_a", {"x": 0.0, "y": 0.0})); w.vector(j.get("anchor_b", {"x": 0.0, "y": 0.0}))
+    (name, k), = j["kind"].items()
+    w.varint(JOINT_KINDS.index(name))
+    lim = lambda v: (w.f32(v["lower"]), w.f32(v["upper"]))
+    mot = lambda v: (w.f32(v["speed"]), w.f32(v["max"]))
+    spr = lambda v: (w.f32(v["hertz"]), w.f32(v["damping_ratio"]))
+    if name in ("Prismatic", "Wheel"):
+        w.vector(k["axis"])
+    if name in ("Revolute", "Prismatic"):
+        _opt(w, k.get("reference_angle"), w.f32); _opt(w, k.get("limit"), lim)
+        _opt(w, k.get("motor"), mot); _opt(w, k.get("spring"), spr)
+    elif name == "Distance":
+        _opt(w, k.get("length"), w.f32); _opt(w, k.get("spring"), spr); _opt(w, k.get("limit"), lim)
+    elif name == "Weld":
+        _opt(w, k.get("reference_angle"), w.f32)
+        for f in ("linear_hertz", "linear_damping_ratio", "angular_hertz", "angular_damping_ratio"):
+            w.f32(k.get(f, 0.0))
+    elif name == "Wheel":
+        _opt(w, k.get("spring"), spr); _opt(w, k.get("limit"), lim); _opt(w, k.get("motor"), mot)
+    else:
+        for f in ("angular_offset", "max_force", "max_torque", "correction_factor"):
+            w.f32(k[f])
+    w.u8(1 if j.get("collide_connected", False) else 0)
+    _opt(w, j.get("break_force"), w.f32); _opt(w, j.get("break_torque"), w.f32)
+
+
 def encode(message, m):
     """Encode a command (version byte + postcard): "SetGravity" {x, y}; "Tilt"
     {"Orientation": name} or {"Accelerometer": {x, y, z}}; "Spawn" {bodies}; "Remove" {ids};
+    "Build" {bodies: [{motion, position, parts: [{shape, offset, ...}], ...}], joints: [...]};
+    "RemoveJoints" {ids};
     "Reset" None; "SetVelocity" {id, velocity, angular_velocity}; "Drag" {"Grab": {hand, id,
     point}}, {"Move": {hand, target}} or {"Release": {hand}}; and the `…/query` request
     "WorldQuery" {"RayClosest": {origin, translation}}, {"RayAll": {..., limit}}, {"Point":
@@ -386,6 +549,17 @@ def encode(message, m):
             _ref(w, r)
     elif message == "Reset":
         pass
+    elif message == "Build":
+        w.varint(len(m["bodies"]))
+        for b in m["bodies"]:
+            _build_body(w, b)
+        w.varint(len(m["joints"]))
+        for j in m["joints"]:
+            _joint(w, j)
+    elif message == "RemoveJoints":
+        w.varint(len(m["ids"]))
+        for r in m["ids"]:
+            _ref(w, r)
     elif message == "SetVelocity":
         _ref(w, m["id"]); w.vector(m["velocity"]); w.f32(m["angular_velocity"])
     elif message == "WorldQuery":

@@ -86,6 +86,54 @@ fn command(rng: &mut Rng, ids: &[BodyRef]) -> (CommandKey, Vec<u8>) {
             };
             (CommandKey::Drag, encode(&drag).unwrap())
         }
+        // A pendulum hinged to a live body or the world (refused when the live body is
+        // static or gone), its joint sometimes breaking under a weak break force.
+        9 if rng.next() % 2 == 0 && !ids.is_empty() => {
+            let x = rng.f(-3.0, 3.0);
+            let bob = BuildBody {
+                name: None,
+                motion: Motion::Dynamic,
+                position: Vector::new(x + 0.8, 4.5),
+                angle: 0.0,
+                velocity: Vector::default(),
+                angular_velocity: 0.0,
+                colour: Colour::default(),
+                parts: vec![
+                    PartSpec::at(ShapeSpec::Circle { radius: 0.2 }, Vector::default()),
+                    PartSpec::at(
+                        ShapeSpec::Rect {
+                            width: 0.3,
+                            height: 0.1,
+                        },
+                        Vector::new(0.3, 0.0),
+                    ),
+                ],
+            };
+            let a = if rng.next() % 2 == 0 {
+                JointEnd::World
+            } else {
+                JointEnd::Live(ids[(rng.next() % ids.len() as u64) as usize])
+            };
+            let joint = JointSpec {
+                a,
+                b: JointEnd::New(0),
+                anchor_a: Vector::new(x, 5.0),
+                anchor_b: Vector::new(-0.8, 0.5),
+                kind: JointKindSpec::Distance {
+                    length: None,
+                    spring: None,
+                    limit: None,
+                },
+                collide_connected: false,
+                break_force: (rng.next() % 2 == 0).then_some(rng.f(2.0, 30.0)),
+                break_torque: None,
+            };
+            let b = Build {
+                bodies: vec![bob],
+                joints: vec![joint],
+            };
+            (CommandKey::Build, encode(&b).unwrap())
+        }
         _ => (CommandKey::Gravity, vec![1, 0xff, 0xff]), // malformed: recorded as rejected
     }
 }
@@ -250,17 +298,21 @@ fn a_recorded_run_with_joints_replays_bit_identically() {
     let live = record_from(SceneSource::File(scene), &path, 300, 0x5151_7e3a);
     let journal = Journal::read(&path).unwrap();
     let mut replayed = Vec::new();
+    let mut most_joints = 0;
     let report = replay(&journal, None, |sim| {
-        assert_eq!(
-            sim.world().joint_count(),
-            12,
-            "the scene's joints are rebuilt"
+        most_joints = most_joints.max(sim.world().joint_count());
+        // the scene's 12, and any a random build added
+        assert!(
+            sim.world().joint_count() >= 12,
+            "the scene's joints are rebuilt: {}",
+            sim.world().joint_count()
         );
         replayed.push((sim.frame(), sim.world().state_hash()))
     })
     .unwrap();
     assert_eq!(report.mismatches, 0, "{report:?}");
     assert_eq!(replayed, live);
+    assert!(most_joints > 12, "no build was applied in the run");
     let distinct: std::collections::BTreeSet<u64> = live.iter().map(|f| f.1).collect();
     assert!(distinct.len() > live.len() / 2, "the run moved");
     let _ = std::fs::remove_dir_all(&dir);

@@ -73,6 +73,7 @@ fn each_command_variant_has_the_documented_index() {
             }),
         ),
         ("RemoveJoints", Command::RemoveJoints(Vec::new())),
+        ("HandGone", Command::HandGone(7)),
     ];
     for (name, command) in commands {
         let bytes = record(command);

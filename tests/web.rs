@@ -1466,3 +1466,80 @@ async fn the_page_draws_compounds_and_joints_built_over_the_wire() {
     page.wait_for("tiltbox.joints() === 0", 10).await;
     stop(page, gw, server).await;
 }
+
+/// A page that holds a brick and goes away (its WebSocket closes) lets the brick go at once:
+/// the gateway keeps a `…/hand/<hand>` liveliness token for each hand a page grabs with, and
+/// drops it with the connection, so the daemon does not wait out its 3 s time-out.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_page_that_leaves_lets_go_of_what_it_held() {
+    let port = 17499;
+    let server = daemon(port).await;
+    let keys = server.keys().clone();
+    let gs = session::open(&[format!("tcp/127.0.0.1:{port}")])
+        .await
+        .unwrap();
+    let gw = Gateway::start(
+        gs,
+        WebOptions {
+            listen: "127.0.0.1:0".parse().unwrap(),
+            tls: TlsMode::Off,
+            allow: Allow::parse("drag").unwrap(),
+            rate: 120,
+            keys: keys.clone(),
+            fixed_prefix: false,
+        },
+    )
+    .await
+    .unwrap();
+    let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_secs(2)).await; // the bricks land
+    let red = |sc: SceneState| {
+        sc.bodies
+            .into_iter()
+            .find(|b| b.name == "red brick")
+            .unwrap()
+    };
+    let brick = red(scene(&s, &keys).await);
+    let url = format!("ws://{}/ws", gw.local_addr());
+    let (mut ws, _) = tokio_tungstenite::connect_async(url.as_str())
+        .await
+        .expect("connect");
+    let frame = |d: Drag| {
+        let mut f = vec![0x0b];
+        f.extend(encode(&d).unwrap());
+        WsMessage::Binary(f.into())
+    };
+    let hand = 9;
+    ws.send(frame(Drag::Grab {
+        hand,
+        id: brick.id,
+        point: brick.position,
+    }))
+    .await
+    .unwrap();
+    for _ in 0..10 {
+        let target = Vector::new(0.0, 4.5);
+        ws.send(frame(Drag::Move { hand, target })).await.unwrap();
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let held = red(scene(&s, &keys).await).position;
+    assert!(held.y > 4.0, "the page holds the brick up: {held:?}");
+    ws.close(None).await.unwrap();
+    let left = Instant::now();
+    loop {
+        let y = red(scene(&s, &keys).await).position.y;
+        if y < 3.5 {
+            break;
+        }
+        assert!(
+            left.elapsed() < Duration::from_millis(1500),
+            "still held {:?} after the page left (y = {y})",
+            left.elapsed()
+        );
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    gw.stop().await;
+    server.shutdown().await.unwrap();
+}

@@ -9,14 +9,16 @@
 use super::wire::{self, RateLimit, Tag};
 use super::{Counters, Ctx};
 use crate::client::session::watch_server;
-use crate::protocol::{CommandKey, Keys};
+use crate::protocol::{decode, CommandKey, Drag, Keys};
 use axum::extract::ws::{Message, WebSocket};
 use futures_util::{SinkExt, StreamExt};
 use serde_json::json;
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::mpsc;
+use zenoh::liveliness::LivelinessToken;
 use zenoh::qos::CongestionControl;
 
 /// What the Zenoh side hands the socket task.
@@ -98,6 +100,9 @@ async fn serve(socket: WebSocket, ctx: &Ctx, keys: &Keys) -> Result<(), String> 
     send_text(&mut sink, &hello).await?;
 
     let mut commands = RateLimit::new(ctx.opts.rate);
+    // A liveliness token per hand this page holds with: when the page goes (this function
+    // returns, however), the tokens go and the daemon lets its hands go at once.
+    let mut hands = HashMap::new();
     loop {
         tokio::select! {
             down = rx.recv() => {
@@ -132,6 +137,9 @@ async fn serve(socket: WebSocket, ctx: &Ctx, keys: &Keys) -> Result<(), String> 
                         };
                         match verdict {
                             Ok(checked) => {
+                                if checked.key == CommandKey::Drag {
+                                    track_hand(ctx, keys, &checked.payload, &mut hands).await;
+                                }
                                 put(ctx, keys, checked).await?;
                                 Counters::add(&ctx.counters.commands, 1);
                             }
@@ -162,6 +170,49 @@ async fn serve(socket: WebSocket, ctx: &Ctx, keys: &Keys) -> Result<(), String> 
         }
     }
     Ok(())
+}
+
+/// Most hand tokens kept for one page: beyond it, those of hands already let go are dropped.
+const MAX_HAND_TOKENS: usize = 16;
+
+/// Keep a `…/hand/<hand>` token for each hand a page grabs with (and whether it was let go).
+/// A release does not drop its token at once: the token's end travels apart from the
+/// release, and arriving first it would make the release a refusal ("holds no body").
+async fn track_hand(
+    ctx: &Ctx,
+    keys: &Keys,
+    payload: &[u8],
+    hands: &mut HashMap<u64, (LivelinessToken, bool)>,
+) {
+    match decode::<Drag>(payload) {
+        Ok(Drag::Grab { hand, .. }) => {
+            if let Some(h) = hands.get_mut(&hand) {
+                h.1 = false;
+                return;
+            }
+            if hands.len() >= MAX_HAND_TOKENS {
+                hands.retain(|_, (_, released)| !*released);
+            }
+            match ctx
+                .session
+                .liveliness()
+                .declare_token(keys.hand(hand))
+                .await
+            {
+                Ok(token) => {
+                    hands.insert(hand, (token, false));
+                }
+                // The daemon's 3 s time-out still lets the hand go.
+                Err(e) => tracing::debug!("hand token: {e}"),
+            }
+        }
+        Ok(Drag::Release { hand }) => {
+            if let Some(h) = hands.get_mut(&hand) {
+                h.1 = true;
+            }
+        }
+        _ => {}
+    }
 }
 
 async fn put(ctx: &Ctx, keys: &Keys, c: wire::Checked) -> Result<(), String> {

@@ -161,6 +161,22 @@ impl Keys {
     pub fn server(&self) -> String {
         self.key("server")
     }
+    /// `…/hand/<hand>`: the liveliness token a client keeps while its hand `hand` may hold a
+    /// body; when it goes (the client left), the daemon lets the hand go.
+    pub fn hand(&self, hand: u64) -> String {
+        self.key(&format!("hand/{hand}"))
+    }
+    /// `…/hand/*`: every hand's token (what the daemon watches).
+    pub fn hands(&self) -> String {
+        self.key("hand/*")
+    }
+    /// The hand a `…/hand/<hand>` key names, if it is one of this world's.
+    pub fn hand_of(&self, key: &str) -> Option<u64> {
+        key.strip_prefix(self.prefix.as_str())?
+            .strip_prefix("/hand/")?
+            .parse()
+            .ok()
+    }
     /// The key a command is written to.
     pub fn command(&self, key: CommandKey) -> String {
         self.key(key.suffix())

@@ -41,6 +41,9 @@ pub enum Command {
     Build(Build),
     /// Remove joints, all or nothing: ids as sent, resolved when applied. Appended.
     RemoveJoints(Vec<JointRef>),
+    /// The client of hand `0` went away (its `…/hand/<hand>` liveliness token went): let the
+    /// hand go if it holds a body, silently. Arrives on `…/drag`'s channel. Appended.
+    HandGone(u64),
 }
 
 /// A body to add, validated.
@@ -143,6 +146,16 @@ impl Intake {
     /// counted as dropped): the `commands_received` of `…/stats`.
     pub fn received(&self) -> Arc<AtomicU64> {
         self.received.clone()
+    }
+
+    /// Queue the release of hand `hand`, whose client went away (never blocks; on a full
+    /// channel it is counted as a dropped `…/drag` command, and the hand's time-out lets it go).
+    pub fn hand_gone(&self, hand: u64) {
+        let key = CommandKey::Drag;
+        let command = Ok(Command::HandGone(hand));
+        if let Err(TrySendError::Full(_)) = self.tx.try_send(Incoming { key, command }) {
+            self.dropped[key.index()].fetch_add(1, Ordering::Relaxed);
+        }
     }
 
     /// Decode, validate and queue. Never blocks: a full channel is counted and reported by the

@@ -332,6 +332,22 @@ impl Server {
                 .map_err(zerr("command subscriber"))?;
             subscribers.push(sub);
         }
+        // Hands whose client went away: their `…/hand/<hand>` liveliness token is deleted.
+        let hand_intake = intake.clone();
+        let hand_keys = keys.clone();
+        let hands = session
+            .liveliness()
+            .declare_subscriber(keys.hands())
+            .callback(move |sample| {
+                if sample.kind() == zenoh::sample::SampleKind::Delete {
+                    if let Some(hand) = hand_keys.hand_of(sample.key_expr().as_str()) {
+                        hand_intake.hand_gone(hand);
+                    }
+                }
+            })
+            .await
+            .map_err(zerr("hand liveliness subscriber"))?;
+        subscribers.push(hands);
         drop(intake);
 
         let token = session

@@ -22,6 +22,7 @@ class Client:
         self.session = zenoh.open(conf)
         self.prefix = prefix or "tiltbox/" + world
         self._subscribers = []
+        self._hands = {}  # hand -> [its liveliness token, let go]
 
     def key(self, suffix):
         """The full key of `suffix` (`poses`, `spawn`, ...)."""
@@ -141,7 +142,15 @@ class Client:
         self.send("velocity", "SetVelocity", m)
 
     def grab(self, hand, body, point):
-        """Hand `hand` (an id of this client's) takes hold of `body` at `point` {x, y} m."""
+        """Hand `hand` (an id of this client's) takes hold of `body` at `point` {x, y} m. The
+        client keeps the hand's liveliness token (`…/hand/<hand>`) while it lives, so a client
+        that dies lets go at once."""
+        if hand not in self._hands:
+            if len(self._hands) >= 16:  # drop the tokens of hands already let go
+                for h in [h for h, (_, gone) in self._hands.items() if gone]:
+                    self._hands.pop(h)[0].undeclare()
+            self._hands[hand] = [self.session.liveliness().declare_token(self.key(f"hand/{hand}")), False]
+        self._hands[hand][1] = False
         self.send("drag", "Drag", {"Grab": {"hand": hand, "id": body, "point": point}})
 
     def move(self, hand, target):
@@ -149,3 +158,7 @@ class Client:
 
     def release(self, hand):
         self.send("drag", "Drag", {"Release": {"hand": hand}})
+        # The token stays a while: its end travels apart from the release, and arriving
+        # first it would make the release a refusal.
+        if hand in self._hands:
+            self._hands[hand][1] = True

@@ -67,6 +67,10 @@ impl Simulation {
             Command::Drag(d) => self.drag(d).map(|()| None),
             Command::Build(b) => self.build(b).map(Some),
             Command::RemoveJoints(ids) => self.remove_joints(ids).map(Some),
+            Command::HandGone(hand) => {
+                self.hand_gone(hand);
+                Ok(None)
+            }
         };
         match result {
             Ok(kind) => {

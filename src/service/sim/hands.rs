@@ -75,6 +75,13 @@ impl Simulation {
         }
     }
 
+    /// Let hand `hand` go if it holds a body (its client went away); nothing otherwise.
+    pub(super) fn hand_gone(&mut self, hand: u64) {
+        if let Some(h) = self.hands.0.remove(&hand) {
+            let _ = self.world.remove_joint(h.joint);
+        }
+    }
+
     /// The hand `hand`, if it holds a body.
     fn held(&mut self, hand: u64) -> Result<&mut Hand, String> {
         let live = self.hands.0.get(&hand).map(|h| h.joint);

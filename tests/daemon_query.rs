@@ -170,3 +170,36 @@ async fn rays_points_and_boxes_find_the_bricks_the_scene_reply_shows() {
     drop(s);
     server.shutdown().await.unwrap();
 }
+
+/// `limits.max_queries_per_second` bounds the queries answered, all clients together: with 5
+/// a second, a burst of 12 gets at most the bucket's 5 and what refills while they are
+/// answered (a tick each, about 0.2 s: one more), and the rest are refused by name.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn queries_beyond_the_rate_limit_are_refused_by_name() {
+    let mut config = daemon_config(PORT + 1);
+    config.limits.max_queries_per_second = 5;
+    let server = serve(&config).await;
+    let keys = server.keys().clone();
+    let s = open(PORT + 1).await;
+    let q = encode(&WorldQuery::Point {
+        point: Vector::new(0.0, 1.0),
+        filter: all(),
+    })
+    .unwrap();
+    let (mut answered, mut refused) = (0, 0);
+    for _ in 0..12 {
+        match ask(&s, &keys, &q).await {
+            QueryAnswer::Refused { reason } => {
+                assert!(
+                    reason.contains("rate limit: limits.max_queries_per_second = 5"),
+                    "{reason}"
+                );
+                refused += 1;
+            }
+            _ => answered += 1,
+        }
+    }
+    assert!(answered >= 5 && answered <= 8, "{answered} answered");
+    assert_eq!(answered + refused, 12);
+    server.shutdown().await.unwrap();
+}

@@ -53,6 +53,9 @@ pub struct ServeArgs {
     /// [config: limits.max_spawns_per_second; default 20]
     #[arg(long, value_name = "N")]
     pub max_spawns_per_second: Option<u32>,
+    /// `…/query` requests answered per second, all clients together [config: limits.max_queries_per_second; default 600]
+    #[arg(long, value_name = "N")]
+    pub max_queries_per_second: Option<u32>,
     /// [config: limits.max_bodies_per_spawn; default 64]
     #[arg(long, value_name = "N")]
     pub max_bodies_per_spawn: Option<u32>,
@@ -191,6 +194,7 @@ impl ServeArgs {
         set(&mut l.max_angular_speed, &self.max_angular_speed);
         set(&mut l.max_friction, &self.max_friction);
         set(&mut l.max_name_bytes, &self.max_name_bytes);
+        set(&mut l.max_queries_per_second, &self.max_queries_per_second);
         let z = &mut c.zenoh;
         set(&mut z.mode, &self.mode);
         if !self.listen.is_empty() {

@@ -85,6 +85,9 @@ pub struct Limits {
     pub max_friction: f32,
     /// Longest body name (bytes of UTF-8). Default 64.
     pub max_name_bytes: u32,
+    /// Most `…/query` requests answered per second (wall clock, all clients together: Zenoh
+    /// does not say who asked), with a second's burst; more are refused. Default 600.
+    pub max_queries_per_second: u32,
 }
 
 /// How the daemon joins Zenoh.
@@ -142,6 +145,7 @@ impl Default for Limits {
             max_angular_speed: 100.0,
             max_friction: 10.0,
             max_name_bytes: 64,
+            max_queries_per_second: 600,
         }
     }
 }
@@ -405,6 +409,12 @@ impl ServerConfig {
             ));
         }
         count("limits.max_name_bytes", l.max_name_bytes, 0, 1 << 20)?;
+        count(
+            "limits.max_queries_per_second",
+            l.max_queries_per_second,
+            1,
+            1_000_000,
+        )?;
         if l.min_size > l.max_coordinate || l.min_density > l.max_density {
             return Err(invalid(
                 "limits.min_size / limits.min_density",

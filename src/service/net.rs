@@ -7,6 +7,7 @@ use super::command::{Incoming, Intake};
 use super::config::Limits;
 use super::config::{ConfigError, ServerConfig};
 use super::journal::JournalWriter;
+use super::rate::RateLimit;
 use super::sim::{SceneSource, StartError};
 use super::tick::{self, Outputs, Recording, RunSummary, Shared, TickConfig};
 use super::wire::check_query;
@@ -458,6 +459,7 @@ async fn declare_world_queries(
     let (tx, mut rx) = tokio::sync::mpsc::channel::<Query>(MAX_PENDING);
     let reply_key = key.clone();
     let task = tokio::spawn(async move {
+        let mut rate = RateLimit::new(limits.max_queries_per_second);
         // Every query that came in meanwhile is asked at once, so they share one tick.
         while let Some(first) = rx.recv().await {
             let mut batch = vec![first];
@@ -467,6 +469,14 @@ async fn declare_world_queries(
             let asked: Vec<_> = batch
                 .into_iter()
                 .map(|query| {
+                    if !rate.take(std::time::Instant::now()) {
+                        let reason = format!(
+                            "rate limit: limits.max_queries_per_second = {} queries already \
+                             answered in the last second",
+                            rate.rate()
+                        );
+                        return (query, Err(reason));
+                    }
                     let bytes = query
                         .payload()
                         .map(|p| p.to_bytes().to_vec())

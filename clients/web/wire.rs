@@ -248,7 +248,7 @@ pub use crate::service::RateLimit;
 mod tests {
     use super::*;
     use crate::protocol::{encode, Orientation};
-    use std::time::Duration;
+    use std::time::{Duration, Instant};
 
     #[test]
     fn allowed_commands_are_decoded_and_re_encoded() {

@@ -121,7 +121,7 @@ pub struct ServeArgs {
     /// [config: resume; default false].
     #[arg(long)]
     pub resume: bool,
-    /// Log filter (tracing EnvFilter syntax; RUST_LOG wins) [default info,zenoh=warn].
+    /// Log filter (tracing EnvFilter syntax; RUST_LOG wins) [default info,zenoh=error: Zenoh's own warnings repeat what the daemon reports in its own words].
     #[arg(long, value_name = "FILTER")]
     pub log: Option<String>,
     /// Instead of serving: run the daemon with an in-process client for SECONDS and print
@@ -231,6 +231,17 @@ impl ServeArgs {
                 });
             }
         }
+        // The config cannot tell a checkpoint_every left at its default from one given; the
+        // flag can, so `--checkpoint-every 10` alone is refused as `--checkpoint-every 5` is.
+        if let (Some(every), None) = (self.checkpoint_every, &c.checkpoint) {
+            return Err(ConfigError::Invalid {
+                key: "checkpoint_every",
+                value: every.to_string(),
+                expected: "has no effect without a checkpoint file (config key checkpoint, flag \
+                           --checkpoint)"
+                    .into(),
+            });
+        }
         c.validate()?;
         Ok(c)
     }
@@ -238,7 +249,7 @@ impl ServeArgs {
 
 /// Run `tiltbox serve`.
 pub fn run(args: ServeArgs) -> Result<ExitCode, Failure> {
-    init_logging(args.log.as_deref(), "info,zenoh=warn");
+    init_logging(args.log.as_deref(), "info,zenoh=error");
     let config = args
         .config()
         .map_err(|e| Failure::Usage(format!("bad config: {e}")))?;

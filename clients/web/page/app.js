@@ -290,6 +290,7 @@ function frame(now) {
     drawBody(b, p[0], p[1], p[2], px);
   }
   if (state.joints.size) drawJoints(poseOf, px);
+  if (probe.drag) timeDrag(poseOf, now);
   if (probe.tilt && probe.tilt.seenAt && s.t >= probe.tilt.t) {
     metrics.tiltToVisible.push(now - probe.tilt.sentAt);
     probe.tilt = null;
@@ -476,7 +477,23 @@ function eventPoint(e) {
 }
 
 function moveHand(h, now) {
-  if (send('Drag', { Move: { hand: h.hand, target: h.target } })) { h.sent = now; metrics.drags++; }
+  if (send('Drag', { Move: { hand: h.hand, target: h.target } })) {
+    h.sent = now; metrics.drags++;
+    if (h.fresh && !probe.drag) probe.drag = { sentAt: now, key: h.key, from: null };
+    h.fresh = false;
+  }
+}
+
+// The drag probe, at each frame drawn: the first frame after the move fixes where the body
+// was drawn; the first one 5 mm away from there is the finger's move on the screen.
+function timeDrag(poseOf, now) {
+  const d = probe.drag, p = poseOf(d.key);
+  if (!p || now - d.sentAt > 2000) { probe.drag = null; return; }
+  if (!d.from) { d.from = [p[0], p[1]]; return; }
+  if (Math.hypot(p[0] - d.from[0], p[1] - d.from[1]) >= 0.005) {
+    metrics.dragToVisible.push(now - d.sentAt);
+    probe.drag = null;
+  }
 }
 
 canvas.addEventListener('pointerdown', e => {
@@ -484,7 +501,8 @@ canvas.addEventListener('pointerdown', e => {
   const [x, y] = eventPoint(e);
   const hit = bodyAt(x, y);
   if (hit) {
-    const h = { hand: PAGE_HANDS + (e.pointerId & 1023), target: { x, y }, sent: performance.now() };
+    const h = { hand: PAGE_HANDS + (e.pointerId & 1023), target: { x, y }, sent: performance.now(),
+      key: hit.key, fresh: true };
     if (send('Drag', { Grab: { hand: h.hand, id: hit.b.info.id, point: { x, y } } })) {
       hands.set(e.pointerId, h);
       metrics.drags++;

@@ -17,10 +17,13 @@ const state = {
 
 const metrics = {
   fps: 0, framesDrawn: 0, framesIn: 0, bytesIn: 0, rtt: null, errors: [], rejected: [],
-  tilts: 0, spawns: 0, drags: 0, tiltToSnapshot: [], tiltToVisible: [], connected: false,
+  tilts: 0, spawns: 0, drags: 0, tiltToSnapshot: [], tiltToVisible: [], dragToVisible: [],
+  connected: false,
 };
 // A tilt in flight, timed until its gravity is drawn: { sentAt, g0, seenAt, t } or null.
-const probe = { tilt: null };
+// A drag's first move, timed until its body is drawn 5 mm from where it was drawn when the
+// move went out: { sentAt, key, from } or null.
+const probe = { tilt: null, drag: null };
 // What the world tells the person (a refusal); app.js puts it on the screen.
 const hooks = { note: () => {} };
 

@@ -46,7 +46,7 @@ pub enum Mouse {
 
 /// The mouse's hand id on `…/drag`: this process's id in the high bits, so two viewers on one
 /// world do not share a hand.
-fn mouse_hand() -> u64 {
+pub(super) fn mouse_hand() -> u64 {
     (std::process::id() as u64) << 16 | 1
 }
 

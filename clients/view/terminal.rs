@@ -3,7 +3,7 @@
 //! line with rate and latency, keys to quit (and with `--control` to drive the world). The terminal is put
 //! back on `q`, Esc, Ctrl-C, SIGTERM and on panic (ratatui's hook).
 
-use super::control::{key_command, Control, Key, Mouse, Put, KEY_HELP};
+use super::control::{key_command, mouse_hand, Control, Key, Mouse, Put, KEY_HELP};
 use super::playout::{Playout, Xya};
 use super::render::{cell_to_world, render, Status};
 use super::world::{Applied, Join, Received, WorldView};
@@ -159,10 +159,15 @@ pub(super) fn show(
     let mut snap_next = false;
     let mut terminal = ratatui::try_init()?;
     let _guard = TerminalGuard { mouse: control };
-    if control {
-        // The mouse drags bodies (left button), as a finger does on the web page.
+    // The mouse drags bodies (left button), as a finger does on the web page. Its hand's
+    // liveliness token lives as long as the viewer: a viewer that dies lets go at once.
+    let _hand_token = if control {
         crossterm::execute!(std::io::stdout(), crossterm::event::EnableMouseCapture)?;
-    }
+        let token = session.liveliness().declare_token(keys.hand(mouse_hand()));
+        rt.block_on(async { token.await }).ok()
+    } else {
+        None
+    };
     let stop = Arc::new(AtomicBool::new(false));
     let input = {
         let (tx, stop) = (tx.clone(), stop.clone());

@@ -199,7 +199,7 @@ async fn queries_beyond_the_rate_limit_are_refused_by_name() {
             _ => answered += 1,
         }
     }
-    assert!(answered >= 5 && answered <= 8, "{answered} answered");
+    assert!((5..=8).contains(&answered), "{answered} answered");
     assert_eq!(answered + refused, 12);
     server.shutdown().await.unwrap();
 }

@@ -204,7 +204,8 @@ fn check_joint(j: &JointSpec, bodies: &[BuildBody]) -> Result<(), String> {
         ("break_force", j.break_force),
         ("break_torque", j.break_torque),
     ] {
-        if let Some(v) = v.filter(|v| !(*v > 0.0)) {
+        // NaN is refused too: it is not greater than 0.
+        if let Some(v) = v.filter(|v| v.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)) {
             return Err(format!(
                 "{field} = {v} is out of range: must be > 0 (or left out: never breaks)"
             ));

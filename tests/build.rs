@@ -36,16 +36,7 @@ fn v(x: f32, y: f32) -> Vector {
 }
 
 fn body(motion: Motion, at: Vector, parts: Vec<PartSpec>) -> BuildBody {
-    BuildBody {
-        name: None,
-        motion,
-        position: at,
-        angle: 0.0,
-        velocity: v(0.0, 0.0),
-        angular_velocity: 0.0,
-        colour: Colour::default(),
-        parts,
-    }
+    BuildBody::new(motion, at, parts)
 }
 
 fn rect(w: f32, h: f32, offset: Vector) -> PartSpec {
@@ -63,21 +54,7 @@ fn disc(r: f32) -> PartSpec {
 }
 
 fn hinge(a: JointEnd, b: JointEnd, anchor_a: Vector, anchor_b: Vector) -> JointSpec {
-    JointSpec {
-        a,
-        b,
-        anchor_a,
-        anchor_b,
-        kind: JointKindSpec::Revolute {
-            reference_angle: None,
-            limit: None,
-            motor: None,
-            spring: None,
-        },
-        collide_connected: false,
-        break_force: None,
-        break_torque: None,
-    }
+    JointSpec::hinge(a, b, anchor_a, anchor_b)
 }
 
 /// A pendulum: a static pin at (0, 5) and a 0.2 m disc 1.5 m to its right on a hinge.

@@ -325,14 +325,8 @@ fn build_remove_joints_and_joints_broken_examples_are_the_encoded_bytes() {
     let (bytes, prose) = payload_after("### Build");
     let v = Vector::new;
     let body = |motion, position, colour: &str, shape| BuildBody {
-        name: None,
-        motion,
-        position,
-        angle: 0.0,
-        velocity: v(0.0, 0.0),
-        angular_velocity: 0.0,
         colour: colour.parse().unwrap(),
-        parts: vec![PartSpec::at(shape, v(0.0, 0.0))],
+        ..BuildBody::new(motion, position, vec![PartSpec::at(shape, v(0.0, 0.0))])
     };
     let pendulum = Build {
         bodies: vec![
@@ -352,21 +346,12 @@ fn build_remove_joints_and_joints_broken_examples_are_the_encoded_bytes() {
                 ShapeSpec::Circle { radius: 0.25 },
             ),
         ],
-        joints: vec![JointSpec {
-            a: JointEnd::New(0),
-            b: JointEnd::New(1),
-            anchor_a: v(0.0, 0.0),
-            anchor_b: v(-1.5, 0.0),
-            kind: JointKindSpec::Revolute {
-                reference_angle: None,
-                limit: None,
-                motor: None,
-                spring: None,
-            },
-            collide_connected: false,
-            break_force: None,
-            break_torque: None,
-        }],
+        joints: vec![JointSpec::hinge(
+            JointEnd::New(0),
+            JointEnd::New(1),
+            v(0.0, 0.0),
+            v(-1.5, 0.0),
+        )],
     };
     assert_eq!(bytes, encode(&pendulum).unwrap());
     assert_eq!(stated_size(&prose), bytes.len());

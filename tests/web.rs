@@ -244,6 +244,19 @@ async fn browser_page(tag: &str) -> (Browser, Cdp) {
     (browser, Cdp::open_page(&devtools).await)
 }
 
+/// A fresh Chromium's page (`tag` names its profile) on the gateway's page, once it has
+/// joined its world and drawn a frame.
+async fn joined_page(tag: &str, gw: &Gateway) -> (Browser, Cdp) {
+    let (browser, mut page) = browser_page(tag).await;
+    page.navigate(gw.url()).await;
+    page.wait_for(
+        "!!(window.tiltbox && tiltbox.state.joined && tiltbox.state.frame > 0)",
+        20,
+    )
+    .await;
+    (browser, page)
+}
+
 /// Close the page, then stop the gateway, then the daemon.
 async fn stop(page: Cdp, gw: Gateway, server: Server) {
     drop(page);
@@ -1367,13 +1380,7 @@ async fn the_page_draws_compounds_and_joints_built_over_the_wire() {
     let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
         .await
         .unwrap();
-    let (_browser, mut page) = browser_page("joints").await;
-    page.navigate(gw.url()).await;
-    page.wait_for(
-        "!!(window.tiltbox && tiltbox.state.joined && tiltbox.state.frame > 0)",
-        20,
-    )
-    .await;
+    let (_browser, mut page) = joined_page("joints", &gw).await;
     let v = Vector::new;
     let part = |w: f32, h: f32, at: Vector| {
         PartSpec::at(
@@ -1385,14 +1392,8 @@ async fn the_page_draws_compounds_and_joints_built_over_the_wire() {
         )
     };
     let fixed = |at: Vector, colour: &str, parts| BuildBody {
-        name: None,
-        motion: Motion::Static,
-        position: at,
-        angle: 0.0,
-        velocity: v(0.0, 0.0),
-        angular_velocity: 0.0,
         colour: colour.parse().unwrap(),
-        parts,
+        ..BuildBody::new(Motion::Static, at, parts)
     };
     let build = Build {
         bodies: vec![
@@ -1412,21 +1413,12 @@ async fn the_page_draws_compounds_and_joints_built_over_the_wire() {
                 )
             },
         ],
-        joints: vec![JointSpec {
-            a: JointEnd::New(1),
-            b: JointEnd::New(2),
-            anchor_a: v(0.0, 0.0),
-            anchor_b: v(-1.0, 0.0),
-            kind: JointKindSpec::Revolute {
-                reference_angle: None,
-                limit: None,
-                motor: None,
-                spring: None,
-            },
-            collide_connected: false,
-            break_force: None,
-            break_torque: None,
-        }],
+        joints: vec![JointSpec::hinge(
+            JointEnd::New(1),
+            JointEnd::New(2),
+            v(0.0, 0.0),
+            v(-1.0, 0.0),
+        )],
     };
     let mut w = watch(&s, &keys).await;
     s.put(keys.build(), encode(&build).unwrap()).await.unwrap();
@@ -1440,6 +1432,10 @@ async fn the_page_draws_compounds_and_joints_built_over_the_wire() {
         }
     };
     page.wait_for("tiltbox.joints() === 1", 10).await;
+    // The event is applied between frames: wait for two frames drawn after it.
+    let f0 = page.eval("tiltbox.metrics.framesDrawn").await;
+    page.wait_for(&format!("tiltbox.metrics.framesDrawn > {f0} + 1"), 5)
+        .await;
     // The post of the L: centre (-2 + 0.25, 3 + 0.625), drawn in the L's green.
     let green = page
         .eval(
@@ -1559,13 +1555,7 @@ async fn finger_to_screen_through_the_page_is_measured() {
     let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
         .await
         .unwrap();
-    let (_browser, mut page) = browser_page("finger").await;
-    page.navigate(gw.url()).await;
-    page.wait_for(
-        "!!(window.tiltbox && tiltbox.state.joined && tiltbox.state.frame > 0)",
-        20,
-    )
-    .await;
+    let (_browser, mut page) = joined_page("finger", &gw).await;
     tokio::time::sleep(Duration::from_secs(2)).await; // the bricks land
     let size = page
         .eval("[document.getElementById('world').clientWidth, document.getElementById('world').clientHeight]")

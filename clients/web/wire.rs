@@ -242,7 +242,7 @@ pub fn check_upstream(bytes: &[u8], allow: &Allow) -> Result<Checked, Refusal> {
     }
 }
 
-pub use crate::service::RateLimit;
+pub use crate::protocol::RateLimit;
 
 #[cfg(test)]
 mod tests {

@@ -122,6 +122,23 @@ pub struct BuildBody {
     pub parts: Vec<PartSpec>,
 }
 
+impl BuildBody {
+    /// A body of `parts` with its origin at `position` (m), unturned, at rest, unnamed, grey.
+    /// Change what differs with struct update syntax.
+    pub fn new(motion: Motion, position: Vector, parts: Vec<PartSpec>) -> BuildBody {
+        BuildBody {
+            name: None,
+            motion,
+            position,
+            angle: 0.0,
+            velocity: Vector::default(),
+            angular_velocity: 0.0,
+            colour: Colour::default(),
+            parts,
+        }
+    }
+}
+
 /// One end of a joint in a [`Build`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum JointEnd {
@@ -256,6 +273,29 @@ pub struct JointSpec {
     pub break_force: Option<f32>,
     /// Breaks when the step's mean torque passes this (N m); None: never.
     pub break_torque: Option<f32>,
+}
+
+impl JointSpec {
+    /// A hinge between `a` and `b` at their anchors (m, each in its own frame): a revolute
+    /// joint with no limit, motor or spring, whose bodies do not collide and which never
+    /// breaks. Change what differs with struct update syntax.
+    pub fn hinge(a: JointEnd, b: JointEnd, anchor_a: Vector, anchor_b: Vector) -> JointSpec {
+        JointSpec {
+            a,
+            b,
+            anchor_a,
+            anchor_b,
+            kind: JointKindSpec::Revolute {
+                reference_angle: None,
+                limit: None,
+                motor: None,
+                spring: None,
+            },
+            collide_connected: false,
+            break_force: None,
+            break_torque: None,
+        }
+    }
 }
 
 /// `…/build`: add bodies of one or more shapes and joints between them and live bodies, all

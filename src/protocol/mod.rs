@@ -12,6 +12,7 @@ mod bounded;
 pub mod build;
 pub mod keys;
 pub mod messages;
+pub mod rate;
 pub mod snapshot;
 pub mod tilt;
 
@@ -29,6 +30,7 @@ pub use messages::{
     Drag, HitInfo, QueryAnswer, QueryFilterSpec, RayHitInfo, SetVelocity, ShapeHit, ShapePair,
     WorldQuery,
 };
+pub use rate::RateLimit;
 pub use snapshot::{
     decode_frame, encode_frame, Grid, GridPose, SnapshotDecoder, SnapshotEncoder, SnapshotFrame,
     SNAPSHOT_VERSION,
@@ -411,7 +413,7 @@ mod tests {
             spawn[3], 0,
             "version, count, None, then the shape's variant"
         );
-        spawn[3] = 5; // 4 is Segment since issue 17
+        spawn[3] = 6; // 4 is Segment since issue 17, 5 Compound since issue 33
         assert_eq!(
             decode::<Spawn>(&spawn),
             Err(DecodeError::UnknownVariant { message: "Spawn" })

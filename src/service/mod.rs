@@ -12,8 +12,7 @@
 //! - `tick`: the fixed-rate loop ([`run_loop`], [`Outputs`]); `scene_query`: late joiners'
 //!   `…/scene` queries, answered by the tick thread only when one waits; `world_query`:
 //!   `…/query` rays, points and boxes, answered the same way.
-//! - `net`: the Zenoh session, declarations and shutdown ([`Server`]); `rate`: a token
-//!   bucket ([`RateLimit`]) for request rates in wall-clock time.
+//! - `net`: the Zenoh session, declarations and shutdown ([`Server`]).
 //! - `bench`: the `bench-net` measurement ([`bench_net`]).
 //! - [`checkpoint`] and [`journal`]: the daemon's files (checkpoints and resume; the command
 //!   journal and deterministic replay), whose errors are [`FileError`]s.
@@ -27,7 +26,6 @@ mod config;
 mod files;
 pub mod journal;
 mod net;
-mod rate;
 mod scene_query;
 mod sim;
 mod tick;
@@ -42,7 +40,6 @@ pub use files::FileError;
 pub use net::{
     shutdown_worlds, start_worlds, world_configs, PublishHook, Server, ServerOptions, ServiceError,
 };
-pub use rate::RateLimit;
 pub use sim::{SceneSource, SimState, Simulation, StartError, MAX_PHYSICS_EVENTS};
 pub use tick::{run as run_loop, Outputs, Recording, RunSummary, TickConfig};
 pub use wire::{check_query, parse_command, BodyMeta};

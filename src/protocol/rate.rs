@@ -1,5 +1,6 @@
-//! A token bucket, for rates of requests in wall-clock time (the web gateway's per-page
-//! command rate, the daemon's `…/query` rate).
+//! A token bucket, for rates of messages in wall-clock time: the web gateway's per-page
+//! command rate and the daemon's `…/query` rate (here, below both, so that clients need not
+//! depend on the daemon).
 
 use std::time::Instant;
 

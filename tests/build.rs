@@ -527,3 +527,46 @@ fn a_reset_to_a_scene_with_joints_is_followed_by_its_joints() {
     assert!(bodies.is_empty());
     assert_eq!(after.len(), joints.len());
 }
+
+#[test]
+fn a_checkpoint_keeps_built_compounds_and_joints_and_restores_to_the_same_steps() {
+    use tiltbox::service::checkpoint;
+    let (config, mut sim) = bricks();
+    let l = body(
+        Motion::Dynamic,
+        v(-2.0, 4.0),
+        vec![
+            rect(1.0, 0.25, v(0.0, 0.0)),
+            rect(0.25, 0.75, v(0.375, 0.5)),
+        ],
+    );
+    let mut b = pendulum();
+    b.bodies.push(l);
+    b.joints.push(hinge(
+        JointEnd::World,
+        JointEnd::New(2),
+        v(-2.0, 4.5),
+        v(0.0, 0.5),
+    ));
+    let ev = send(&mut sim, &config, CommandKey::Build, &b);
+    assert!(matches!(ev.kind, EventKind::Built { .. }), "{ev:?}");
+    for _ in 0..10 {
+        sim.step().unwrap();
+    }
+    let bytes = checkpoint::encode(&sim.export_state()).unwrap();
+    let state = checkpoint::decode(&bytes).unwrap();
+    let mut back = Simulation::restore(&config, SceneSource::Embedded, state).unwrap();
+    assert_eq!(back.scene_with_joints(), sim.scene_with_joints());
+    for _ in 0..60 {
+        sim.step().unwrap();
+        back.step().unwrap();
+    }
+    assert_eq!(back.world().state_hash(), sim.world().state_hash());
+    let listed = back.scene_with_joints();
+    assert_eq!(listed.joints.len(), 2);
+    assert!(listed
+        .scene
+        .bodies
+        .iter()
+        .any(|b| matches!(&b.shape, ShapeSpec::Compound { parts } if parts.len() == 2)));
+}

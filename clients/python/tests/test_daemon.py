@@ -112,6 +112,27 @@ class AgainstTheDaemon(unittest.TestCase):
         gone = wait_for(self.events, lambda e: "JointsRemoved" in e["kind"])["kind"]["JointsRemoved"]
         self.assertEqual(gone["ids"], [joint["id"]])
 
+    def test_a_client_that_closes_lets_go_of_what_it_held(self):
+        """The client keeps its hand's liveliness token; closing the session ends it, and the
+        daemon lets go at once instead of after its 3 s time-out."""
+        ball = {"name": "held ball", "shape": {"Circle": {"radius": 0.3}}, "position": {"x": 2.0, "y": 1.0}}
+        self.c.spawn([ball])
+        added = wait_for(self.events, lambda e: "Added" in e["kind"])["kind"]["Added"]["bodies"][0]
+        hand = Client(ENDPOINT)
+        hand.grab(31, added["id"], added["position"])
+        for _ in range(10):
+            hand.move(31, {"x": 2.0, "y": 4.5})
+            time.sleep(0.05)
+        time.sleep(0.5)
+        held = next(b for b in self.c.scene()["bodies"] if b["id"] == added["id"])["position"]
+        self.assertGreater(held["y"], 4.0, held)
+        hand.close()
+        left = time.monotonic()
+        while next(b for b in self.c.scene()["bodies"] if b["id"] == added["id"])["position"]["y"] > 3.5:
+            self.assertLess(time.monotonic() - left, 1.5, "still held after the client closed")
+            time.sleep(0.05)
+        self.c.remove([added["id"]])
+
 
 if __name__ == "__main__":
     unittest.main()

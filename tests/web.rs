@@ -298,6 +298,27 @@ async fn gateway_at_rate(port: u16, allow: &str, rate: u32) -> Gateway {
     .expect("gateway starts")
 }
 
+/// A gateway serving plain `ws://` (no TLS) toward the daemon on `port`, for WebSocket
+/// clients in this process: the default world, `allow`, `rate` commands a second per page.
+async fn plain_gateway(port: u16, allow: Allow, rate: u32) -> Gateway {
+    let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
+        .await
+        .unwrap();
+    Gateway::start(
+        s,
+        WebOptions {
+            listen: "127.0.0.1:0".parse().unwrap(),
+            tls: TlsMode::Off,
+            allow,
+            rate,
+            keys: Keys::for_world(DEFAULT_WORLD).unwrap(),
+            fixed_prefix: false,
+        },
+    )
+    .await
+    .expect("gateway starts")
+}
+
 /// Decoded snapshots and events seen by the test's own Zenoh session.
 struct Watch {
     snaps: mpsc::UnboundedReceiver<Snapshot>,
@@ -1212,22 +1233,7 @@ async fn pages_at_60_hz() {
     let port = 17494;
     let server = daemon(port).await;
     let keys = server.keys().clone();
-    let gs = session::open(&[format!("tcp/127.0.0.1:{port}")])
-        .await
-        .unwrap();
-    let gw = Gateway::start(
-        gs,
-        WebOptions {
-            listen: "127.0.0.1:0".parse().unwrap(),
-            tls: TlsMode::Off,
-            allow: Allow::NONE,
-            rate: 60,
-            keys: keys.clone(),
-            fixed_prefix: false,
-        },
-    )
-    .await
-    .unwrap();
+    let gw = plain_gateway(port, Allow::NONE, 60).await;
     let url = format!("ws://{}/ws", gw.local_addr());
     let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
         .await
@@ -1471,22 +1477,7 @@ async fn a_page_that_leaves_lets_go_of_what_it_held() {
     let port = 17499;
     let server = daemon(port).await;
     let keys = server.keys().clone();
-    let gs = session::open(&[format!("tcp/127.0.0.1:{port}")])
-        .await
-        .unwrap();
-    let gw = Gateway::start(
-        gs,
-        WebOptions {
-            listen: "127.0.0.1:0".parse().unwrap(),
-            tls: TlsMode::Off,
-            allow: Allow::parse("drag").unwrap(),
-            rate: 120,
-            keys: keys.clone(),
-            fixed_prefix: false,
-        },
-    )
-    .await
-    .unwrap();
+    let gw = plain_gateway(port, Allow::parse("drag").unwrap(), 120).await;
     let s = session::open(&[format!("tcp/127.0.0.1:{port}")])
         .await
         .unwrap();

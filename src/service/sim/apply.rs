@@ -12,6 +12,17 @@ use crate::service::command::{Command, Incoming, SpawnDef};
 use crate::service::wire::{body_info, build, vec2, vector};
 use std::collections::HashSet;
 
+/// A joint end of a build once its live body is found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum End {
+    /// The world's fixed frame.
+    World,
+    /// A live body.
+    Live(BodyId),
+    /// The build's body at this index.
+    New(u32),
+}
+
 impl Simulation {
     fn reject(&mut self, key: CommandKey, reason: String) -> Event {
         self.rejected += 1;
@@ -173,9 +184,14 @@ impl Simulation {
         let ends = self.live_ends(&b)?;
         let ids = self.add_bodies(&defs)?;
         let mut joint_ids = Vec::with_capacity(b.joints.len());
+        let pick = |e: End| match e {
+            End::World => None,
+            End::Live(id) => Some(id),
+            End::New(n) => Some(ids[n as usize]),
+        };
         for (i, (j, &(a, bb))) in b.joints.iter().zip(&ends).enumerate() {
-            let pick = |e: Result<BodyId, u32>| e.unwrap_or_else(|n| ids[n as usize]);
-            let def = build::joint_def(j, a.map(pick), pick(bb));
+            let bb = pick(bb).expect("checked when parsed: b is a body");
+            let def = build::joint_def(j, pick(a), bb);
             match self.world.add_joint(&def) {
                 Ok(id) => joint_ids.push(id),
                 Err(e) => {
@@ -198,38 +214,30 @@ impl Simulation {
         Ok(EventKind::Built { bodies, joints })
     }
 
-    /// Each joint's ends: a live body's id (`Ok`), a new body's index (`Err`), or None for the
-    /// world. Refuses a live id that names no body, and a joint whose ends are all static or
-    /// kinematic.
-    #[allow(clippy::type_complexity)]
-    fn live_ends(
-        &self,
-        b: &Build,
-    ) -> Result<Vec<(Option<Result<BodyId, u32>>, Result<BodyId, u32>)>, String> {
-        let end =
-            |i: usize, field: &str, e: JointEnd| -> Result<Option<Result<BodyId, u32>>, String> {
-                Ok(match e {
-                    JointEnd::World => None,
-                    JointEnd::New(n) => Some(Err(n)),
-                    JointEnd::Live(r) => Some(Ok(self
-                        .world
-                        .live_id(r.index, r.generation)
-                        .ok_or_else(|| format!("joints[{i}]: {field}: no body with id {r}"))?)),
-                })
-            };
-        let moves = |e: &Option<Result<BodyId, u32>>| match e {
-            None => false,
-            Some(Err(n)) => b.bodies[*n as usize].motion == Motion::Dynamic,
-            Some(Ok(id)) => self.world.body(*id).is_some_and(|b| b.inv_mass() > 0.0),
+    /// Each joint's ends, live ids found. Refuses a live id that names no body, and a joint
+    /// whose ends are all static or kinematic.
+    fn live_ends(&self, b: &Build) -> Result<Vec<(End, End)>, String> {
+        let end = |i: usize, field: &str, e: JointEnd| match e {
+            JointEnd::World => Ok(End::World),
+            JointEnd::New(n) => Ok(End::New(n)),
+            JointEnd::Live(r) => self
+                .world
+                .live_id(r.index, r.generation)
+                .map(End::Live)
+                .ok_or_else(|| format!("joints[{i}]: {field}: no body with id {r}")),
+        };
+        let moves = |e: End| match e {
+            End::World => false,
+            End::New(n) => b.bodies[n as usize].motion == Motion::Dynamic,
+            End::Live(id) => self.world.body(id).is_some_and(|b| b.inv_mass() > 0.0),
         };
         let mut out = Vec::with_capacity(b.joints.len());
         for (i, j) in b.joints.iter().enumerate() {
             let (a, bb) = (end(i, "a", j.a)?, end(i, "b", j.b)?);
-            let bb = bb.expect("checked when parsed: b is a body");
-            if a == Some(bb) {
+            if a == bb {
                 return Err(format!("joints[{i}]: a and b are the same body"));
             }
-            if !moves(&a) && !moves(&Some(bb)) {
+            if !moves(a) && !moves(bb) {
                 return Err(format!(
                     "joints[{i}]: neither a nor b is a dynamic body: a joint must move something"
                 ));

@@ -10,8 +10,8 @@
 #![allow(clippy::unnecessary_cast)] // Real <-> f32 casts matter with the `f64` feature.
 
 use super::spawn::{
-    check_motion, check_place, check_shape_limits, check_vertices_as_sent, checked_name,
-    shape_from_spec,
+    check_angle, check_motion, check_place, check_shape_limits, check_vertices_as_sent,
+    checked_name, shape_from_spec,
 };
 use super::{finite, shape_spec, vec2, vector};
 use crate::physics::joint::{
@@ -110,11 +110,7 @@ fn part_def(p: &PartSpec, motion: Motion, limits: &Limits) -> Result<PartDef, St
     let (shape, centroid) = shape_from_spec(&place.shape).map_err(|e| e.to_string())?;
     check_shape_limits(&place.shape, &shape, limits)?;
     let max = limits.max_coordinate;
-    for (field, v) in [
-        ("offset.x", place.offset.x),
-        ("offset.y", place.offset.y),
-        ("angle", place.angle),
-    ] {
+    for (field, v) in [("offset.x", place.offset.x), ("offset.y", place.offset.y)] {
         finite(field, v)?;
         if v.abs() > max {
             return Err(format!(
@@ -122,6 +118,7 @@ fn part_def(p: &PartSpec, motion: Motion, limits: &Limits) -> Result<PartDef, St
             ));
         }
     }
+    check_angle(place.angle)?;
     if p.friction > limits.max_friction {
         return Err(format!(
             "friction = {} is out of range: must be within [0, {}] (limits.max_friction)",

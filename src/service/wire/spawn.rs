@@ -305,6 +305,11 @@ pub(super) fn check_place(position: Vector, angle: f32, limits: &Limits) -> Resu
             ));
         }
     }
+    check_angle(angle)
+}
+
+/// An angle as sent: finite and within [`MAX_ANGLE`] (larger ones only lose precision).
+pub(super) fn check_angle(angle: f32) -> Result<(), String> {
     finite("angle", angle)?;
     if angle.abs() > MAX_ANGLE {
         return Err(format!(

@@ -255,7 +255,9 @@ fn boxes_pyramid(base: usize, x: Real, y0: Real, out: &mut Vec<BodyDef>) {
 /// - `joint_grid`: Box2D's benchmark of that name ([`joint_grid`]), 500 steps, sleep off;
 /// - `smash`: Box2D's benchmark of that name ([`smash`]), 300 steps, sleep on;
 /// - `tumbler` and `compounds`: Box2D's benchmarks of those names ([`tumbler`],
-///   [`compounds`]), bodies of several shapes.
+///   [`compounds`]), bodies of several shapes;
+/// - `many_pyramids` and `spinner`: Box2D's benchmarks of those names ([`many_pyramids`],
+///   [`spinner`]).
 pub fn benchmark_setups() -> Vec<Setup> {
     let g = Vec2::new(0.0, -10.0);
     let ground = |width: Real| BodyDef::fixed(Shape::rect(width, 2.0), Vec2::new(0.0, -1.0));
@@ -344,6 +346,8 @@ pub fn benchmark_setups() -> Vec<Setup> {
         smash(),
         tumbler(),
         compounds(),
+        many_pyramids(),
+        spinner(),
         Setup {
             name: "mixed_shapes",
             gravity: g,
@@ -488,6 +492,119 @@ pub fn tumbler() -> Setup {
     }
 }
 
+/// Box2D v3's `many_pyramids` benchmark (`shared/benchmarks.c`): 20 rows of 20 pyramids of
+/// base 10 (55 boxes of 1 m each, density 1, friction 0.6: 22,000 boxes), each row on its own
+/// ground segment 220 m long, the rows 11 m apart; the pyramids 11 m apart along a row.
+/// Gravity 10 m/s^2, 200 steps, sleep off. The ground is one static body of 20 segments, as
+/// Box2D's.
+pub fn many_pyramids() -> Setup {
+    let (base, extent, rows, columns) = (10, 0.5 as Real, 20, 20);
+    let row_gap = 2.0 * extent * (base as Real + 1.0);
+    let width = 2.0 * extent * columns as Real * (base as Real + 1.0);
+    let segment = |y: Real| {
+        let s = crate::physics::Segment::new(
+            Vec2::new(-0.5 * width, y),
+            Vec2::new(0.5 * width, y),
+            0.0,
+        );
+        Shape::Segment(Box::new(s))
+    };
+    let mut ground = BodyDef::fixed(segment(0.0), Vec2::ZERO);
+    for i in 1..rows {
+        ground
+            .parts
+            .push(PartDef::new(segment(i as Real * row_gap), Vec2::ZERO));
+    }
+    let mut bodies = vec![ground];
+    let base_width = 2.0 * extent * base as Real;
+    for i in 0..rows {
+        let base_y = i as Real * row_gap;
+        for j in 0..columns {
+            let centre_x = -0.5 * width + j as Real * (base_width + 2.0 * extent) + 2.0 * extent;
+            for level in 0..base {
+                let y = (2.0 * level as Real + 1.0) * extent + base_y;
+                for k in level..base {
+                    let x = (level as Real + 1.0) * extent
+                        + 2.0 * (k - level) as Real * extent
+                        + centre_x
+                        - 0.5;
+                    bodies.push(
+                        BodyDef::dynamic(Shape::rect(2.0 * extent, 2.0 * extent), Vec2::new(x, y))
+                            .with_friction(0.6),
+                    );
+                }
+            }
+        }
+    }
+    Setup {
+        name: "many_pyramids",
+        gravity: Vec2::new(0.0, -10.0),
+        bodies,
+        steps: 200,
+        sleep: false,
+        warm_up: 0,
+        joints: Vec::new(),
+    }
+}
+
+/// Box2D v3's `spinner` benchmark (`shared/benchmarks.c`): a loop of 360 chain pieces of
+/// radius 40 m centred 32 m up (friction 0.1); a paddle hinged to the world at (0, 12) and
+/// driven at 5 rad/s by a motor of torque up to `f32::MAX`, as Box2D's (its paddle is a 0.8 x
+/// 40 m box rounded by 0.2 m; tiltbox has no rounded polygon, so this one is 1.2 x 40.4 m with
+/// square corners; friction 0); and 6,076 capsules (1 m end to end, radius 0.25), discs
+/// (radius 0.35) and squares (0.7 m) in turn (density 0.25, friction 0.1, restitution 0.1) on a
+/// 0.5 m grid from (-23, 2). Gravity 10 m/s^2, 500 steps, sleep on (the paddle never rests).
+/// The ring's pieces are separate static bodies here (tiltbox's chains are), one chain body in
+/// Box2D.
+pub fn spinner() -> Setup {
+    let ring: Vec<Vec2> = (0..360)
+        .map(|i| {
+            let a = -2.0 * PI * i as Real / 360.0;
+            Vec2::new(40.0 * a.cos(), 32.0 + 40.0 * a.sin())
+        })
+        .collect();
+    let mut bodies: Vec<BodyDef> = BodyDef::chain(&ring, true, false)
+        .expect("a valid ring")
+        .into_iter()
+        .map(|piece| piece.with_friction(0.1))
+        .collect();
+    let paddle = bodies.len();
+    bodies.push(BodyDef::dynamic(Shape::rect(1.2, 40.4), Vec2::new(0.0, 12.0)).with_friction(0.0));
+    let kinds = [
+        Shape::capsule(1.0, 0.25),
+        Shape::circle(0.35),
+        Shape::rect(0.7, 0.7),
+    ];
+    let (mut x, mut y) = (-23.0 as Real, 2.0 as Real);
+    for i in 0..2 * 3038 {
+        bodies.push(
+            BodyDef::dynamic(kinds[i % 3].clone(), Vec2::new(x, y))
+                .with_density(0.25)
+                .with_friction(0.1)
+                .with_restitution(0.1),
+        );
+        x += 0.5;
+        if x >= 23.0 {
+            (x, y) = (-23.0, y + 0.5);
+        }
+    }
+    Setup {
+        name: "spinner",
+        gravity: Vec2::new(0.0, -10.0),
+        bodies,
+        steps: 500,
+        sleep: true,
+        warm_up: 0,
+        joints: vec![SetupJoint {
+            a: None,
+            b: paddle,
+            anchor_a: Vec2::new(0.0, 12.0),
+            anchor_b: Vec2::ZERO,
+            motor: Some((5.0, f32::MAX as Real)),
+        }],
+    }
+}
+
 /// Box2D v3's `compounds` benchmark (`shared/benchmarks.c`): a static ground of one body and
 /// 282 shapes (a floor of 81 boxes 1.1 m x 1 m from x = -40 m to 40 m, two walls of 100 boxes 1
 /// m x 1.1 m at x = +-40 m, and a segment at y = -80 m from x = -800 m to 800 m), and 20
@@ -621,4 +738,29 @@ pub fn closed_box_defs(width: Real, height: Real, thickness: Real) -> Vec<BodyDe
             Vec2::new(0.5 * (width + t), 0.5 * height),
         ),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The counts Box2D's `benchmarks.c` makes: 20 x 20 pyramids of 55 boxes on one ground of
+    /// 20 segments; 6,076 bodies, a paddle and a ring of 360 pieces, the paddle on a motor.
+    #[test]
+    fn many_pyramids_and_spinner_have_box2ds_counts_and_build() {
+        let p = many_pyramids();
+        assert_eq!(p.bodies.len(), 1 + 20 * 20 * 55);
+        assert_eq!(p.bodies[0].parts.len(), 19);
+        // the first pyramid's bottom-left box sits on the first segment, at the left end
+        let first = &p.bodies[1];
+        assert_eq!((first.position.x, first.position.y), (-109.0, 0.5));
+        let s = spinner();
+        assert_eq!(s.bodies.len(), 360 + 1 + 6076);
+        assert_eq!(s.joints.len(), 1);
+        assert_eq!(s.joints[0].b, 360);
+        for setup in [p, s] {
+            let w = setup.build().unwrap();
+            assert_eq!(w.body_count(), setup.bodies.len());
+        }
+    }
 }

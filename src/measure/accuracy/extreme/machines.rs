@@ -87,54 +87,22 @@ pub fn tumbler(settings: &Settings) -> Verdict {
     )
 }
 
-/// Box2D's `spinner`: a ring of 360 chain pieces of radius 40 m centred 32 m up (friction 0.1),
-/// a 1.2 m x 40.4 m paddle (Box2D's is a 0.8 x 40 box rounded by 0.2 m; tiltbox has no rounded
-/// polygon, so its corners are square) hinged at (0, 12) and driven at 5 rad/s by a motor of
-/// unlimited torque, and 6,076 capsules, discs and squares (density 0.25, friction 0.1,
-/// restitution 0.1) dropped on a 0.5 m grid, 8.3 s. Bounds: from 1 s on the paddle turns
+/// Box2D's `spinner` ([`cases::spinner`]): a ring of 360 chain pieces of radius 40 m centred
+/// 32 m up, a 1.2 m x 40.4 m paddle hinged at (0, 12) and driven at 5 rad/s by a motor of
+/// unlimited torque (Box2D's `FLT_MAX`), and 6,076 capsules, discs and squares dropped on a
+/// 0.5 m grid, 8.3 s, sleep off. Bounds: from 1 s on the paddle turns
 /// through 5 rad/s x t within 1 % (nothing can stall a motor of unlimited torque; Box2D's
 /// benchmark reports this angle), never slower than 95 % of its speed (each pass solves the
 /// motor before the contacts, as Box2D does, so a step ends with the bodies' push on it), and
 /// no body's centre leaves the ring.
 pub fn spinner(settings: &Settings) -> Verdict {
-    let mut w = new_world(settings, gravity());
-    let ring: Vec<Vec2> = (0..360)
-        .map(|i| {
-            let a = -2.0 * PI * i as Real / 360.0;
-            vec2(40.0 * a.cos(), 32.0 + 40.0 * a.sin())
-        })
-        .collect();
-    for piece in BodyDef::chain(&ring, true, false).expect("a valid ring") {
-        w.add_body(&piece.with_friction(0.1)).expect("valid piece");
-    }
-    let paddle = BodyDef::dynamic(Shape::rect(1.2, 40.4), vec2(0.0, 12.0)).with_friction(0.0);
-    let paddle = w.add_body(&paddle).expect("valid paddle");
-    let motor = JointKind::Revolute(Revolute {
-        motor: Some(Motor {
-            speed: 5.0,
-            max: Real::INFINITY,
-        }),
-        ..Revolute::free()
-    });
-    let hinge = JointDef::new(motor, None, paddle).with_anchors(vec2(0.0, 12.0), Vec2::ZERO);
-    w.add_joint(&hinge).expect("valid hinge");
-    let kinds = [
-        Shape::capsule(1.0, 0.25),
-        Shape::circle(0.35),
-        Shape::rect(0.7, 0.7),
-    ];
-    let (mut x, mut y) = (-23.0 as Real, 2.0 as Real);
-    for i in 0..2 * 3038 {
-        let def = BodyDef::dynamic(kinds[i % 3].clone(), vec2(x, y))
-            .with_density(0.25)
-            .with_friction(0.1)
-            .with_restitution(0.1);
-        w.add_body(&def).expect("valid body");
-        x += 0.5;
-        if x >= 23.0 {
-            (x, y) = (-23.0, y + 0.5);
-        }
-    }
+    let setup = cases::spinner();
+    let mut w = build(&setup, settings);
+    let paddle = w
+        .bodies()
+        .nth(setup.joints[0].b)
+        .map(|b| b.id())
+        .expect("the paddle");
     let (mut ok, mut slowest, mut farthest) = (true, Real::INFINITY, 0.0);
     let angle = |w: &World| w.body(paddle).map_or(Real::NAN, |b| b.angle()) as f64;
     let mut start = 0.0;

@@ -24,6 +24,14 @@
 //! sorted lists (Box2D re-queries its moved proxies alike); the rest of the kept pairs stand.
 //! The kept pairs are always exactly the pairs of overlapping fat boxes, and the output is the
 //! same set whichever path ran, so results do not depend on it.
+//!
+//! A static body of several shapes (a ground of 20 segments, one a row of pyramids) is swept
+//! shape by shape: its box spans all its shapes, and swept whole it paired with every body
+//! above it (all 22,000 boxes of Box2D's `many_pyramids`), each pair then searched for
+//! touching shapes every step. Its shapes' boxes ([`Piece`]s) stand in the passive list
+//! instead, so only a body near one of its shapes pairs with it (Box2D's tree holds shapes,
+//! not bodies). The kept pairs with such a body are those whose fat boxes meet a piece's; the
+//! narrow phase tests its shapes one by one, so results are the same as swept whole.
 
 use super::math::Real;
 use super::shape::Aabb;
@@ -32,6 +40,14 @@ use super::shape::Aabb;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Proxy {
     /// Bounding box, already grown by the body's contact margin (m).
+    pub aabb: Aabb,
+}
+
+/// One shape of a static body of several, swept in its body's place: the shape's box, grown
+/// as a proxy is (m), and its body's slot.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Piece {
+    pub slot: u32,
     pub aabb: Aabb,
 }
 
@@ -89,6 +105,10 @@ pub(crate) struct SweepAndPrune {
     band_start: Vec<u32>,
     /// Scratch for [`sort_keys`].
     sort_scratch: Vec<u64>,
+    /// Each slot's: whether its body is swept by its [`Piece`]s (sized only when some are).
+    pieced: Vec<bool>,
+    /// Scratch for `sweep`: the pieces' fat boxes, sorted by left edge.
+    piece_boxes: Vec<SortedBox>,
     /// Slots freed since the lists were last compacted, flagged by slot in `dead` (removal
     /// marks them, the next query drops them in one pass: removing k bodies costs k, not k
     /// passes over the lists).
@@ -207,12 +227,15 @@ impl SweepAndPrune {
     }
 
     /// Fill `out` with the keys of all active-active and active-passive pairs whose boxes
-    /// overlap, sorted ascending. `proxies` is indexed by slot.
-    pub fn find_pairs(&mut self, proxies: &[Proxy], out: &mut Vec<u64>) {
+    /// overlap, sorted ascending. `proxies` is indexed by slot; `pieces` are the shapes of the
+    /// static bodies swept shape by shape, by slot (a pair with one of them is kept where a
+    /// piece's fat box meets the other body's and their whole boxes overlap).
+    pub fn find_pairs(&mut self, proxies: &[Proxy], pieces: &[Piece], out: &mut Vec<u64>) {
         out.clear();
         if self.active_is_empty() {
             return;
         }
+        self.flag_pieced(proxies.len(), pieces);
         let inside = |i: &u32| {
             let (tight, fat) = (&proxies[*i as usize].aabb, &self.fat[*i as usize]);
             fat.min.x <= tight.min.x
@@ -234,13 +257,16 @@ impl SweepAndPrune {
                 }
             }
         }
-        if !kept || self.outside.len() > most {
+        // A body swept by pieces that grew (the margins changed) is swept again whole.
+        let pieced = &self.pieced;
+        let piece_moved = !pieces.is_empty() && self.outside.iter().any(|&i| pieced[i as usize]);
+        if !kept || self.outside.len() > most || piece_moved {
             self.fat.clear();
             self.fat
                 .extend(proxies.iter().map(|p| p.aabb.inflated(FAT_MARGIN)));
             let fat = std::mem::take(&mut self.fat);
             let mut pairs = std::mem::take(&mut self.fat_pairs);
-            self.sweep(&fat, &mut pairs);
+            self.sweep(&fat, pieces, &mut pairs);
             (self.fat, self.fat_pairs) = (fat, pairs);
             self.fat_valid = true;
         } else if !self.outside.is_empty() {
@@ -250,6 +276,20 @@ impl SweepAndPrune {
             let (a, b) = pair_of(key);
             proxies[a as usize].aabb.overlaps(&proxies[b as usize].aabb)
         }));
+    }
+
+    /// Flag the slots swept by `pieces` (a world without any skips this).
+    fn flag_pieced(&mut self, slots: usize, pieces: &[Piece]) {
+        if pieces.is_empty() && self.pieced.is_empty() {
+            return;
+        }
+        self.pieced.clear();
+        if !pieces.is_empty() {
+            self.pieced.resize(slots, false);
+            for p in pieces {
+                self.pieced[p.slot as usize] = true;
+            }
+        }
     }
 
     /// Give the bodies in `outside` new fat boxes from `proxies` and search their pairs
@@ -284,8 +324,21 @@ impl SweepAndPrune {
         self.active.clear();
         self.active.extend(self.active_boxes.iter().map(|b| b.slot));
         self.passive.clear();
-        self.passive
-            .extend(self.passive_boxes.iter().map(|b| b.slot));
+        if self.pieced.is_empty() {
+            self.passive
+                .extend(self.passive_boxes.iter().map(|b| b.slot));
+        } else {
+            // Each piece stands in the sorted list; its body is listed once, at the end.
+            let pieced = &self.pieced;
+            self.passive.extend(
+                self.passive_boxes
+                    .iter()
+                    .map(|b| b.slot)
+                    .filter(|&i| !pieced[i as usize]),
+            );
+            let by_pieces = pieced.iter().enumerate().filter(|(_, &p)| p);
+            self.passive.extend(by_pieces.map(|(i, _)| i as u32));
+        }
 
         // The moved boxes, active and passive apart (each in sorted order), against the
         // lists they pair with: moved active boxes with the active and the passive ones,
@@ -311,8 +364,9 @@ impl SweepAndPrune {
     }
 
     /// Fill `out` with the active-active and active-passive pairs of overlapping `boxes`
-    /// (indexed by slot), sorted ascending.
-    fn sweep(&mut self, boxes: &[Aabb], out: &mut Vec<u64>) {
+    /// (indexed by slot), the bodies swept by `pieces` through their pieces (grown as `boxes`
+    /// are), sorted ascending.
+    fn sweep(&mut self, boxes: &[Aabb], pieces: &[Piece], out: &mut Vec<u64>) {
         out.clear();
         self.sweeps += 1;
         let min_x = |i: u32| boxes[i as usize].min.x;
@@ -326,8 +380,12 @@ impl SweepAndPrune {
         self.active_boxes
             .extend(self.active.iter().map(|&i| SortedBox::new(i, boxes)));
         self.passive_boxes.clear();
-        self.passive_boxes
-            .extend(self.passive.iter().map(|&i| SortedBox::new(i, boxes)));
+        if pieces.is_empty() {
+            self.passive_boxes
+                .extend(self.passive.iter().map(|&i| SortedBox::new(i, boxes)));
+        } else {
+            self.sort_pieces_in(boxes, pieces);
+        }
         let (active, passive) = (&self.active_boxes, &self.passive_boxes);
 
         // Active with active.
@@ -336,6 +394,46 @@ impl SweepAndPrune {
         // Active with passive: each active box against the passive list, from both sides.
         cross_pairs(active, passive, out);
         sort_keys(out, &mut self.sort_scratch, boxes.len());
+        if !pieces.is_empty() {
+            // A body near two pieces of one body paired with each.
+            out.dedup();
+        }
+    }
+
+    /// The passive boxes in sorted order with each body swept by pieces replaced by its
+    /// pieces' fat boxes (merged in: both lists are sorted by left edge).
+    fn sort_pieces_in(&mut self, boxes: &[Aabb], pieces: &[Piece]) {
+        self.piece_boxes.clear();
+        self.piece_boxes.extend(pieces.iter().map(|p| {
+            let b = p.aabb.inflated(FAT_MARGIN);
+            SortedBox {
+                min_x: b.min.x,
+                max_x: b.max.x,
+                min_y: b.min.y,
+                max_y: b.max.y,
+                slot: p.slot,
+            }
+        }));
+        self.piece_boxes
+            .sort_unstable_by(|a, b| a.min_x.total_cmp(&b.min_x).then(a.slot.cmp(&b.slot)));
+        let pieced = &self.pieced;
+        let mut whole = self
+            .passive
+            .iter()
+            .filter(|&&i| !pieced[i as usize])
+            .map(|&i| SortedBox::new(i, boxes))
+            .peekable();
+        let mut parts = self.piece_boxes.iter().copied().peekable();
+        loop {
+            let take_whole = match (whole.peek(), parts.peek()) {
+                (Some(w), Some(p)) => w.min_x <= p.min_x,
+                (Some(_), None) => true,
+                (None, Some(_)) => false,
+                (None, None) => break,
+            };
+            let next = if take_whole { whole.next() } else { parts.next() };
+            self.passive_boxes.extend(next);
+        }
     }
 }
 
@@ -605,19 +703,19 @@ mod tests {
             sap.insert(i, true);
         }
         let mut out = Vec::new();
-        sap.find_pairs(&proxies, &mut out);
+        sap.find_pairs(&proxies, &[], &mut out);
         let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
         assert_eq!(pairs, vec![(0, 1), (0, 3), (0, 4), (1, 5)]);
 
         // Body 1 falls asleep: its pair with the passive 5 is no longer examined.
         sap.set_passive(&[1], true);
-        sap.find_pairs(&proxies, &mut out);
+        sap.find_pairs(&proxies, &[], &mut out);
         let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
         assert_eq!(pairs, vec![(0, 1), (0, 3), (0, 4)]);
 
         // Everything asleep: nothing at all.
         sap.set_passive(&[0, 2], true);
-        sap.find_pairs(&proxies, &mut out);
+        sap.find_pairs(&proxies, &[], &mut out);
         assert!(out.is_empty());
     }
 
@@ -684,7 +782,7 @@ mod tests {
         }
         let mut out = Vec::new();
         for round in 0..6 {
-            sap.find_pairs(&proxies, &mut out);
+            sap.find_pairs(&proxies, &[], &mut out);
             let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
             let expected = brute_force(&proxies, &active, &alive);
             assert!(
@@ -847,7 +945,7 @@ mod tests {
                     sap.insert(gone[0] as u32, !active[gone[0]]);
                 }
             }
-            sap.find_pairs(&proxies, &mut out);
+            sap.find_pairs(&proxies, &[], &mut out);
             let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
             assert_eq!(pairs, brute_force(&proxies, &active, &alive), "step {step}");
         }
@@ -857,5 +955,77 @@ mod tests {
         // this tested only the sweep). 19 sweeps and 10 updates when written.
         assert!((16..200).contains(&sap.sweeps), "{} sweeps", sap.sweeps);
         assert!(sap.updates >= 8, "{} updates", sap.updates);
+    }
+    /// A static body swept by pieces (four thin strips at different heights, its whole box
+    /// spanning them all) pairs with every active box that meets a strip, and with none that
+    /// lies clear of every strip by more than the fat margins allow (swept whole it would pair
+    /// with all of them); every other pair is exactly a full search's. Active boxes jiggle
+    /// every step and jump now and then, so the sweep, the update and the kept pairs all run.
+    #[test]
+    fn a_static_body_of_several_shapes_pairs_only_near_its_shapes() {
+        let mut rand = xorshift(0x1234_5677);
+        let strip = |y: Real| proxy(-1.0, y, 11.0, y + 0.1).aabb;
+        let strips: Vec<Aabb> = [0.0, 2.5, 5.0, 7.5].map(strip).to_vec();
+        let pieced = 40u32;
+        let mut proxies: Vec<Proxy> = (0..40)
+            .map(|i| {
+                // Rows 2 and 4 meet a strip; rows 1, 3 and 5 lie 0.3 m clear.
+                let (x, y) = ((i % 8) as Real * 1.3, (i / 8) as Real * 1.5 + 0.4);
+                proxy(x, y, x + 0.8, y + 0.8)
+            })
+            .collect();
+        proxies.push(proxy(-1.0, 0.0, 11.0, 7.6)); // the body swept by its strips
+        proxies.push(proxy(5.0, 3.0, 5.5, 3.5)); // an ordinary static body
+        let pieces: Vec<Piece> = strips
+            .iter()
+            .map(|&aabb| Piece {
+                slot: pieced,
+                aabb,
+            })
+            .collect();
+        let mut sap = SweepAndPrune::default();
+        for i in 0..40 {
+            sap.insert(i, false);
+        }
+        sap.insert(pieced, true);
+        sap.insert(pieced + 1, true);
+        let (active, alive) = (
+            (0..42).map(|i| i < 40).collect::<Vec<_>>(),
+            vec![true; 42],
+        );
+        let (mut out, mut with_pieced) = (Vec::new(), 0);
+        for step in 0..300 {
+            for (i, p) in proxies.iter_mut().take(40).enumerate() {
+                // One body jumps now and then (an update); at step 150 ten do (a sweep).
+                let jumps = step % 30 == 0 && i == step % 40 || step == 150 && i < 10;
+                let big = if jumps { 80.0 } else { 1.0 };
+                let d = vec2(rand() - 0.5, rand() - 0.5) * (0.01 * big);
+                p.aabb.min += d;
+                p.aabb.max += d;
+            }
+            sap.find_pairs(&proxies, &pieces, &mut out);
+            let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
+            let mut expected = brute_force(&proxies, &active, &alive);
+            expected.retain(|&(a, b)| b != pieced || {
+                let near = proxies[a as usize].aabb.inflated(3.0 * FAT_MARGIN);
+                strips.iter().any(|s| s.overlaps(&near))
+            });
+            let (others, found): (Vec<_>, Vec<_>) = pairs.iter().partition(|p| p.1 != pieced);
+            let (others_expected, candidates): (Vec<_>, Vec<_>) =
+                expected.iter().partition(|p| p.1 != pieced);
+            assert_eq!(others, others_expected, "step {step}");
+            for &(a, _) in &found {
+                assert!(candidates.contains(&(a, pieced)), "step {step}: {a} far from every strip");
+            }
+            for a in 0..40u32 {
+                let meets = strips.iter().any(|s| s.overlaps(&proxies[a as usize].aabb));
+                assert!(!meets || found.contains(&(a, pieced)), "step {step}: {a} missed");
+            }
+            with_pieced += found.len();
+        }
+        // Boxes met the strips (5,382 pairs in all when written: the two rows, and jumpers),
+        // and every path ran (2 sweeps and 46 updates).
+        assert!(with_pieced >= 300, "{with_pieced} pairs with the strips");
+        assert!(sap.sweeps >= 2 && sap.updates >= 2, "{} / {}", sap.sweeps, sap.updates);
     }
 }

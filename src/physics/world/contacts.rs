@@ -27,7 +27,7 @@ impl World {
     pub(super) fn find_contacts(&mut self, dt: Real) {
         self.update_proxies(dt);
         let bp = &mut self.broad_phase;
-        bp.sweep.find_pairs(&bp.proxies, &mut bp.pair_keys);
+        bp.sweep.find_pairs(&bp.proxies, &bp.pieces, &mut bp.pair_keys);
         self.merge_contacts(dt);
         self.wake_queued();
     }
@@ -57,6 +57,27 @@ impl World {
                 },
             },
         }));
+        self.update_pieces(margin);
+    }
+
+    /// The shapes' boxes of the static bodies swept shape by shape, grown by `margin` (m) as
+    /// their proxies are.
+    fn update_pieces(&mut self, margin: Real) {
+        let bp = &mut self.broad_phase;
+        bp.pieces.clear();
+        for &slot in &bp.pieced_slots {
+            let Some(body) = &self.bodies.slots[slot as usize].body else {
+                continue;
+            };
+            let Some(parts) = body.compound() else {
+                continue;
+            };
+            let frame = body.frame();
+            bp.pieces.extend(parts.all.iter().map(|part| Piece {
+                slot,
+                aabb: part.aabb(frame).inflated(margin),
+            }));
+        }
     }
 
     /// Walk the candidate pairs in key order beside last step's contacts: each pair's contact

@@ -8,7 +8,7 @@
 //! - `snapshot.rs`: the full state as plain data (checkpoints).
 
 use super::body::{Body, BodyDef, BodyId};
-use super::broad_phase::{pair_of, Proxy, SweepAndPrune};
+use super::broad_phase::{pair_of, Piece, Proxy, SweepAndPrune};
 use super::collide::collide;
 use super::contact::{Contact, ContactInfo, ContactPoint, ContactPointInfo};
 use super::error::{finite, finite_vec, positive, PhysicsError};
@@ -116,6 +116,35 @@ struct BroadPhase {
     pair_keys: Vec<u64>,
     /// Scratch for a pair of bodies of several shapes: its pairs of shapes whose boxes meet.
     shape_pairs: Vec<u32>,
+    /// The static bodies of several shapes, swept shape by shape (see [`Piece`]), by slot.
+    pieced_slots: Vec<u32>,
+    /// Their shapes' boxes for this step.
+    pieces: Vec<Piece>,
+}
+
+impl BroadPhase {
+    /// A body came alive in slot `index`: into the sweep, passive if static or asleep.
+    fn insert(&mut self, index: u32, body: &Body) {
+        self.sweep.insert(index, body.is_static() || !body.awake);
+        if body.is_static() && body.compound().is_some() {
+            self.pieced_slots.push(index);
+        }
+    }
+
+    /// Bodies in `slots` (sorted) went.
+    fn remove(&mut self, slots: &[u32]) {
+        self.sweep.remove(slots);
+        if !self.pieced_slots.is_empty() {
+            self.pieced_slots
+                .retain(|i| slots.binary_search(i).is_err());
+        }
+    }
+
+    /// Every body went.
+    fn clear(&mut self) {
+        self.sweep.clear();
+        self.pieced_slots.clear();
+    }
 }
 
 /// The solvers' buffers for one step.
@@ -244,12 +273,11 @@ impl World {
             generation: slot.generation,
         };
         let body = Body::from_def(id, def);
-        let passive = body.is_static();
+        self.broad_phase.insert(index, &body);
         self.bodies.filtered += usize::from(body.filter() != Filter::DEFAULT);
         self.bodies.flagged += usize::from(body.any_flags());
         slot.body = Some(body);
         self.bodies.count += 1;
-        self.broad_phase.sweep.insert(index, passive);
         Ok(id)
     }
 
@@ -313,8 +341,9 @@ impl World {
         clear(&mut gone);
         self.bodies.removing = gone;
         let mut removed = Vec::with_capacity(ids.len());
-        let slots: Vec<u32> = ids.iter().map(|id| id.index).collect();
-        self.broad_phase.sweep.remove(&slots);
+        let mut slots: Vec<u32> = ids.iter().map(|id| id.index).collect();
+        slots.sort_unstable();
+        self.broad_phase.remove(&slots);
         for &id in ids {
             let slot = &mut self.bodies.slots[id.index as usize];
             let body = slot.body.take().expect("checked above");
@@ -366,7 +395,7 @@ impl World {
         self.bodies.filtered = 0;
         self.bodies.flagged = 0;
         self.events = Default::default();
-        self.broad_phase.sweep.clear();
+        self.broad_phase.clear();
         self.contacts.awake.clear();
         self.contacts.previous.clear();
         self.contacts.sleeping.clear();

@@ -637,8 +637,7 @@ impl World {
                 Some(b) => Some(b.body(id, state.slots.len())?),
             };
             if let Some(b) = &body {
-                let passive = b.is_static() || !b.awake;
-                self.broad_phase.sweep.insert(id.index, passive);
+                self.broad_phase.insert(id.index, b);
                 self.bodies.count += 1;
                 self.bodies.filtered += usize::from(b.filter() != Filter::DEFAULT);
                 self.bodies.flagged += usize::from(b.any_flags());

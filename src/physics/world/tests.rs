@@ -703,3 +703,34 @@ fn a_struck_body_does_not_pass_a_wall_it_was_not_paired_with() {
     }
     assert!(fastest > 10.0, "the box was struck: {fastest} m/s");
 }
+
+/// A heavy plank resting on light boxes asks for [`Tier::Extreme`] (their masses are 222 to
+/// one apart and the boxes carry its weight); the same plank hinged at its centre to the world
+/// asks for nothing by its mass, since the hinge carries its weight (Box2D's `spinner`, whose
+/// hinged paddle stirs bodies 280 times lighter, ran at twice the cost when it did).
+#[test]
+fn a_heavy_body_hinged_to_the_world_asks_nothing_by_its_mass() {
+    use crate::physics::body::MassSpec;
+    use crate::physics::joint::{JointDef, JointKind, Revolute};
+    let plank_tier = |hinged: bool| {
+        let mut w = awake_world_on_floor(40.0);
+        for x in [-4.0, 0.0, 4.0] {
+            w.add_body(&BodyDef::dynamic(Shape::rect(0.3, 0.3), vec2(x, 0.15)))
+                .unwrap();
+        }
+        let mut plank = BodyDef::dynamic(Shape::rect(10.0, 0.5), vec2(0.0, 0.55));
+        plank.mass = MassSpec::Mass(20.0);
+        let plank = w.add_body(&plank).unwrap();
+        if hinged {
+            let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), None, plank)
+                .with_anchors(vec2(0.0, 0.55), Vec2::ZERO);
+            w.add_joint(&hinge).unwrap();
+        }
+        for _ in 0..10 {
+            w.step(1.0 / 60.0).unwrap();
+        }
+        w.tiers.body_tier[plank.index as usize]
+    };
+    assert_eq!(plank_tier(false), Tier::Extreme, "resting on the boxes");
+    assert!(plank_tier(true) < Tier::Extreme, "hinged: {:?}", plank_tier(true));
+}

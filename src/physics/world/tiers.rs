@@ -191,6 +191,9 @@ pub(super) struct TierScratch {
     pub joint_loaded: Vec<u32>,
     /// Each island's, at its root: whether a joint of it is loaded (sized only when one is).
     pub island_joint_loaded: Vec<bool>,
+    /// Each slot's: whether a joint holds its body to a body that does not move with it
+    /// (static or kinematic), which then carries its weight (sized only when one does).
+    pub anchored: Vec<bool>,
     /// The joints (indices of this step's joint constraints) of the tier being solved.
     pub tier_joints: Vec<u32>,
 }
@@ -207,11 +210,38 @@ impl World {
     /// island is), `extreme_mass_ratio` apart for [`Tier::Extreme`]. Fills `contact_tier` and
     /// `body_tier`; returns the highest tier.
     pub(super) fn assign_tiers(&mut self) -> Tier {
+        self.mark_anchored();
         let need = self.contact_needs().max(self.joint_needs());
         if need == Tier::Base {
             return Tier::Base;
         }
         self.island_tiers()
+    }
+
+    /// Flag the bodies a joint holds to a static or kinematic body (`anchored`): the anchor
+    /// carries their weight, so a light body they touch does not (Box2D's `spinner`: a 48 kg
+    /// paddle on a motor, hinged to the ground, stirring 0.17 kg bodies asked for the
+    /// mass-ratio tier at every touch, and ran at twice the cost for it).
+    fn mark_anchored(&mut self) {
+        self.tiers.anchored.clear();
+        let slots = &self.bodies.slots;
+        // (The solver's one fixed body past the slots stands for the world.)
+        let fixed = |i: u32| {
+            slots
+                .get(i as usize)
+                .is_none_or(|s| s.body.as_ref().is_some_and(|b| b.inv_mass == 0.0))
+        };
+        for k in &self.joints.constraints.constraints {
+            let held = match (fixed(k.a), fixed(k.b)) {
+                (true, false) => k.b,
+                (false, true) => k.a,
+                _ => continue,
+            };
+            if self.tiers.anchored.is_empty() {
+                self.tiers.anchored.resize(slots.len(), false);
+            }
+            self.tiers.anchored[held as usize] = true;
+        }
     }
 
     /// What the joints ask: their pairs of dynamic bodies join islands (appended to
@@ -306,7 +336,12 @@ impl World {
                 Some(c) if [c.a, c.b] == input.bodies => c.normal,
                 _ => Vec2::ZERO,
             };
-            let masses = if ratio >= stiff && carries_heavy(input, (ma, mb), (up, normal), g) {
+            let heavy = if mb <= ma { b } else { a };
+            let anchored = self.tiers.anchored.get(heavy as usize) == Some(&true);
+            let masses = if ratio >= stiff
+                && !anchored
+                && carries_heavy(input, (ma, mb), (up, normal), g)
+            {
                 ratio
             } else {
                 0.0

@@ -67,7 +67,7 @@ pub fn markdown(r: &Report) -> String {
         m,
         "Each case runs at 60 Hz (except `huge_dt`) with the solver's defaults: \
          `Settings::soft_step()` ({} substeps, {} Hz contacts, damping ratio {}, push-out {} m/s, \
-         adaptive stiffness: islands with heavy loads, or where a body carries the weight of one 12 or 100 times its mass, get 1.5, 1.75 or 4 times the substeps and stiffness (joints too), with creeping springs at 1.5 and 1.75, \
+         adaptive stiffness: islands with heavy loads, or where a body carries the weight of one 12 or 100 times its mass, get 1.5, 1.75 or 5 times the substeps and stiffness (joints too), with creeping springs at 1.5 and 1.75, \
          slop {} m) and `Settings::sequential()` (10 iterations, \
          split-impulse Baumgarte 0.2, slop 10 mm); the last column is the soft step with adaptive stiffness off \
          (every island on the base settings, as before issue 12). Sleeping is turned off (a sleeping stack cannot drift) except \

@@ -339,10 +339,13 @@ impl World {
                 Some(c) if [c.a, c.b] == input.bodies => c.normal,
                 _ => Vec2::ZERO,
             };
-            let heavy = if mb <= ma { b } else { a };
-            let anchored = self.tiers.anchored.get(heavy as usize) == Some(&true);
+            // (Read only for such a pair, as the normal is.)
+            let anchored = || {
+                let heavy = if mb <= ma { b } else { a };
+                self.tiers.anchored.get(heavy as usize) == Some(&true)
+            };
             let masses = if ratio >= stiff
-                && !anchored
+                && !anchored()
                 && carries_heavy(input, (ma, mb), (up, normal), g)
             {
                 ratio

@@ -348,6 +348,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
         compounds(),
         many_pyramids(),
         spinner(),
+        washer(),
         Setup {
             name: "mixed_shapes",
             gravity: g,
@@ -605,6 +606,72 @@ pub fn spinner() -> Setup {
     }
 }
 
+/// Box2D v3's `washer` benchmark (`shared/benchmarks.c`): a kinematic drum at (0, 10) turning
+/// at 25 deg/s (and drifting at (0.001, -0.002) m/s, as Box2D's), of 40 quadrilaterals: 36
+/// round its rim from radius 16 m to 18 m, each 10 degrees wide and overlapping its
+/// neighbours by 1 degree on each side, and 4 paddles from 14 m to 16 m at 0, 90, 180 and 270
+/// degrees; inside, 90 x 90 boxes of 0.2 m (density 1, friction 0.6) 0.21 m apart from
+/// (-9.9, 0.1), each reporting its hits. Gravity 10 m/s^2, 500 steps, sleep on. A tiltbox
+/// body's origin is its own shape's centre, and a kinematic body turns about its origin; so
+/// that the drum turns about its centre as Box2D's does, its own shape is a 1 cm sensor disc
+/// there (it touches nothing), the 40 quadrilaterals its parts.
+pub fn washer() -> Setup {
+    let deg = PI / 180.0;
+    let turn =
+        |v: Vec2, a: Real| Vec2::new(v.x * a.cos() - v.y * a.sin(), v.x * a.sin() + v.y * a.cos());
+    let quad = |points: [Vec2; 4]| {
+        let (polygon, centre) = Polygon::new(&points).expect("a valid quadrilateral");
+        PartDef::new(Shape::Polygon(Box::new(polygon)), centre)
+    };
+    let sensor = crate::physics::ShapeFlags {
+        sensor: true,
+        ..crate::physics::ShapeFlags::NONE
+    };
+    let mut drum = BodyDef::kinematic(
+        Shape::circle(0.01),
+        Vec2::new(0.0, 10.0),
+        Vec2::new(0.001, -0.002),
+    )
+    .with_angular_velocity(25.0 * deg)
+    .with_flags(sensor);
+    let (r0, r1, r2) = (14.0, 16.0, 18.0);
+    for i in 0..36 {
+        let (u1, u2) = (
+            turn(Vec2::X, 10.0 * deg * i as Real),
+            turn(Vec2::X, 10.0 * deg * (i + 1) as Real),
+        );
+        let (a1, a2) = (turn(u1, -deg), turn(u2, deg));
+        drum = drum.with_part(quad([a1 * r1, a1 * r2, a2 * r2, a2 * r1]));
+        if i % 9 == 0 {
+            drum = drum.with_part(quad([u1 * r0, u1 * r1, u2 * r1, u2 * r0]));
+        }
+    }
+    let hits = crate::physics::ShapeFlags {
+        hit_events: true,
+        ..crate::physics::ShapeFlags::NONE
+    };
+    let (n, a) = (90, 0.1 as Real);
+    let mut bodies = vec![drum];
+    for i in 0..n {
+        for j in 0..n {
+            let x = -1.1 * a * n as Real + 2.1 * a * j as Real;
+            let y = -1.1 * a * n as Real + 10.0 + 2.1 * a * i as Real;
+            bodies.push(
+                BodyDef::dynamic(Shape::rect(2.0 * a, 2.0 * a), Vec2::new(x, y)).with_flags(hits),
+            );
+        }
+    }
+    Setup {
+        name: "washer",
+        gravity: Vec2::new(0.0, -10.0),
+        bodies,
+        steps: 500,
+        sleep: true,
+        warm_up: 0,
+        joints: Vec::new(),
+    }
+}
+
 /// Box2D v3's `compounds` benchmark (`shared/benchmarks.c`): a static ground of one body and
 /// 282 shapes (a floor of 81 boxes 1.1 m x 1 m from x = -40 m to 40 m, two walls of 100 boxes 1
 /// m x 1.1 m at x = +-40 m, and a segment at y = -80 m from x = -800 m to 800 m), and 20
@@ -745,7 +812,8 @@ mod tests {
     use super::*;
 
     /// The counts Box2D's `benchmarks.c` makes: 20 x 20 pyramids of 55 boxes on one ground of
-    /// 20 segments; 6,076 bodies, a paddle and a ring of 360 pieces, the paddle on a motor.
+    /// 20 segments; 6,076 bodies, a paddle and a ring of 360 pieces, the paddle on a motor;
+    /// a drum of 40 shapes and 8,100 boxes.
     #[test]
     fn many_pyramids_and_spinner_have_box2ds_counts_and_build() {
         let p = many_pyramids();
@@ -758,7 +826,10 @@ mod tests {
         assert_eq!(s.bodies.len(), 360 + 1 + 6076);
         assert_eq!(s.joints.len(), 1);
         assert_eq!(s.joints[0].b, 360);
-        for setup in [p, s] {
+        let washer = washer();
+        assert_eq!(washer.bodies.len(), 1 + 90 * 90);
+        assert_eq!(washer.bodies[0].parts.len(), 36 + 4);
+        for setup in [p, s, washer] {
             let w = setup.build().unwrap();
             assert_eq!(w.body_count(), setup.bodies.len());
         }

@@ -431,7 +431,11 @@ impl SweepAndPrune {
                 (None, Some(_)) => false,
                 (None, None) => break,
             };
-            let next = if take_whole { whole.next() } else { parts.next() };
+            let next = if take_whole {
+                whole.next()
+            } else {
+                parts.next()
+            };
             self.passive_boxes.extend(next);
         }
     }
@@ -978,10 +982,7 @@ mod tests {
         proxies.push(proxy(5.0, 3.0, 5.5, 3.5)); // an ordinary static body
         let pieces: Vec<Piece> = strips
             .iter()
-            .map(|&aabb| Piece {
-                slot: pieced,
-                aabb,
-            })
+            .map(|&aabb| Piece { slot: pieced, aabb })
             .collect();
         let mut sap = SweepAndPrune::default();
         for i in 0..40 {
@@ -989,10 +990,7 @@ mod tests {
         }
         sap.insert(pieced, true);
         sap.insert(pieced + 1, true);
-        let (active, alive) = (
-            (0..42).map(|i| i < 40).collect::<Vec<_>>(),
-            vec![true; 42],
-        );
+        let (active, alive) = ((0..42).map(|i| i < 40).collect::<Vec<_>>(), vec![true; 42]);
         let (mut out, mut with_pieced) = (Vec::new(), 0);
         for step in 0..300 {
             for (i, p) in proxies.iter_mut().take(40).enumerate() {
@@ -1006,26 +1004,39 @@ mod tests {
             sap.find_pairs(&proxies, &pieces, &mut out);
             let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
             let mut expected = brute_force(&proxies, &active, &alive);
-            expected.retain(|&(a, b)| b != pieced || {
-                let near = proxies[a as usize].aabb.inflated(3.0 * FAT_MARGIN);
-                strips.iter().any(|s| s.overlaps(&near))
+            expected.retain(|&(a, b)| {
+                b != pieced || {
+                    let near = proxies[a as usize].aabb.inflated(3.0 * FAT_MARGIN);
+                    strips.iter().any(|s| s.overlaps(&near))
+                }
             });
             let (others, found): (Vec<_>, Vec<_>) = pairs.iter().partition(|p| p.1 != pieced);
             let (others_expected, candidates): (Vec<_>, Vec<_>) =
                 expected.iter().partition(|p| p.1 != pieced);
             assert_eq!(others, others_expected, "step {step}");
             for &(a, _) in &found {
-                assert!(candidates.contains(&(a, pieced)), "step {step}: {a} far from every strip");
+                assert!(
+                    candidates.contains(&(a, pieced)),
+                    "step {step}: {a} far from every strip"
+                );
             }
             for a in 0..40u32 {
                 let meets = strips.iter().any(|s| s.overlaps(&proxies[a as usize].aabb));
-                assert!(!meets || found.contains(&(a, pieced)), "step {step}: {a} missed");
+                assert!(
+                    !meets || found.contains(&(a, pieced)),
+                    "step {step}: {a} missed"
+                );
             }
             with_pieced += found.len();
         }
         // Boxes met the strips (5,382 pairs in all when written: the two rows, and jumpers),
         // and every path ran (2 sweeps and 46 updates).
         assert!(with_pieced >= 300, "{with_pieced} pairs with the strips");
-        assert!(sap.sweeps >= 2 && sap.updates >= 2, "{} / {}", sap.sweeps, sap.updates);
+        assert!(
+            sap.sweeps >= 2 && sap.updates >= 2,
+            "{} / {}",
+            sap.sweeps,
+            sap.updates
+        );
     }
 }

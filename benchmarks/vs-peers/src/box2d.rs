@@ -129,8 +129,11 @@ impl Box2d {
             for d in &setup.bodies {
                 let mut bd = b2DefaultBodyDef();
                 let is_static = d.mass == MassSpec::Static;
+                let is_kinematic = d.mass == MassSpec::Kinematic;
                 bd.type_ = if is_static {
                     b2BodyType_b2_staticBody
+                } else if is_kinematic {
+                    b2BodyType_b2_kinematicBody
                 } else {
                     b2BodyType_b2_dynamicBody
                 };
@@ -147,14 +150,13 @@ impl Box2d {
                 let body = b2CreateBody(world, &bd);
 
                 let own_density = match d.mass {
-                    MassSpec::Static => 0.0,
+                    MassSpec::Static | MassSpec::Kinematic => 0.0,
                     MassSpec::Density(rho) => rho as f32,
                     // Box2D takes a density: the one that gives this mass.
                     MassSpec::Mass(m) => {
                         assert!(d.parts.is_empty(), "the peer scenes give parts by density");
                         (m / d.shape.area()) as f32
                     }
-                    MassSpec::Kinematic => panic!("the peer scenes have no kinematic bodies"),
                 };
                 let own = (
                     &d.shape,
@@ -163,16 +165,19 @@ impl Box2d {
                     d.friction,
                     d.restitution,
                     own_density,
+                    d.flags,
                 );
                 let parts = d.parts.iter().map(|p| {
                     let pose = Transform {
                         p: p.offset,
                         q: Rot::from_angle(p.angle),
                     };
-                    let density = if is_static { 0.0 } else { p.density as f32 };
-                    (&p.shape, pose, p.filter, p.friction, p.restitution, density)
+                    let fixed = is_static || is_kinematic;
+                    let density = if fixed { 0.0 } else { p.density as f32 };
+                    let (f, r) = (p.friction, p.restitution);
+                    (&p.shape, pose, p.filter, f, r, density, p.flags)
                 });
-                for (shape, pose, filter, friction, restitution, density) in
+                for (shape, pose, filter, friction, restitution, density, flags) in
                     std::iter::once(own).chain(parts)
                 {
                     let mut sd = b2DefaultShapeDef();
@@ -182,9 +187,11 @@ impl Box2d {
                     sd.material.friction = friction as f32;
                     sd.material.restitution = restitution as f32;
                     sd.density = density;
+                    sd.isSensor = flags.sensor;
+                    sd.enableHitEvents = flags.hit_events;
                     create_shape(body, &sd, shape, pose);
                 }
-                if !is_static {
+                if !is_static && !is_kinematic {
                     dynamic.push(body);
                 }
                 all.push(body);

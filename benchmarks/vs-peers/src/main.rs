@@ -239,7 +239,7 @@ impl Engine for Tiltbox {
     fn dynamic_bodies(&self) -> Vec<BodyState> {
         self.world
             .bodies()
-            .filter(|b| !b.is_static())
+            .filter(|b| !b.is_static() && !b.is_kinematic())
             .map(|b| BodyState {
                 position: [b.position().x as f32, b.position().y as f32],
                 angle: b.angle() as f32,
@@ -261,7 +261,7 @@ impl Engine for Tiltbox {
         let mut sanity = summarise(
             self.world
                 .bodies()
-                .filter(|b| !b.is_static())
+                .filter(|b| !b.is_static() && !b.is_kinematic())
                 .map(|b| (b.position().y as f32, b.is_awake())),
             floor,
         );
@@ -374,6 +374,12 @@ impl Rapier {
         for def in &setup.bodies {
             let builder = match def.mass {
                 MassSpec::Static => RigidBodyBuilder::fixed(),
+                MassSpec::Kinematic => RigidBodyBuilder::kinematic_velocity_based()
+                    .linvel(Vector::new(
+                        def.linear_velocity.x as f32,
+                        def.linear_velocity.y as f32,
+                    ))
+                    .angvel(def.angular_velocity as f32),
                 _ => RigidBodyBuilder::dynamic()
                     .linvel(Vector::new(
                         def.linear_velocity.x as f32,
@@ -397,8 +403,11 @@ impl Rapier {
                 def.restitution,
                 def.filter,
             );
+            // (rapier has no event for a hit's approach speed: shapes that report hits in
+            // tiltbox and Box2D report nothing here.)
+            let collider = collider.sensor(def.flags.sensor);
             let collider = match (def.mass, &def.shape) {
-                (MassSpec::Static, _) => collider,
+                (MassSpec::Static | MassSpec::Kinematic, _) => collider,
                 // parry2d 0.31 moves a capsule's two half discs out by 3r/8 (a 3D hemisphere's
                 // centroid) where a half disc's is 4r/(3 pi), so its 2D capsule inertia is low
                 // (3 % for mixed_shapes' capsule); tiltbox's closed form is checked against a
@@ -424,7 +433,6 @@ impl Rapier {
                     );
                     collider.mass(m as f32)
                 }
-                (MassSpec::Kinematic, _) => panic!("the peer scenes have no kinematic bodies"),
             };
             let (handle, _) = world.insert(builder, collider);
             // A body's further shapes, each at its pose in the body's frame.
@@ -441,14 +449,14 @@ impl Rapier {
                 )
                 .translation(Vector::new(part.offset.x as f32, part.offset.y as f32))
                 .rotation(part.angle as f32);
-                let c = if def.mass == MassSpec::Static {
-                    c
+                let c = if matches!(def.mass, MassSpec::Static | MassSpec::Kinematic) {
+                    c.sensor(part.flags.sensor)
                 } else {
-                    c.density(part.density as f32)
+                    c.density(part.density as f32).sensor(part.flags.sensor)
                 };
                 world.insert_collider(c, Some(handle));
             }
-            if def.mass != MassSpec::Static {
+            if !matches!(def.mass, MassSpec::Static | MassSpec::Kinematic) {
                 dynamic.push(handle);
             }
             handles.push(handle);

@@ -27,7 +27,8 @@ impl World {
     pub(super) fn find_contacts(&mut self, dt: Real) {
         self.update_proxies(dt);
         let bp = &mut self.broad_phase;
-        bp.sweep.find_pairs(&bp.proxies, &bp.pieces, &mut bp.pair_keys);
+        bp.sweep
+            .find_pairs(&bp.proxies, &bp.pieces, &mut bp.pair_keys);
         self.merge_contacts(dt);
         self.wake_queued();
     }

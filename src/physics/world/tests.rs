@@ -732,5 +732,9 @@ fn a_heavy_body_hinged_to_the_world_asks_nothing_by_its_mass() {
         w.tiers.body_tier[plank.index as usize]
     };
     assert_eq!(plank_tier(false), Tier::Extreme, "resting on the boxes");
-    assert!(plank_tier(true) < Tier::Extreme, "hinged: {:?}", plank_tier(true));
+    assert!(
+        plank_tier(true) < Tier::Extreme,
+        "hinged: {:?}",
+        plank_tier(true)
+    );
 }

@@ -344,14 +344,13 @@ impl World {
                 let heavy = if mb <= ma { b } else { a };
                 self.tiers.anchored.get(heavy as usize) == Some(&true)
             };
-            let masses = if ratio >= stiff
-                && !anchored()
-                && carries_heavy(input, (ma, mb), (up, normal), g)
-            {
-                ratio
-            } else {
-                0.0
-            };
+            let masses =
+                if ratio >= stiff && !anchored() && carries_heavy(input, (ma, mb), (up, normal), g)
+                {
+                    ratio
+                } else {
+                    0.0
+                };
             // A soft contact's spring compresses by its load over m omega^2, and omega can rise
             // with the substep rate only: 1.5 times the substeps hold 1.5^2 = 2.25 times the
             // load at the same compression.

@@ -612,9 +612,11 @@ pub fn spinner() -> Setup {
 /// neighbours by 1 degree on each side, and 4 paddles from 14 m to 16 m at 0, 90, 180 and 270
 /// degrees; inside, 90 x 90 boxes of 0.2 m (density 1, friction 0.6) 0.21 m apart from
 /// (-9.9, 0.1), each reporting its hits. Gravity 10 m/s^2, 500 steps, sleep on. A tiltbox
-/// body's origin is its own shape's centre, and a kinematic body turns about its origin; so
-/// that the drum turns about its centre as Box2D's does, its own shape is a 1 cm sensor disc
-/// there (it touches nothing), the 40 quadrilaterals its parts.
+/// body's own shape is centred on its origin (a segment: given from it), and a kinematic body
+/// turns about its origin; so that the drum turns about its centre as Box2D's does, its own
+/// shape is a 20 cm segment given from the centre but buried 1 m deep inside the first rim
+/// quadrilateral (no box reaches it), the 40 quadrilaterals its parts. The peers get the same
+/// segment.
 pub fn washer() -> Setup {
     let deg = PI / 180.0;
     let turn =
@@ -623,17 +625,13 @@ pub fn washer() -> Setup {
         let (polygon, centre) = Polygon::new(&points).expect("a valid quadrilateral");
         PartDef::new(Shape::Polygon(Box::new(polygon)), centre)
     };
-    let sensor = crate::physics::ShapeFlags {
-        sensor: true,
-        ..crate::physics::ShapeFlags::NONE
-    };
+    let buried = crate::physics::Segment::new(Vec2::new(16.9, 1.0), Vec2::new(17.1, 1.0), 0.0);
     let mut drum = BodyDef::kinematic(
-        Shape::circle(0.01),
+        Shape::Segment(Box::new(buried)),
         Vec2::new(0.0, 10.0),
         Vec2::new(0.001, -0.002),
     )
-    .with_angular_velocity(25.0 * deg)
-    .with_flags(sensor);
+    .with_angular_velocity(25.0 * deg);
     let (r0, r1, r2) = (14.0, 16.0, 18.0);
     for i in 0..36 {
         let (u1, u2) = (

@@ -435,6 +435,13 @@ impl Body {
                 .compound()
                 .is_some_and(|p| p.all.iter().any(|part| part.flags.any()))
     }
+    /// Whether any of its shapes has a flag that `pick` picks.
+    pub(crate) fn asks(&self, pick: impl Fn(&ShapeFlags) -> bool) -> bool {
+        pick(&self.flags())
+            || self
+                .compound()
+                .is_some_and(|p| p.all.iter().any(|part| pick(&part.flags)))
+    }
     /// A body of several shapes: all of them, in the centre-of-mass frame. None for a body of
     /// one shape, whose centre of mass is its origin.
     #[inline]

@@ -85,8 +85,43 @@ struct Bodies {
     filtered: usize,
     /// Live bodies with a shape that reports events or is a sensor (none: no step looks).
     flagged: usize,
+    /// Of those, the bodies with a shape that reports touches, and those with a sensor: each
+    /// event stage runs only while some body asks for it (8,100 boxes that report hits kept the
+    /// sensor stage's query tree in step with them, 6 % of Box2D's washer, with no sensor).
+    asking: Asking,
     /// Scratch for `remove_bodies`: a flag per slot, all false between calls.
     removing: Vec<bool>,
+}
+
+/// How many live bodies ask for each kind of event.
+#[derive(Clone, Copy, Debug, Default)]
+struct Asking {
+    touches: usize,
+    sensors: usize,
+}
+
+impl Bodies {
+    /// Count `body`'s filter and flags in (`add`) or out.
+    fn note(&mut self, body: &Body, add: bool) {
+        let [filtered, flagged, touches, sensors] = [
+            body.filter() != Filter::DEFAULT,
+            body.any_flags(),
+            body.asks(|f| f.contact_events),
+            body.asks(|f| f.sensor),
+        ]
+        .map(usize::from);
+        if add {
+            self.filtered += filtered;
+            self.flagged += flagged;
+            self.asking.touches += touches;
+            self.asking.sensors += sensors;
+        } else {
+            self.filtered -= filtered;
+            self.flagged -= flagged;
+            self.asking.touches -= touches;
+            self.asking.sensors -= sensors;
+        }
+    }
 }
 
 /// The contacts, sorted by pair key, and the constraint graph that colours them.
@@ -274,8 +309,8 @@ impl World {
         };
         let body = Body::from_def(id, def);
         self.broad_phase.insert(index, &body);
-        self.bodies.filtered += usize::from(body.filter() != Filter::DEFAULT);
-        self.bodies.flagged += usize::from(body.any_flags());
+        self.bodies.note(&body, true);
+        let slot = &mut self.bodies.slots[index as usize];
         slot.body = Some(body);
         self.bodies.count += 1;
         Ok(id)
@@ -347,8 +382,8 @@ impl World {
         for &id in ids {
             let slot = &mut self.bodies.slots[id.index as usize];
             let body = slot.body.take().expect("checked above");
-            self.bodies.filtered -= usize::from(body.filter() != Filter::DEFAULT);
-            self.bodies.flagged -= usize::from(body.any_flags());
+            self.bodies.note(&body, false);
+            let slot = &mut self.bodies.slots[id.index as usize];
             removed.push(body);
             slot.generation = slot.generation.wrapping_add(1);
             self.bodies.free.push(id.index);
@@ -394,6 +429,7 @@ impl World {
         self.bodies.count = 0;
         self.bodies.filtered = 0;
         self.bodies.flagged = 0;
+        self.bodies.asking = Asking::default();
         self.events = Default::default();
         self.broad_phase.clear();
         self.contacts.awake.clear();

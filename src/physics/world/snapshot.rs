@@ -639,8 +639,7 @@ impl World {
             if let Some(b) = &body {
                 self.broad_phase.insert(id.index, b);
                 self.bodies.count += 1;
-                self.bodies.filtered += usize::from(b.filter() != Filter::DEFAULT);
-                self.bodies.flagged += usize::from(b.any_flags());
+                self.bodies.note(b, true);
             }
             self.bodies.slots.push(Slot {
                 generation: s.generation,

@@ -59,10 +59,10 @@ impl World {
         }
         self.time += dt as f64;
         self.steps += 1;
-        if self.bodies.flagged > 0 || !self.events.touching.is_empty() {
+        if self.bodies.asking.touches > 0 || !self.events.touching.is_empty() {
             self.find_contact_events();
         }
-        if self.bodies.flagged > 0 || !self.events.overlapping.is_empty() {
+        if self.bodies.asking.sensors > 0 || !self.events.overlapping.is_empty() {
             self.find_sensor_events();
         }
         Ok(())

@@ -738,3 +738,32 @@ fn a_heavy_body_hinged_to_the_world_asks_nothing_by_its_mass() {
         plank_tier(true)
     );
 }
+
+/// Shapes that report hits, with no sensor anywhere, leave the sensor stage alone (it keeps
+/// the query tree in step with every body, 6 % of Box2D's washer); a sensor brings it in, and
+/// removing the sensor's body takes it out again.
+#[test]
+fn only_a_sensor_brings_in_the_sensor_stage() {
+    use crate::physics::events::ShapeFlags;
+    let mut w = awake_world_on_floor(20.0);
+    let hits = ShapeFlags {
+        hit_events: true,
+        ..ShapeFlags::NONE
+    };
+    let sensor = ShapeFlags {
+        sensor: true,
+        ..ShapeFlags::NONE
+    };
+    w.add_body(&BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(0.0, 0.5)).with_flags(hits))
+        .unwrap();
+    w.step(1.0 / 60.0).unwrap();
+    assert_eq!(w.queries.synced_at, None, "hits alone");
+    let probe = BodyDef::fixed(Shape::circle(0.5), vec2(5.0, 0.5)).with_flags(sensor);
+    let probe = w.add_body(&probe).unwrap();
+    w.step(1.0 / 60.0).unwrap();
+    assert_eq!(w.queries.synced_at, Some(w.steps), "with a sensor");
+    w.remove_body(probe).unwrap();
+    w.step(1.0 / 60.0).unwrap();
+    w.step(1.0 / 60.0).unwrap();
+    assert_ne!(w.queries.synced_at, Some(w.steps), "the sensor gone");
+}

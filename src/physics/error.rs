@@ -97,6 +97,9 @@ pub enum PhysicsError {
         /// What was asked of it.
         what: &'static str,
     },
+    /// A target pose given to a body that is not kinematic.
+    #[error("body {0} is not kinematic: only a kinematic body is moved to a target pose")]
+    NotKinematic(BodyId),
 }
 
 /// Check that `value` is finite, naming `field` if not.

@@ -576,6 +576,35 @@ impl World {
         Ok(())
     }
 
+    /// Aim a kinematic body at a pose to reach in `dt` seconds (Box2D's
+    /// `b2Body_SetTargetTransform`): its velocities become those that carry its origin to
+    /// `position` (m) and its angle to `angle` (rad, turning the shorter way) over a step of
+    /// `dt`, and it keeps them until told otherwise. Refused, with nothing changed, for a body
+    /// that is not kinematic, values that are not finite, `dt` not above zero, or speeds beyond
+    /// `Settings::max_linear_speed`.
+    pub fn set_target_transform(
+        &mut self,
+        id: BodyId,
+        position: Vec2,
+        angle: Real,
+        dt: Real,
+    ) -> Result<(), PhysicsError> {
+        finite_vec(["position.x", "position.y"], position)?;
+        finite("angle", angle)?;
+        positive("dt", dt)?;
+        let b = self.body(id).ok_or(PhysicsError::UnknownBody(id))?;
+        if !b.kinematic {
+            return Err(PhysicsError::NotKinematic(id));
+        }
+        // The centre (its origin unless it has parts) goes where the target puts it; the turn
+        // is the target's rotation relative to the current one, within (-pi, pi].
+        let target = Rot::from_angle(angle);
+        let centre = position + target.rotate(b.local_center());
+        let q = b.rot;
+        let turn = (target.s * q.c - target.c * q.s).atan2(target.c * q.c + target.s * q.s);
+        self.set_velocity(id, (centre - b.center_of_mass()) / dt, turn / dt)
+    }
+
     /// Set a body's collision filter (its own shape's, for a body of several). Its island wakes; from the next step, its contacts with
     /// bodies the filter now refuses end and new ones begin where it now allows them.
     pub fn set_filter(&mut self, id: BodyId, filter: Filter) -> Result<(), PhysicsError> {

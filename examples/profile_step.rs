@@ -22,14 +22,15 @@ fn main() {
             std::process::exit(1);
         }
     };
-    for _ in 0..warm_up.unwrap_or(setup.warm_up) {
-        let _ = world.step(1.0 / 60.0);
+    let warm_up = warm_up.unwrap_or(setup.warm_up);
+    for k in 0..warm_up {
+        let _ = setup.step(&mut world, k);
     }
     let mut times = Vec::with_capacity(steps);
     let mut contacts = 0;
-    for _ in 0..steps {
+    for k in warm_up..warm_up + steps {
         let t = Instant::now();
-        let _ = world.step(1.0 / 60.0);
+        let _ = setup.step(&mut world, k);
         times.push(t.elapsed().as_secs_f64() * 1e3);
         contacts += world.contact_count();
     }

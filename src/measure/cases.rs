@@ -177,6 +177,25 @@ pub struct Setup {
     pub warm_up: usize,
     /// Revolute joints between the bodies.
     pub joints: Vec<SetupJoint>,
+    /// A kinematic body aimed at a pose on a path before each step, if any.
+    pub driver: Option<SetupDriver>,
+}
+
+/// A kinematic body of a [`Setup`] aimed, before each step, at the pose its path gives for the
+/// end of the step (Box2D's step functions call `b2Body_SetTargetTransform` alike).
+#[derive(Clone, Copy, Debug)]
+pub struct SetupDriver {
+    /// Index of the kinematic body in `bodies`.
+    pub body: usize,
+    /// Its origin (m) and angle (rad) at time t (s) from the start.
+    pub path: fn(Real) -> (Vec2, Real),
+}
+
+impl SetupDriver {
+    /// The pose to reach by the end of step `k` (0 the first) at dt = 1/60 s.
+    pub fn target(&self, k: usize) -> (Vec2, Real) {
+        (self.path)((k + 1) as Real / 60.0)
+    }
 }
 
 /// A revolute joint of a [`Setup`]: bodies by index into `bodies` (A None: the world, a
@@ -197,6 +216,21 @@ pub struct SetupJoint {
 }
 
 impl Setup {
+    /// Step a World built by [`Setup::build`] once at 1/60 s, the driver (if any) aimed
+    /// first; `k` is the step's index from 0.
+    pub fn step(&self, world: &mut World, k: usize) -> Result<(), PhysicsError> {
+        const DT: Real = 1.0 / 60.0;
+        if let Some(driver) = &self.driver {
+            // A World built from the set-up holds body i in slot i, never reused.
+            let id = world
+                .live_id(driver.body as u32, 0)
+                .expect("Setup::step steps a World built by Setup::build");
+            let (position, angle) = driver.target(k);
+            world.set_target_transform(id, position, angle, DT)?;
+        }
+        world.step(DT)
+    }
+
     /// A World with this scene, the default (soft-step) settings and the scene's sleep flag.
     pub fn build(&self) -> Result<World, PhysicsError> {
         self.build_with(Default::default())
@@ -304,6 +338,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 500,
             sleep: false,
             warm_up: 0,
+            driver: None,
             joints: Vec::new(),
         },
         Setup {
@@ -313,6 +348,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 500,
             sleep: false,
             warm_up: 0,
+            driver: None,
             joints: Vec::new(),
         },
         Setup {
@@ -322,6 +358,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 600,
             sleep: false,
             warm_up: 0,
+            driver: None,
             joints: Vec::new(),
         },
         Setup {
@@ -331,6 +368,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 500,
             sleep: false,
             warm_up: 0,
+            driver: None,
             joints: Vec::new(),
         },
         Setup {
@@ -340,6 +378,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 300,
             sleep: true,
             warm_up: 300,
+            driver: None,
             joints: Vec::new(),
         },
         joint_grid(100),
@@ -349,6 +388,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
         many_pyramids(),
         spinner(),
         washer(),
+        junkyard(),
         Setup {
             name: "mixed_shapes",
             gravity: g,
@@ -356,6 +396,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             steps: 500,
             sleep: false,
             warm_up: 0,
+            driver: None,
             joints: Vec::new(),
         },
     ]
@@ -417,6 +458,7 @@ pub fn joint_grid(n: usize) -> Setup {
         steps: 500,
         sleep: false,
         warm_up: 0,
+        driver: None,
         joints,
     }
 }
@@ -446,6 +488,7 @@ pub fn smash() -> Setup {
         steps: 300,
         sleep: true,
         warm_up: 0,
+        driver: None,
         joints: Vec::new(),
     }
 }
@@ -483,6 +526,7 @@ pub fn tumbler() -> Setup {
         steps: 750,
         sleep: true,
         warm_up: 0,
+        driver: None,
         joints: vec![SetupJoint {
             a: None,
             b: 0,
@@ -544,6 +588,7 @@ pub fn many_pyramids() -> Setup {
         steps: 200,
         sleep: false,
         warm_up: 0,
+        driver: None,
         joints: Vec::new(),
     }
 }
@@ -596,6 +641,7 @@ pub fn spinner() -> Setup {
         steps: 500,
         sleep: true,
         warm_up: 0,
+        driver: None,
         joints: vec![SetupJoint {
             a: None,
             b: paddle,
@@ -666,7 +712,95 @@ pub fn washer() -> Setup {
         steps: 500,
         sleep: true,
         warm_up: 0,
+        driver: None,
         joints: Vec::new(),
+    }
+}
+
+/// Box2D v3's `junkyard` benchmark (`shared/benchmarks.c`): a static ground of one body and
+/// 261 boxes (a floor of 161 boxes 1.1 m x 1 m from x = -80 m to 80 m at y = 0, two walls of
+/// 50 boxes 1 m x 1.1 m at x = +-80 m from y = 1 m), 200 x 40 pentagons of radius 0.25 m
+/// (Box2D's Fibonacci points, density 1, friction 0.6) in columns 0.75 m apart from x = -75 m,
+/// rows 1 m apart from y = 15 m, shifted -0.1 and +0.1 m in turn, and a kinematic pusher, a
+/// 4 m x 8 m box standing on the floor, driven along x to 60 sin(0.2 t) m. Gravity 10 m/s^2,
+/// 800 steps, sleep on. Box2D's pusher has its origin at the floor, its box 4 m above it;
+/// here its origin is the box's centre, and its path is lifted 4 m to match.
+pub fn junkyard() -> Setup {
+    let mut ground = BodyDef::fixed(Shape::rect(1.1, 1.0), Vec2::new(-80.0, 0.0));
+    let offset = |x: Real, y: Real| Vec2::new(x + 80.0, y);
+    for i in 1..161 {
+        let at = offset(-80.0 + i as Real, 0.0);
+        ground.parts.push(PartDef::new(Shape::rect(1.1, 1.0), at));
+    }
+    for side in [-80.0, 80.0] {
+        for j in 0..50 {
+            let at = offset(side, 1.0 + j as Real);
+            ground.parts.push(PartDef::new(Shape::rect(1.0, 1.1), at));
+        }
+    }
+    let radius = 0.25;
+    let phi = PI * ((5.0 as Real).sqrt() - 1.0);
+    let points: Vec<Vec2> = (0..5)
+        .map(|i| {
+            let theta = phi * i as Real;
+            Vec2::new(radius * theta.cos(), radius * theta.sin())
+        })
+        .collect();
+    let pentagon = convex_hull(&points);
+    let mut bodies = vec![ground];
+    let mut side = -0.1;
+    for i in 0..200 {
+        let x = 1.5 * (2.0 * i as Real - 200.0) * radius;
+        for j in 0..40 {
+            let y = 4.0 * j as Real * radius + 15.0;
+            // Box2D's hull is centred on the points' origin; tiltbox's polygon on its centroid.
+            let (polygon, centroid) = Polygon::new(&pentagon).expect("a valid pentagon");
+            let at = Vec2::new(x + side, y) + centroid;
+            bodies.push(BodyDef::dynamic(Shape::Polygon(Box::new(polygon)), at));
+            side = -side;
+        }
+    }
+    let pusher = bodies.len();
+    bodies.push(BodyDef::kinematic(
+        Shape::rect(4.0, 8.0),
+        Vec2::new(0.0, 4.0),
+        Vec2::ZERO,
+    ));
+    Setup {
+        name: "junkyard",
+        gravity: Vec2::new(0.0, -10.0),
+        bodies,
+        steps: 800,
+        sleep: true,
+        warm_up: 0,
+        joints: Vec::new(),
+        driver: Some(SetupDriver {
+            body: pusher,
+            path: |t| (Vec2::new(60.0 * (0.2 * t).sin(), 4.0), 0.0),
+        }),
+    }
+}
+
+/// The convex hull of `points`, counter-clockwise (gift wrapping: a handful of points).
+fn convex_hull(points: &[Vec2]) -> Vec<Vec2> {
+    let start = (0..points.len())
+        .min_by(|&i, &j| points[i].x.total_cmp(&points[j].x))
+        .expect("points");
+    let mut hull = vec![points[start]];
+    let mut at = start;
+    loop {
+        let mut next = (at + 1) % points.len();
+        for k in 0..points.len() {
+            let (a, b) = (points[next] - points[at], points[k] - points[at]);
+            if a.x * b.y - a.y * b.x < 0.0 {
+                next = k;
+            }
+        }
+        if next == start {
+            return hull;
+        }
+        hull.push(points[next]);
+        at = next;
     }
 }
 
@@ -727,6 +861,7 @@ pub fn compounds() -> Setup {
         steps: 500,
         sleep: true,
         warm_up: 0,
+        driver: None,
         joints: Vec::new(),
     }
 }
@@ -824,10 +959,14 @@ mod tests {
         assert_eq!(s.bodies.len(), 360 + 1 + 6076);
         assert_eq!(s.joints.len(), 1);
         assert_eq!(s.joints[0].b, 360);
+        let junk = junkyard();
+        assert_eq!(junk.bodies.len(), 1 + 200 * 40 + 1);
+        assert_eq!(junk.bodies[0].parts.len(), 160 + 100);
+        assert!(matches!(&junk.bodies[1].shape, Shape::Polygon(p) if p.vertices().len() == 5));
         let washer = washer();
         assert_eq!(washer.bodies.len(), 1 + 90 * 90);
         assert_eq!(washer.bodies[0].parts.len(), 36 + 4);
-        for setup in [p, s, washer] {
+        for setup in [p, s, washer, junk] {
             let w = setup.build().unwrap();
             assert_eq!(w.body_count(), setup.bodies.len());
         }

@@ -66,6 +66,7 @@ fn setup(name: &'static str, bodies: Vec<BodyDef>) -> Setup {
         steps: 0,
         sleep: false,
         warm_up: 0,
+        driver: None,
         joints: Vec::new(),
     }
 }

@@ -86,6 +86,9 @@ fn mixing(m: Mixing) -> unsafe extern "C" fn(f32, u64, f32, u64) -> f32 {
 /// A Box2D world holding one scene.
 pub struct Box2d {
     world: b2WorldId,
+    /// The driven kinematic body and its driver, and the steps taken.
+    driver: Option<(b2BodyId, tiltbox::measure::cases::SetupDriver)>,
+    steps: usize,
     dynamic: Vec<b2BodyId>,
     /// Each joint's bodies and local anchors, for the gap in the sanity column.
     joints: Vec<(b2BodyId, b2BodyId, b2Vec2, b2Vec2)>,
@@ -220,6 +223,8 @@ impl Box2d {
             }
             Box2d {
                 world,
+                driver: setup.driver.map(|d| (all[d.body], d)),
+                steps: 0,
                 dynamic,
                 joints,
                 floor: crate::lowest_static(&setup.bodies),
@@ -301,8 +306,23 @@ fn angle(r: b2Rot) -> f32 {
 
 impl Engine for Box2d {
     fn step(&mut self) {
-        // SAFETY: a live world.
-        unsafe { b2World_Step(self.world, self.dt, self.substeps) }
+        // SAFETY: a live world, and a live kinematic body in it.
+        unsafe {
+            if let Some((body, driver)) = self.driver {
+                let (p, angle) = driver.target(self.steps);
+                let angle = angle as f32;
+                let target = b2Transform {
+                    p: v(p.x as f32, p.y as f32),
+                    q: b2Rot {
+                        c: angle.cos(),
+                        s: angle.sin(),
+                    },
+                };
+                b2Body_SetTargetTransform(body, target, self.dt, true);
+            }
+            b2World_Step(self.world, self.dt, self.substeps);
+        }
+        self.steps += 1;
     }
     fn contact_pairs(&self) -> usize {
         // SAFETY: a live world. Box2D's count includes pairs whose AABBs overlap without a

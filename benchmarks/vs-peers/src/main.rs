@@ -50,7 +50,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::time::Instant;
 use tiltbox::measure::accuracy::max_penetration;
-use tiltbox::measure::cases::{benchmark_setups, Setup};
+use tiltbox::measure::cases::{benchmark_setups, Setup, SetupDriver};
 use tiltbox::measure::machine::cpu_model;
 use tiltbox::physics::{BodyDef, MassSpec, Mixing, Real, Settings, Shape, Vec2, World};
 
@@ -169,6 +169,9 @@ pub(crate) trait Engine {
 pub(crate) struct Tiltbox {
     world: World,
     dt: f32,
+    /// The set-up, for its driver, and the steps taken.
+    setup: Setup,
+    steps: usize,
 }
 
 impl Tiltbox {
@@ -176,6 +179,8 @@ impl Tiltbox {
         Tiltbox {
             world: setup.build().expect("tiltbox refused a benchmark set-up"),
             dt: DT,
+            setup: setup.clone(),
+            steps: 0,
         }
     }
 
@@ -184,7 +189,16 @@ impl Tiltbox {
         let world = setup
             .build_with(settings)
             .expect("tiltbox refused the set-up");
-        Tiltbox { world, dt }
+        assert!(
+            setup.driver.is_none() || dt == DT,
+            "a driven set-up runs at 1/60 s"
+        );
+        Tiltbox {
+            world,
+            dt,
+            setup: setup.clone(),
+            steps: 0,
+        }
     }
 }
 
@@ -228,7 +242,14 @@ pub(crate) fn summarise(ys: impl Iterator<Item = (f32, bool)>, floor: f32) -> Sa
 
 impl Engine for Tiltbox {
     fn step(&mut self) {
-        self.world.step(self.dt as _).expect("tiltbox step failed");
+        if self.setup.driver.is_some() {
+            self.setup
+                .step(&mut self.world, self.steps)
+                .expect("tiltbox step failed");
+        } else {
+            self.world.step(self.dt as _).expect("tiltbox step failed");
+        }
+        self.steps += 1;
     }
     fn max_penetration(&self) -> f64 {
         max_penetration(&self.world)
@@ -283,6 +304,9 @@ impl Engine for Tiltbox {
 
 pub(crate) struct Rapier {
     world: PhysicsWorld,
+    /// The driven kinematic body and its driver, and the steps taken.
+    driver: Option<(RigidBodyHandle, SetupDriver)>,
+    steps: usize,
     dynamic: Vec<RigidBodyHandle>,
     floor: f32,
     /// Each joint's bodies and local anchors, for the gap in the sanity column.
@@ -487,6 +511,8 @@ impl Rapier {
         }
         Rapier {
             world,
+            driver: setup.driver.map(|d| (handles[d.body], d)),
+            steps: 0,
             dynamic,
             floor: lowest_static(&setup.bodies),
             joints,
@@ -496,7 +522,21 @@ impl Rapier {
 
 impl Engine for Rapier {
     fn step(&mut self) {
+        if let Some((handle, driver)) = self.driver {
+            // As Box2D's b2Body_SetTargetTransform: the velocities that reach the pose in dt.
+            let (p, angle) = driver.target(self.steps);
+            let dt = self.world.integration_parameters.dt;
+            let body = &mut self.world.bodies[handle];
+            let (here, turned) = (*body.translation(), body.rotation().angle());
+            let target = Vector::new(p.x as f32, p.y as f32);
+            let turn = (angle as f32 - turned + std::f32::consts::PI)
+                .rem_euclid(2.0 * std::f32::consts::PI)
+                - std::f32::consts::PI;
+            body.set_linvel((target - here) / dt, true);
+            body.set_angvel(turn / dt, true);
+        }
         self.world.step();
+        self.steps += 1;
     }
     fn max_penetration(&self) -> f64 {
         self.world
@@ -1047,6 +1087,7 @@ pub(crate) fn pyramid_setup(base: usize) -> Setup {
         steps: 0,
         sleep: false,
         warm_up: 0,
+        driver: None,
         joints: Vec::new(),
     }
 }

@@ -779,13 +779,22 @@ fn a_kinematic_body_reaches_its_target_pose_in_one_step() {
     let def = BodyDef::kinematic(Shape::rect(2.0, 1.0), vec2(1.0, 1.0), Vec2::ZERO).with_angle(3.0);
     let id = w.add_body(&def).unwrap();
     let dt = 1.0 / 60.0;
-    w.set_target_transform(id, vec2(1.5, 0.8), -3.0, dt).unwrap();
+    w.set_target_transform(id, vec2(1.5, 0.8), -3.0, dt)
+        .unwrap();
     let turn = w.body(id).unwrap().angular_velocity() * dt;
     assert!((turn - (2.0 * PI - 6.0)).abs() < 1e-4, "turned {turn} rad");
     w.step(dt).unwrap();
     let b = w.body(id).unwrap();
-    assert!((b.position() - vec2(1.5, 0.8)).length() < 1e-4, "{:?}", b.position());
-    assert!((b.angle() - (3.0 + 2.0 * PI - 6.0)).abs() < 1e-4, "{}", b.angle());
+    assert!(
+        (b.position() - vec2(1.5, 0.8)).length() < 1e-4,
+        "{:?}",
+        b.position()
+    );
+    assert!(
+        (b.angle() - (3.0 + 2.0 * PI - 6.0)).abs() < 1e-4,
+        "{}",
+        b.angle()
+    );
     let ball = w
         .add_body(&BodyDef::dynamic(Shape::circle(0.5), vec2(5.0, 5.0)))
         .unwrap();
@@ -793,7 +802,9 @@ fn a_kinematic_body_reaches_its_target_pose_in_one_step() {
         w.set_target_transform(ball, Vec2::ZERO, 0.0, dt),
         Err(PhysicsError::NotKinematic(_))
     ));
-    assert!(w.set_target_transform(id, vec2(Real::NAN, 0.0), 0.0, dt).is_err());
+    assert!(w
+        .set_target_transform(id, vec2(Real::NAN, 0.0), 0.0, dt)
+        .is_err());
     assert!(w.set_target_transform(id, Vec2::ZERO, 0.0, 0.0).is_err());
     // (The refusals left last step's aim: 0.5 m right and 0.2 m down over dt.)
     let v = w.body(id).unwrap().linear_velocity();

@@ -527,7 +527,7 @@ impl Engine for Rapier {
             let (p, angle) = driver.target(self.steps);
             let dt = self.world.integration_parameters.dt;
             let body = &mut self.world.bodies[handle];
-            let (here, turned) = (*body.translation(), body.rotation().angle());
+            let (here, turned) = (body.translation(), body.rotation().angle());
             let target = Vector::new(p.x as f32, p.y as f32);
             let turn = (angle as f32 - turned + std::f32::consts::PI)
                 .rem_euclid(2.0 * std::f32::consts::PI)

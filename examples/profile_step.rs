@@ -1,5 +1,6 @@
 //! Steps one benchmark scene and prints ms/step: a target for `perf record` while optimising.
 //! Usage: cargo run --release --no-default-features --features measure --example profile_step [SCENE] [STEPS] [WARM_UP]
+//! (SCENE: a benchmark set-up's name, or `pile_N` for N boxes in a pile 20 deep.)
 //! (WARM_UP: untimed steps first; the scene's own warm-up when left out).
 use std::time::Instant;
 
@@ -8,10 +9,16 @@ fn main() {
     let name = args.next().unwrap_or_else(|| "large_pyramid".to_string());
     let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(500);
     let warm_up: Option<usize> = args.next().and_then(|s| s.parse().ok());
-    let Some(setup) = tiltbox::measure::cases::benchmark_setups()
-        .into_iter()
-        .find(|s| s.name == name)
-    else {
+    // `pile_N`: N boxes in a pile 20 deep (how the cost grows with the count).
+    let pile = name
+        .strip_prefix("pile_")
+        .and_then(|n| n.parse().ok())
+        .map(tiltbox::measure::cases::pile);
+    let Some(setup) = pile.or_else(|| {
+        tiltbox::measure::cases::benchmark_setups()
+            .into_iter()
+            .find(|s| s.name == name)
+    }) else {
         eprintln!("unknown scene {name}");
         std::process::exit(2);
     };

@@ -717,6 +717,38 @@ pub fn washer() -> Setup {
     }
 }
 
+/// A pile for measuring how the step's cost grows with the body count: `n` boxes of 1 m in 20
+/// rows (as deep at every size, so that every size runs the same stiffness tier), side by side
+/// (one island, braced), each row 1 mm above the one below, on a ground as wide, between two
+/// walls.
+/// Sleep off (every body awake), 120 steps of warm-up, gravity 10 m/s^2.
+pub fn pile(n: usize) -> Setup {
+    const ROWS: usize = 20;
+    let columns = n.div_ceil(ROWS);
+    let width = columns as Real;
+    let x0 = -0.5 * width + 0.5;
+    let mut bodies = vec![
+        BodyDef::fixed(Shape::rect(width + 4.0, 2.0), Vec2::new(0.0, -1.0)),
+        BodyDef::fixed(Shape::rect(1.0, 30.0), Vec2::new(-0.5 * width - 0.5, 15.0)),
+        BodyDef::fixed(Shape::rect(1.0, 30.0), Vec2::new(0.5 * width + 0.5, 15.0)),
+    ];
+    bodies.extend((0..n).map(|i| {
+        let (column, row) = (i / ROWS, i % ROWS);
+        let at = Vec2::new(x0 + column as Real, 0.5 + 1.001 * row as Real);
+        BodyDef::dynamic(Shape::rect(1.0, 1.0), at)
+    }));
+    Setup {
+        name: "pile",
+        gravity: Vec2::new(0.0, -10.0),
+        bodies,
+        steps: 100,
+        sleep: false,
+        warm_up: 120,
+        joints: Vec::new(),
+        driver: None,
+    }
+}
+
 /// Box2D v3's `junkyard` benchmark (`shared/benchmarks.c`): a static ground of one body and
 /// 261 boxes (a floor of 161 boxes 1.1 m x 1 m from x = -80 m to 80 m at y = 0, two walls of
 /// 50 boxes 1 m x 1.1 m at x = +-80 m from y = 1 m), 200 x 40 pentagons of radius 0.25 m

@@ -232,7 +232,7 @@ impl World {
         let fixed = |i: u32| {
             slots
                 .get(i as usize)
-                .is_none_or(|s| s.body.as_ref().is_some_and(|b| b.inv_mass == 0.0))
+                .map_or(true, |s| s.body.as_ref().is_some_and(|b| b.inv_mass == 0.0))
         };
         for k in &self.joints.constraints.constraints {
             let held = match (fixed(k.a), fixed(k.b)) {

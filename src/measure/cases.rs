@@ -262,6 +262,21 @@ impl Setup {
     }
 }
 
+/// A scene as Box2D's `benchmarks.c` runs it: gravity 10 m/s^2 down, sleep on, timed from the
+/// first step, no joints and no driver (a scene that differs says so over the result).
+fn box2d_scene(name: &'static str, bodies: Vec<BodyDef>, steps: usize) -> Setup {
+    Setup {
+        name,
+        gravity: Vec2::new(0.0, -10.0),
+        bodies,
+        steps,
+        sleep: true,
+        warm_up: 0,
+        joints: Vec::new(),
+        driver: None,
+    }
+}
+
 fn boxes_pyramid(base: usize, x: Real, y0: Real, out: &mut Vec<BodyDef>) {
     for row in 0..base {
         let count = base - row;
@@ -452,14 +467,9 @@ pub fn joint_grid(n: usize) -> Setup {
         }
     }
     Setup {
-        name: "joint_grid",
-        gravity: Vec2::new(0.0, -10.0),
-        bodies,
-        steps: 500,
         sleep: false,
-        warm_up: 0,
-        driver: None,
         joints,
+        ..box2d_scene("joint_grid", bodies, 500)
     }
 }
 
@@ -482,14 +492,8 @@ pub fn smash() -> Setup {
         }
     }
     Setup {
-        name: "smash",
         gravity: Vec2::ZERO,
-        bodies,
-        steps: 300,
-        sleep: true,
-        warm_up: 0,
-        driver: None,
-        joints: Vec::new(),
+        ..box2d_scene("smash", bodies, 300)
     }
 }
 
@@ -520,13 +524,6 @@ pub fn tumbler() -> Setup {
         }
     }
     Setup {
-        name: "tumbler",
-        gravity: Vec2::new(0.0, -10.0),
-        bodies,
-        steps: 750,
-        sleep: true,
-        warm_up: 0,
-        driver: None,
         joints: vec![SetupJoint {
             a: None,
             b: 0,
@@ -534,6 +531,7 @@ pub fn tumbler() -> Setup {
             anchor_b: Vec2::new(-10.0, 0.0),
             motor: Some((25.0 * PI / 180.0, 1e8)),
         }],
+        ..box2d_scene("tumbler", bodies, 750)
     }
 }
 
@@ -582,14 +580,8 @@ pub fn many_pyramids() -> Setup {
         }
     }
     Setup {
-        name: "many_pyramids",
-        gravity: Vec2::new(0.0, -10.0),
-        bodies,
-        steps: 200,
         sleep: false,
-        warm_up: 0,
-        driver: None,
-        joints: Vec::new(),
+        ..box2d_scene("many_pyramids", bodies, 200)
     }
 }
 
@@ -635,13 +627,6 @@ pub fn spinner() -> Setup {
         }
     }
     Setup {
-        name: "spinner",
-        gravity: Vec2::new(0.0, -10.0),
-        bodies,
-        steps: 500,
-        sleep: true,
-        warm_up: 0,
-        driver: None,
         joints: vec![SetupJoint {
             a: None,
             b: paddle,
@@ -649,6 +634,7 @@ pub fn spinner() -> Setup {
             anchor_b: Vec2::ZERO,
             motor: Some((5.0, f32::MAX as Real)),
         }],
+        ..box2d_scene("spinner", bodies, 500)
     }
 }
 
@@ -705,16 +691,7 @@ pub fn washer() -> Setup {
             );
         }
     }
-    Setup {
-        name: "washer",
-        gravity: Vec2::new(0.0, -10.0),
-        bodies,
-        steps: 500,
-        sleep: true,
-        warm_up: 0,
-        driver: None,
-        joints: Vec::new(),
-    }
+    box2d_scene("washer", bodies, 500)
 }
 
 /// A pile for measuring how the step's cost grows with the body count: `n` boxes of 1 m in 20
@@ -738,14 +715,9 @@ pub fn pile(n: usize) -> Setup {
         BodyDef::dynamic(Shape::rect(1.0, 1.0), at)
     }));
     Setup {
-        name: "pile",
-        gravity: Vec2::new(0.0, -10.0),
-        bodies,
-        steps: 100,
         sleep: false,
         warm_up: 120,
-        joints: Vec::new(),
-        driver: None,
+        ..box2d_scene("pile", bodies, 100)
     }
 }
 
@@ -799,17 +771,11 @@ pub fn junkyard() -> Setup {
         Vec2::ZERO,
     ));
     Setup {
-        name: "junkyard",
-        gravity: Vec2::new(0.0, -10.0),
-        bodies,
-        steps: 800,
-        sleep: true,
-        warm_up: 0,
-        joints: Vec::new(),
         driver: Some(SetupDriver {
             body: pusher,
             path: |t| (Vec2::new(60.0 * (0.2 * t).sin(), 4.0), 0.0),
         }),
+        ..box2d_scene("junkyard", bodies, 800)
     }
 }
 
@@ -886,16 +852,7 @@ pub fn compounds() -> Setup {
             );
         }
     }
-    Setup {
-        name: "compounds",
-        gravity: Vec2::new(0.0, -10.0),
-        bodies,
-        steps: 500,
-        sleep: true,
-        warm_up: 0,
-        driver: None,
-        joints: Vec::new(),
-    }
+    box2d_scene("compounds", bodies, 500)
 }
 
 /// The five shapes of `mixed_shapes`, all between 0.7 m and 1 m across (areas 0.35 to 0.49

@@ -391,6 +391,23 @@ fn bad_input_is_refused_with_the_field_and_value_and_nothing_changes() {
             "shape.width",
         ),
         (ok.clone().with_angle(Real::NAN), "angle"),
+        (
+            ok.clone().with_awake(false).with_velocity(vec2(0.5, 0.0)),
+            "awake = false is refused: a body created asleep must be at rest, and this one \
+             moves: velocity (0.5, 0) m/s",
+        ),
+        (
+            ok.clone().with_awake(false).with_angular_velocity(2.0),
+            "angular_velocity 2 rad/s",
+        ),
+        (
+            BodyDef::fixed(Shape::rect(1.0, 1.0), Vec2::ZERO).with_awake(false),
+            "awake = false is refused: only a dynamic body sleeps",
+        ),
+        (
+            BodyDef::kinematic(Shape::rect(1.0, 1.0), Vec2::ZERO, Vec2::ZERO).with_awake(false),
+            "awake = false is refused: only a dynamic body sleeps",
+        ),
     ];
     for (def, field) in cases {
         let err = w.add_body(&def).unwrap_err().to_string();

@@ -61,6 +61,16 @@ pub struct BodyDef {
     /// sensor; each part has its own).
     #[serde(default)]
     pub flags: ShapeFlags,
+    /// False to create a dynamic body asleep, in an island of its own (Box2D's
+    /// `isAwake = false`): it costs nothing until something touches it, a joint is made to
+    /// it, or it is pushed, and then it wakes. It must be at rest. Default true.
+    #[serde(default = "starts_awake")]
+    pub awake: bool,
+}
+
+/// A body starts awake unless its definition says otherwise.
+fn starts_awake() -> bool {
+    true
 }
 
 impl BodyDef {
@@ -78,6 +88,7 @@ impl BodyDef {
             filter: Filter::DEFAULT,
             parts: Vec::new(),
             flags: ShapeFlags::NONE,
+            awake: true,
         }
     }
 
@@ -136,6 +147,8 @@ impl BodyDef {
         with_filter(filter: Filter) => filter = filter;
         /// Set what its own shape reports and whether it is a sensor.
         with_flags(flags: ShapeFlags) => flags = flags;
+        /// Create it awake (the default) or asleep (see [`BodyDef::awake`]).
+        with_awake(awake: bool) => awake = awake;
     }
 
     /// Add a further shape (see [`BodyDef::parts`]).
@@ -166,6 +179,9 @@ impl BodyDef {
         finite("angular_velocity", self.angular_velocity)?;
         self.validate_parts()?;
         let moves = matches!(self.mass, MassSpec::Density(_) | MassSpec::Mass(_));
+        if !self.awake {
+            self.validate_asleep(moves)?;
+        }
         let shapes = std::iter::once(&self.shape).chain(self.parts.iter().map(|p| &p.shape));
         if moves && shapes.clone().any(|s| matches!(s, Shape::Segment(_))) {
             return Err(PhysicsError::InvalidShape {
@@ -193,6 +209,24 @@ impl BodyDef {
             usable("inertia (from mass and shape)", i)?;
         }
         check_material(self.friction, self.restitution)
+    }
+
+    /// A body created asleep is dynamic (static and kinematic bodies never sleep) and at rest
+    /// (a sleeping body has no velocity).
+    fn validate_asleep(&self, dynamic: bool) -> Result<(), PhysicsError> {
+        let v = self.linear_velocity;
+        let reason = if !dynamic {
+            "only a dynamic body sleeps (a static or kinematic one is never asleep)".to_owned()
+        } else if v != Vec2::ZERO || self.angular_velocity != 0.0 {
+            format!(
+                "a body created asleep must be at rest, and this one moves: velocity ({}, {}) \
+                 m/s, angular_velocity {} rad/s",
+                v.x, v.y, self.angular_velocity
+            )
+        } else {
+            return Ok(());
+        };
+        Err(PhysicsError::CannotStartAsleep { reason })
     }
 
     /// Each part valid, its errors named `parts[i].field`, and not too many.
@@ -347,7 +381,8 @@ impl Body {
             inv_inertia,
             friction: def.friction,
             restitution: def.restitution,
-            awake: true,
+            // Asleep, it is an island of its own: its slot is no other sleeping island's root.
+            awake: def.awake,
             sleep_time: 0.0,
             sleep_island: id.index,
             kinematic,
@@ -580,6 +615,7 @@ impl Body {
             filter: self.filter(),
             parts: self.parts().to_vec(),
             flags: self.flags(),
+            awake: self.awake,
         }
     }
     /// True when every number in the body's state is finite.

@@ -100,6 +100,12 @@ pub enum PhysicsError {
     /// A target pose given to a body that is not kinematic.
     #[error("body {0} is not kinematic: only a kinematic body is moved to a target pose")]
     NotKinematic(BodyId),
+    /// A body asked to start asleep that cannot.
+    #[error("awake = false is refused: {reason}")]
+    CannotStartAsleep {
+        /// Why.
+        reason: String,
+    },
 }
 
 /// Check that `value` is finite, naming `field` if not.

@@ -104,6 +104,7 @@ mod compact_def {
             filter: Default::default(),
             parts: Vec::new(),
             flags: Default::default(),
+            awake: true,
         })
     }
 }

@@ -878,3 +878,87 @@ fn a_ground_of_several_shapes_holds_what_rests_on_each_shape() {
         assert!(y < 2.0 * i as Real + 0.5 - 1.0, "box {i} still at y = {y}");
     }
 }
+
+/// Bodies created asleep (Box2D's `isAwake = false`, as its `smash` benchmark makes its grid):
+/// each is an island of its own that costs nothing (no pair, no contact, no motion) until a
+/// moving body reaches it, and then only what is reached wakes, not the whole grid.
+#[test]
+fn bodies_created_asleep_wait_until_touched_and_wake_one_by_one() {
+    let mut w = World::new(Settings::default(), Vec2::ZERO).unwrap();
+    let hammer =
+        BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(-2.0, 0.0)).with_velocity(vec2(10.0, 0.0));
+    let hammer = w.add_body(&hammer).unwrap();
+    let mut grid = Vec::new();
+    for i in 0..6 {
+        for j in 0..4 {
+            // Side by side, touching: awake, these would be 38 contacts.
+            let at = vec2(2.0 + 0.4 * i as Real, 0.4 * j as Real);
+            let def = BodyDef::dynamic(Shape::rect(0.4, 0.4), at).with_awake(false);
+            grid.push((w.add_body(&def).unwrap(), at));
+        }
+    }
+    let asleep = |w: &World| {
+        grid.iter()
+            .filter(|(id, _)| !w.body(*id).unwrap().is_awake())
+            .count()
+    };
+    // The hammer's face is 3.3 m from the grid at 10 m/s: 15 steps leave it 0.8 m short.
+    for _ in 0..15 {
+        w.step(1.0 / 60.0).unwrap();
+        assert_eq!(w.awake_count(), 1, "only the hammer is awake");
+        assert!(w.contacts.awake.is_empty() && w.contacts.sleeping.is_empty());
+    }
+    assert_eq!(asleep(&w), grid.len());
+    for (id, at) in &grid {
+        let b = w.body(*id).unwrap();
+        assert_eq!((b.position(), b.angle()), (*at, 0.0), "untouched, unmoved");
+        assert!(!b.to_def().awake, "its definition says asleep");
+    }
+    // The first step that reaches the grid wakes only what the hammer (1 m tall, y within
+    // +-0.5 m) reaches within its speculative margin: boxes of the first column, not the 24.
+    let mut woken = 0;
+    for _ in 0..30 {
+        w.step(1.0 / 60.0).unwrap();
+        woken = grid.len() - asleep(&w);
+        if woken > 0 {
+            break;
+        }
+    }
+    assert!((1..=4).contains(&woken), "{woken} woken at first touch");
+    for _ in 0..60 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    // The blow travels through the grid: the far column's lowest box is woken and pushed on.
+    let (far, at) = grid[20];
+    assert!(w.body(far).unwrap().is_awake());
+    assert!(w.body(far).unwrap().position().x > at.x + 0.1);
+    assert!(w.body(hammer).unwrap().linear_velocity().x < 10.0);
+}
+
+/// A body created asleep under gravity stays where it was put, through a copy and an
+/// exported state alike, until it is pushed; then it falls.
+#[test]
+fn a_body_created_asleep_hangs_until_pushed() {
+    let mut w = World::new(Settings::default(), vec2(0.0, -10.0)).unwrap();
+    let at = vec2(0.0, 5.0);
+    let def = BodyDef::dynamic(Shape::circle(0.5), at).with_awake(false);
+    let id = w.add_body(&def).unwrap();
+    let mut restored = World::import_state(&w.export_state()).unwrap();
+    for world in [&mut w, &mut restored] {
+        for _ in 0..60 {
+            world.step(1.0 / 60.0).unwrap();
+        }
+        let b = world.body(id).unwrap();
+        assert_eq!(b.position(), at);
+        assert!(!b.is_awake());
+    }
+    assert_eq!(restored.state_hash(), w.state_hash());
+    w.apply_force(id, vec2(1.0, 0.0)).unwrap();
+    assert!(w.body(id).unwrap().is_awake(), "a push wakes it");
+    for _ in 0..30 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    // Half a second of free fall is 1.25 m.
+    let y = w.body(id).unwrap().position().y;
+    assert!((y - (5.0 - 1.25)).abs() < 0.05, "fell to y = {y}");
+}

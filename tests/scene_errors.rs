@@ -96,6 +96,26 @@ fn static_bodies_take_no_density_mass_or_velocity() {
 }
 
 #[test]
+fn only_a_dynamic_body_at_rest_starts_asleep() {
+    brick_refusal(
+        "static = true\nawake = false",
+        r#"body "brick 3" (#1): awake = false: only a dynamic body sleeps"#,
+    );
+    brick_refusal(
+        "density = 1\nvelocity = [2, 0]\nawake = false",
+        r#"body "brick 3" (#1): awake = false: a body created asleep must be at rest, and this one moves: velocity (2, 0) m/s"#,
+    );
+    let (_, s) = error_for(
+        "[[body]]\nname = \"hill\"\nshape = { type = \"chain\", points = [[0, 0], [1, 0]] }\n\
+         position = [0, 0]\nawake = false\n",
+    );
+    assert!(
+        s.contains("awake = false: a chain is static terrain"),
+        "{s}"
+    );
+}
+
+#[test]
 fn malformed_colour_names_the_value() {
     brick_refusal(
         "density = 1\ncolour = \"#12345\"",

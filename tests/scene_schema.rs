@@ -32,6 +32,65 @@ mass = 3
     assert_eq!(b.def.restitution, 0.0);
     assert_eq!(b.colour, Colour::GREY);
     assert!(!b.is_static);
+    assert!(b.def.awake);
+}
+
+/// `awake = false` creates bodies asleep (a `[[body]]` and a generator's boxes): they hang
+/// where the file puts them, under gravity, until something reaches them.
+#[test]
+fn awake_false_creates_bodies_asleep_until_reached() {
+    let scene = Scene::from_toml_str(&with_ground(
+        r#"
+[[body]]
+name = "hanging"
+shape = { type = "rect", width = 1, height = 1 }
+position = [-5, 4]
+density = 1
+awake = false
+
+[[pyramid]]
+base = 3
+size = 1
+base_y = 2
+awake = false
+
+[[body]]
+name = "ball"
+shape = { type = "circle", radius = 0.25 }
+position = [0, 7.5]
+density = 1
+"#,
+    ))
+    .unwrap();
+    let asleep: Vec<bool> = scene.bodies.iter().map(|b| !b.def.awake).collect();
+    assert_eq!(
+        asleep,
+        [false, true, true, true, true, true, true, true, false]
+    );
+    let (mut world, ids) = scene.build_world().unwrap();
+    for _ in 0..30 {
+        world.step(1.0 / 60.0).unwrap();
+    }
+    // The ball (2.25 m above the pyramid's top box, whose top is at y = 5 m) has not reached
+    // it in half a second of fall (1.23 m): nothing else moved.
+    for (b, id) in scene.bodies.iter().zip(&ids).take(8) {
+        assert_eq!(
+            world.body(*id).unwrap().position(),
+            b.def.position,
+            "{}",
+            b.name
+        );
+    }
+    for _ in 0..90 {
+        world.step(1.0 / 60.0).unwrap();
+    }
+    // The ball woke the pyramid's top box, which woke the boxes it rests on: the pyramid,
+    // 2 m above the ground, falls. The hanging box, 5 m to the side, still hangs.
+    let top = world.body(ids[7]).unwrap();
+    assert!(top.position().y < scene.bodies[7].def.position.y - 1.0);
+    let hanging = world.body(ids[1]).unwrap();
+    assert_eq!(hanging.position(), vec2(-5.0, 4.0));
+    assert!(!hanging.is_awake());
 }
 
 #[test]

@@ -112,6 +112,9 @@ impl SceneError {
                 let (value, message) = split_value(&reason);
                 return SceneError::invalid(body, field, value, message);
             }
+            PhysicsError::CannotStartAsleep { reason } => {
+                return SceneError::invalid(body, "awake", Some("false".into()), reason);
+            }
             PhysicsError::InPart { index, source } => {
                 return SceneError::physics(body, *source).in_part(index);
             }

@@ -29,6 +29,9 @@ fn default_friction() -> Real {
 fn default_density() -> Real {
     DEFAULT_DENSITY
 }
+fn default_awake() -> bool {
+    true
+}
 fn default_gravity() -> [Real; 2] {
     [0.0, -9.81]
 }
@@ -276,6 +279,8 @@ entry_table! {
         contact_events: bool,
         #[serde(default)]
         hit_events: bool,
+        #[serde(default = "default_awake")]
+        awake: bool,
     }
 }
 
@@ -377,6 +382,8 @@ macro_rules! generator_entry {
                 $($(#[$attr])* $spacing: $ty,)*
                 #[serde(default = "default_density")]
                 density: Real,
+                #[serde(default = "default_awake")]
+                awake: bool,
             }
         }
 
@@ -391,6 +398,7 @@ macro_rules! generator_entry {
                     friction: self.friction,
                     restitution: self.restitution,
                     colour: self.colour.as_deref(),
+                    awake: self.awake,
                 }
             }
         }
@@ -616,11 +624,14 @@ impl BodyEntry {
                 &at,
                 field,
                 Some(written),
-                "a chain is static terrain: it takes no mass, density, velocity or kinematic",
+                "a chain is static terrain: it takes no mass, density, velocity, kinematic or awake",
             ))
         };
         if self.kinematic {
             return refuse("kinematic", "true".into());
+        }
+        if !self.awake {
+            return refuse("awake", "false".into());
         }
         if let Some(d) = self.density {
             return refuse("density", d.to_string());
@@ -808,6 +819,7 @@ impl BodyEntry {
             filter: self.filter(&at)?,
             parts,
             flags: shape_flags(self.sensor, self.contact_events, self.hit_events),
+            awake: self.awake,
             ..placed
         };
         def.validate()
@@ -831,6 +843,7 @@ struct Generated<'a> {
     friction: Real,
     restitution: Real,
     colour: Option<&'a str>,
+    awake: bool,
 }
 
 impl Generated<'_> {
@@ -872,7 +885,8 @@ impl Generated<'_> {
         let def = BodyDef::dynamic(Shape::rect(self.size, self.size), position)
             .with_density(self.density)
             .with_friction(self.friction)
-            .with_restitution(self.restitution);
+            .with_restitution(self.restitution)
+            .with_awake(self.awake);
         let index = bodies.len();
         def.validate()
             .map_err(|e| SceneError::physics(body_label(Some(&name), index), e))?;

@@ -125,6 +125,59 @@ fn a_built_pendulum_swings_on_its_hinge_and_is_listed_with_its_joint() {
     assert!(listed.joints.iter().any(|i| i.id == joints[0].id));
 }
 
+/// `Motion::Sleeping` (appended variant 3) builds a body asleep: it hangs where it is put
+/// until a falling disc reaches it, and a moving one is refused naming the motion.
+#[test]
+fn a_body_built_sleeping_hangs_until_something_reaches_it() {
+    let (config, mut sim) = bricks();
+    let hanging = body(
+        Motion::Sleeping,
+        v(50.0, 20.0),
+        vec![rect(1.0, 1.0, v(0.0, 0.0))],
+    );
+    let build = Build {
+        // The disc's bottom is 2 m above the box: it arrives after about 0.64 s (38 steps).
+        bodies: vec![
+            hanging.clone(),
+            body(Motion::Dynamic, v(50.0, 22.7), vec![disc(0.2)]),
+        ],
+        joints: Vec::new(),
+    };
+    let EventKind::Built { bodies, .. } = send(&mut sim, &config, CommandKey::Build, &build).kind
+    else {
+        panic!("expected Built");
+    };
+    let (boxed, disc) = (bodies[0].id, bodies[1].id);
+    // docs/protocol.md: version, two bodies, no name, motion 3.
+    assert_eq!(encode(&build).unwrap()[..4], [1, 2, 0, 3]);
+    for _ in 0..30 {
+        sim.step().unwrap();
+    }
+    assert_eq!(position(&sim, boxed), Vec2::new(50.0, 20.0));
+    assert!(position(&sim, disc).y < 22.0, "the disc falls");
+    for _ in 0..60 {
+        sim.step().unwrap();
+    }
+    // Reached at 0.64 s, the box falls with the disc for most of the next 0.86 s.
+    assert!(
+        position(&sim, boxed).y < 19.5,
+        "{}",
+        position(&sim, boxed).y
+    );
+    let moving = Build {
+        bodies: vec![BuildBody {
+            velocity: v(1.0, 0.0),
+            ..hanging
+        }],
+        joints: Vec::new(),
+    };
+    let reason = refused(&mut sim, &config, &moving);
+    assert!(
+        reason.contains("motion = Sleeping with velocity = [1, 0], angular_velocity = 0"),
+        "{reason}"
+    );
+}
+
 #[test]
 fn a_body_of_several_shapes_has_the_mass_of_its_parts_and_is_described_as_a_compound() {
     let (config, mut sim) = bricks();

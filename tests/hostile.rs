@@ -196,6 +196,7 @@ fn build(rng: &mut Rng) -> Build {
         Motion::Dynamic,
         Motion::Static,
         Motion::Kinematic,
+        Motion::Sleeping,
     ];
     let bodies: Vec<BuildBody> = (0..rng.pick(&[0usize, 1, 2, 3]))
         .map(|_| {

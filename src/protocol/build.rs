@@ -98,6 +98,17 @@ pub enum Motion {
     Kinematic,
     /// 2: never moves.
     Static,
+    /// 3: dynamic, created asleep (Box2D's `isAwake = false`): it stays where it is put and
+    /// costs nothing until something reaches it, a joint is made to it or it is pushed. At
+    /// rest only. Appended.
+    Sleeping,
+}
+
+impl Motion {
+    /// Moved by forces, contacts and joints: `Dynamic`, or `Sleeping` once woken.
+    pub fn is_dynamic(self) -> bool {
+        matches!(self, Motion::Dynamic | Motion::Sleeping)
+    }
 }
 
 /// One body of a [`Build`].

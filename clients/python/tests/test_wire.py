@@ -116,6 +116,13 @@ class Documented(unittest.TestCase):
         self.assertEqual(e["kind"]["JointsBroken"]["joints"],
                          [{"id": {"index": 2, "generation": 0}, "force": 9.75, "torque": 0.0}])
 
+    def test_a_body_built_sleeping_is_motion_3(self):
+        # docs/protocol.md, BuildBody: motion 3 `Sleeping`, appended.
+        b = {"motion": "Sleeping", "position": {"x": 0.0, "y": 0.0},
+             "parts": [{"shape": {"Circle": {"radius": 0.25}}}]}
+        payload = encode("Build", {"bodies": [b], "joints": []})
+        self.assertEqual(payload[:4], bytes([1, 1, 0, 3]))  # version, one body, no name, Sleeping
+
     def test_garbage_is_an_error_never_a_wrong_value(self):
         for bad in [b"", b"\x02\x00", b"\x01", b"\x01\x01\x02\x03"]:
             with self.assertRaises(DecodeError):

@@ -451,7 +451,7 @@ def _opt(w, v, f):
         w.u8(1); f(v)
 
 
-MOTIONS = ["Dynamic", "Kinematic", "Static"]
+MOTIONS = ["Dynamic", "Kinematic", "Static", "Sleeping"]
 JOINT_KINDS = ["Revolute", "Prismatic", "Distance", "Weld", "Wheel", "Motor"]
 
 

@@ -6,7 +6,7 @@ use super::Simulation;
 use crate::physics::PhysicsError;
 use crate::physics::{BodyId, JointId};
 use crate::protocol::{
-    BodyInfo, BodyRef, Build, CommandKey, Event, EventKind, JointEnd, JointRef, Motion, Vector,
+    BodyInfo, BodyRef, Build, CommandKey, Event, EventKind, JointEnd, JointRef, Vector,
 };
 use crate::service::command::{Command, Incoming, SpawnDef};
 use crate::service::wire::{body_info, build, vec2, vector};
@@ -228,7 +228,7 @@ impl Simulation {
         };
         let moves = |e: End| match e {
             End::World => false,
-            End::New(n) => b.bodies[n as usize].motion == Motion::Dynamic,
+            End::New(n) => b.bodies[n as usize].motion.is_dynamic(),
             End::Live(id) => self.world.body(id).is_some_and(|b| b.inv_mass() > 0.0),
         };
         let mut out = Vec::with_capacity(b.joints.len());

@@ -21,7 +21,7 @@ use crate::physics::joint::{
 use crate::physics::{Body, BodyDef, BodyId, Filter, Joint, PartDef, Real, Rot, ShapeFlags, Vec2};
 use crate::protocol::{
     Build, BuildBody, FilterSpec, JointEnd, JointInfo, JointKindSpec, JointRef, JointSpec,
-    LimitSpec, Motion, MotorSpec, PartShape, PartSpec, ShapeSpec, SpringSpec,
+    LimitSpec, Motion, MotorSpec, PartShape, PartSpec, ShapeSpec, SpringSpec, Vector,
 };
 use crate::service::command::SpawnDef;
 use crate::service::config::Limits;
@@ -57,6 +57,15 @@ pub(crate) fn body_def(b: &BuildBody, limits: &Limits) -> Result<SpawnDef, Strin
         return Err("parts is empty: a body needs at least one shape".into());
     }
     check_place(b.position, b.angle, limits)?;
+    if b.motion == Motion::Sleeping
+        && (b.velocity != Vector::default() || b.angular_velocity != 0.0)
+    {
+        return Err(format!(
+            "motion = Sleeping with velocity = [{}, {}], angular_velocity = {}: a body created \
+             asleep must be at rest",
+            b.velocity.x, b.velocity.y, b.angular_velocity
+        ));
+    }
     let mut placed = Vec::with_capacity(b.parts.len());
     for (i, p) in b.parts.iter().enumerate() {
         placed.push(part_def(p, b.motion, limits).map_err(|e| format!("parts[{i}]: {e}"))?);
@@ -74,7 +83,9 @@ pub(crate) fn body_def(b: &BuildBody, limits: &Limits) -> Result<SpawnDef, Strin
         ));
     }
     let mut def = match b.motion {
-        Motion::Dynamic => BodyDef::dynamic(first.shape, position).with_density(first.density),
+        Motion::Dynamic | Motion::Sleeping => BodyDef::dynamic(first.shape, position)
+            .with_density(first.density)
+            .with_awake(b.motion == Motion::Dynamic),
         Motion::Kinematic => BodyDef::kinematic(first.shape, position, Vec2::ZERO),
         Motion::Static => BodyDef::fixed(first.shape, position),
     }
@@ -125,8 +136,7 @@ fn part_def(p: &PartSpec, motion: Motion, limits: &Limits) -> Result<PartDef, St
             p.friction, limits.max_friction
         ));
     }
-    if motion == Motion::Dynamic && !(limits.min_density..=limits.max_density).contains(&p.density)
-    {
+    if motion.is_dynamic() && !(limits.min_density..=limits.max_density).contains(&p.density) {
         return Err(format!(
             "density = {} is out of range: must be within {}..={} (limits.min_density, limits.max_density)",
             p.density, limits.min_density, limits.max_density
@@ -136,7 +146,7 @@ fn part_def(p: &PartSpec, motion: Motion, limits: &Limits) -> Result<PartDef, St
     let offset = vec2(place.offset) + Rot::from_angle(angle).rotate(centroid);
     let def = PartDef::new(shape, offset)
         .with_angle(angle)
-        .with_density(if motion == Motion::Dynamic {
+        .with_density(if motion.is_dynamic() {
             p.density as Real
         } else {
             1.0
@@ -183,7 +193,7 @@ fn check_joint(j: &JointSpec, bodies: &[BuildBody]) -> Result<(), String> {
     }
     let fixed = |end: JointEnd| match end {
         JointEnd::World => true,
-        JointEnd::New(i) => bodies[i as usize].motion != Motion::Dynamic,
+        JointEnd::New(i) => !bodies[i as usize].motion.is_dynamic(),
         JointEnd::Live(_) => false, // the World checks live bodies when the build is applied
     };
     if fixed(j.a) && fixed(j.b) {

@@ -475,9 +475,9 @@ pub fn joint_grid(n: usize) -> Setup {
 
 /// Box2D v3's `smash` benchmark (`shared/benchmarks.c`): no gravity; an 8 m square of density
 /// 8 (512 kg) at x = -20 m moving at 40 m/s into a block of 120 x 80 boxes of 0.4 m (density 1,
-/// 0.16 kg) side by side from x = 30 m, centred on y = 0; 300 steps, sleep on. Box2D starts
-/// the boxes asleep; tiltbox cannot yet, so here they fall asleep as they wait (0.5 s at rest;
-/// the square arrives after 1.15 s), in every engine alike.
+/// 0.16 kg) side by side from x = 30 m, centred on y = 0; 300 steps, sleep on. The boxes
+/// start asleep, as Box2D's do (`isAwake = false`), each an island of its own: the square
+/// (arriving after 1.15 s) wakes only what it reaches, and that what it reaches in turn.
 pub fn smash() -> Setup {
     let mut bodies = Vec::with_capacity(1 + 120 * 80);
     let hammer = BodyDef::dynamic(Shape::rect(8.0, 8.0), Vec2::new(-20.0, 0.0))
@@ -488,7 +488,7 @@ pub fn smash() -> Setup {
     for i in 0..120 {
         for j in 0..80 {
             let at = Vec2::new(i as Real * d + 30.0, (j as Real - 40.0) * d);
-            bodies.push(BodyDef::dynamic(Shape::rect(d, d), at));
+            bodies.push(BodyDef::dynamic(Shape::rect(d, d), at).with_awake(false));
         }
     }
     Setup {

@@ -150,6 +150,7 @@ impl Box2d {
                 bd.linearVelocity = v(d.linear_velocity.x as f32, d.linear_velocity.y as f32);
                 bd.angularVelocity = d.angular_velocity as f32;
                 bd.enableSleep = setup.sleep;
+                bd.isAwake = d.awake;
                 let body = b2CreateBody(world, &bd);
 
                 let own_density = match d.mass {

@@ -410,7 +410,8 @@ impl Rapier {
                         def.linear_velocity.y as f32,
                     ))
                     .angvel(def.angular_velocity as f32)
-                    .can_sleep(setup.sleep),
+                    .can_sleep(setup.sleep)
+                    .sleeping(!def.awake),
             }
             .translation(Vector::new(def.position.x as f32, def.position.y as f32))
             .rotation(def.angle as f32);

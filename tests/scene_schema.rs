@@ -84,8 +84,9 @@ density = 1
     for _ in 0..90 {
         world.step(1.0 / 60.0).unwrap();
     }
-    // The ball woke the pyramid's top box, which woke the boxes it rests on: the pyramid,
-    // 2 m above the ground, falls. The hanging box, 5 m to the side, still hangs.
+    // The ball reached the pyramid's top box, and the pyramid (created asleep, one island of
+    // touching boxes) woke whole: 2 m above the ground, it falls. The hanging box, 5 m to the
+    // side, still hangs.
     let top = world.body(ids[7]).unwrap();
     assert!(top.position().y < scene.bodies[7].def.position.y - 1.0);
     let hanging = world.body(ids[1]).unwrap();

@@ -476,8 +476,9 @@ pub fn joint_grid(n: usize) -> Setup {
 /// Box2D v3's `smash` benchmark (`shared/benchmarks.c`): no gravity; an 8 m square of density
 /// 8 (512 kg) at x = -20 m moving at 40 m/s into a block of 120 x 80 boxes of 0.4 m (density 1,
 /// 0.16 kg) side by side from x = 30 m, centred on y = 0; 300 steps, sleep on. The boxes
-/// start asleep, as Box2D's do (`isAwake = false`), each an island of its own: the square
-/// (arriving after 1.15 s) wakes only what it reaches, and that what it reaches in turn.
+/// start asleep, as Box2D's do (`isAwake = false`). In Box2D each is an island of its own,
+/// woken a layer a step as the square (arriving after 1.15 s) drives in; in tiltbox the
+/// block, all touching, is one island that the square wakes whole.
 pub fn smash() -> Setup {
     let mut bodies = Vec::with_capacity(1 + 120 * 80);
     let hammer = BodyDef::dynamic(Shape::rect(8.0, 8.0), Vec2::new(-20.0, 0.0))

@@ -61,12 +61,17 @@ pub struct BodyDef {
     /// sensor; each part has its own).
     #[serde(default)]
     pub flags: ShapeFlags,
-    /// False to create a dynamic body asleep, in an island of its own (Box2D's
-    /// `isAwake = false`): it costs nothing until something touches it, a joint is made to
-    /// it, or it is pushed, and then it wakes. It must be at rest. Default true.
+    /// False to create a dynamic body asleep (Box2D's `isAwake = false`): it costs nothing
+    /// until a moving body reaches it, a joint is made to it, or it is pushed, and then it
+    /// wakes. Bodies created asleep that touch sleep as one island, as if they had come to rest
+    /// together, and wake together. It must be at rest. Default true.
     #[serde(default = "starts_awake")]
     pub awake: bool,
 }
+
+/// [`Body::sleep_time`] of a body created asleep and not woken since: it sleeps with the
+/// bodies created asleep that it touches (see `World::settle_created_asleep`).
+pub(crate) const CREATED_ASLEEP: Real = -1.0;
 
 /// A body starts awake unless its definition says otherwise.
 fn starts_awake() -> bool {
@@ -383,7 +388,7 @@ impl Body {
             restitution: def.restitution,
             // Asleep, it is an island of its own: its slot is no other sleeping island's root.
             awake: def.awake,
-            sleep_time: 0.0,
+            sleep_time: if def.awake { 0.0 } else { CREATED_ASLEEP },
             sleep_island: id.index,
             kinematic,
         }
@@ -579,6 +584,10 @@ impl Body {
     /// False while the body sleeps (resting with its island). Static bodies report true.
     pub fn is_awake(&self) -> bool {
         self.awake
+    }
+    /// True for a body created asleep that has not woken since.
+    pub(crate) fn is_created_asleep(&self) -> bool {
+        !self.awake && self.sleep_time == CREATED_ASLEEP
     }
     /// True for dynamic bodies that are awake: the ones the solver moves this step.
     pub(crate) fn is_active(&self) -> bool {

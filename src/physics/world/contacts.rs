@@ -218,7 +218,7 @@ fn shape_pairs(a: &Body, b: &Body, margin: Real, out: &mut Vec<u32>) {
 }
 
 /// Whether the filters of pair `key`'s bodies let them collide, and neither is a sensor.
-fn filters_allow(key: u64, bodies: &Bodies) -> bool {
+pub(super) fn filters_allow(key: u64, bodies: &Bodies) -> bool {
     if bodies.filtered == 0 && bodies.flagged == 0 {
         return true;
     }

@@ -2,6 +2,9 @@
 //! rested, and wakes it whole; adaptive stiffness (`tiers.rs`) gives each awake one a tier.
 
 use super::*;
+use crate::physics::body::CREATED_ASLEEP;
+use crate::physics::broad_phase::pair_key;
+use crate::physics::shape::Aabb;
 use crate::physics::solver::graph::UNCOLOURED;
 
 /// Islands' and sleep's buffers, reused every step.
@@ -20,6 +23,12 @@ pub(super) struct IslandScratch {
     pub changed: Vec<u32>,
     /// The sleeping islands to wake, sorted.
     pub waking: Vec<u32>,
+    /// Bodies were created asleep (or one of them was removed) since the islands of the
+    /// bodies created asleep were last drawn: they are drawn again before the next step.
+    pub unsettled: bool,
+    /// A body created asleep woke while contacts were being found: its island's contacts
+    /// are found before the solve.
+    pub refind: bool,
 }
 
 impl World {
@@ -105,6 +114,49 @@ impl World {
         }
     }
 
+    /// Bodies created asleep sleep with the bodies created asleep that they touch, as if they
+    /// had come to rest together: whatever reaches one wakes them all, and their contacts are
+    /// found before that step's solve, so a blow passes through a block of them at once
+    /// instead of a layer a step (which drove each layer deep into the next). Two touch when
+    /// their boxes, grown by half the speculative distance as the broad phase grows them,
+    /// overlap and their filters let them collide. Islands by union-find, the lowest slot the
+    /// root (no other island's: its members are not asleep otherwise).
+    pub(super) fn settle_created_asleep(&mut self) {
+        self.islands.unsettled = false;
+        let margin = 0.5 * self.settings.speculative_distance;
+        let slots = &self.bodies.slots;
+        let mut boxes: Vec<(Aabb, u32)> = slots
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| {
+                let b = s.body.as_ref().filter(|b| b.is_created_asleep())?;
+                Some((b.aabb().inflated(margin), i as u32))
+            })
+            .collect();
+        boxes.sort_unstable_by(|x, y| x.0.min.x.total_cmp(&y.0.min.x).then(x.1.cmp(&y.1)));
+        let pairs = &mut self.islands.contact_bodies;
+        pairs.clear();
+        for (k, &(a, i)) in boxes.iter().enumerate() {
+            for &(b, j) in boxes[k + 1..]
+                .iter()
+                .take_while(|(b, _)| b.min.x <= a.max.x)
+            {
+                let overlap = b.min.y <= a.max.y && a.min.y <= b.max.y;
+                if overlap && super::contacts::filters_allow(pair_key(i, j), &self.bodies) {
+                    pairs.push([i, j]);
+                }
+            }
+        }
+        let parent = &mut self.islands.parent;
+        unite_islands(parent, slots.len(), pairs, |_| true);
+        for &(_, i) in &boxes {
+            let root = find(parent, i);
+            if let Some(b) = self.bodies.slots[i as usize].body.as_mut() {
+                b.sleep_island = root;
+            }
+        }
+    }
+
     /// Contacts with no awake body left leave the graph and are kept aside, unsolved, for
     /// when their island wakes.
     fn set_sleeping_contacts_aside(&mut self) {
@@ -159,6 +211,7 @@ impl World {
                     .filter(|b| !b.awake && islands.binary_search(&b.sleep_island).is_ok())
                 {
                     b.awake = true;
+                    self.islands.refind |= b.sleep_time == CREATED_ASLEEP;
                     b.sleep_time = 0.0;
                     self.islands.changed.push(j as u32);
                 }

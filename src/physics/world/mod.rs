@@ -308,6 +308,7 @@ impl World {
             generation: slot.generation,
         };
         let body = Body::from_def(id, def);
+        self.islands.unsettled |= body.is_created_asleep();
         self.broad_phase.insert(index, &body);
         self.bodies.note(&body, true);
         let slot = &mut self.bodies.slots[index as usize];
@@ -382,6 +383,8 @@ impl World {
         for &id in ids {
             let slot = &mut self.bodies.slots[id.index as usize];
             let body = slot.body.take().expect("checked above");
+            // Bodies created asleep that it touched may no longer touch one another.
+            self.islands.unsettled |= body.is_created_asleep();
             self.bodies.note(&body, false);
             let slot = &mut self.bodies.slots[id.index as usize];
             removed.push(body);

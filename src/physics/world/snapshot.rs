@@ -593,6 +593,9 @@ impl World {
         let err = |e: PhysicsError| StateError(e.to_string());
         let mut world = World::new(state.settings.clone(), vec(state.gravity)).map_err(err)?;
         world.import_slots(state)?;
+        // Their islands drawn again, as the exporting World drew them.
+        let created_asleep = world.bodies().any(Body::is_created_asleep);
+        world.islands.unsettled = created_asleep;
         if !state.time.is_finite() || state.time < 0.0 {
             return Err(StateError(format!("time = {}", state.time)));
         }

@@ -26,10 +26,18 @@ impl World {
     pub fn step(&mut self, dt: Real) -> Result<(), PhysicsError> {
         positive("dt", dt)?;
         self.events.begin_step();
+        if self.islands.unsettled {
+            self.settle_created_asleep();
+        }
+        self.islands.refind = false;
         if !self.broad_phase.sweep.active_is_empty() {
             // (Otherwise everything is static or asleep, and anything pushed would have been
             // woken: nothing moves, nothing to find or solve.)
             self.find_contacts(dt);
+            // Bodies created asleep that just woke have no contacts among them yet.
+            while std::mem::take(&mut self.islands.refind) {
+                self.find_contacts(dt);
+            }
             if self.bodies.flagged > 0 {
                 self.find_hit_candidates();
             }

@@ -30,14 +30,15 @@ fn main() {
         }
     };
     let warm_up = warm_up.unwrap_or(setup.warm_up);
+    let mut spawned = Default::default();
     for k in 0..warm_up {
-        let _ = setup.step(&mut world, k);
+        let _ = setup.step(&mut world, &mut spawned, k);
     }
     let mut times = Vec::with_capacity(steps);
     let mut contacts = 0;
     for k in warm_up..warm_up + steps {
         let t = Instant::now();
-        let _ = setup.step(&mut world, k);
+        let _ = setup.step(&mut world, &mut spawned, k);
         times.push(t.elapsed().as_secs_f64() * 1e3);
         contacts += world.contact_count();
     }

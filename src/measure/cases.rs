@@ -3,7 +3,9 @@
 //! shapes, built the way Box2D's samples and benchmark build them. Every set-up of the
 //! measurement code comes from here. Units: metres, kilograms, radians.
 
-use crate::physics::math::PI;
+use crate::physics::joint::{Limit, Spring};
+use crate::physics::math::{Rot, Transform, PI};
+use crate::physics::ragdoll::{ragdoll, RagdollDef};
 use crate::physics::{
     BodyDef, BodyId, Filter, JointDef, JointKind, Motor, PartDef, PhysicsError, Polygon, Real,
     Revolute, Shape, Vec2, World,
@@ -179,6 +181,28 @@ pub struct Setup {
     pub joints: Vec<SetupJoint>,
     /// A kinematic body aimed at a pose on a path before each step, if any.
     pub driver: Option<SetupDriver>,
+    /// What to put in before step `k` (0 the first), if the scene adds bodies as it runs.
+    pub spawner: Option<fn(usize) -> Vec<SetupSpawn>>,
+}
+
+/// Bodies, and joints between them, that a [`Setup`] puts in before a step, in place of what
+/// an earlier spawn put in the same group (Box2D's `rain` drops ragdolls, and once its columns
+/// are full takes a column's away and drops it again).
+#[derive(Clone, Debug)]
+pub struct SetupSpawn {
+    /// The group it fills (an index from 0); whatever the group held goes first.
+    pub group: usize,
+    /// The bodies.
+    pub bodies: Vec<BodyDef>,
+    /// Joints between them: body indices into `bodies` (A None: the world).
+    pub joints: Vec<SetupJoint>,
+}
+
+/// What a [`Setup`]'s spawns have put in a World: each group's bodies (their joints go with
+/// them).
+#[derive(Clone, Debug, Default)]
+pub struct Spawned {
+    groups: Vec<Vec<BodyId>>,
 }
 
 /// A kinematic body of a [`Setup`] aimed, before each step, at the pose its path gives for the
@@ -213,13 +237,60 @@ pub struct SetupJoint {
     pub anchor_b: Vec2,
     /// A motor: its speed (rad/s) and its largest torque (N m).
     pub motor: Option<(Real, Real)>,
+    /// Limits on B's angle relative to A's, from the angle they were made at: lower, upper (rad).
+    pub limit: Option<(Real, Real)>,
+    /// A spring toward the angle they were made at: frequency (Hz), damping ratio.
+    pub spring: Option<(Real, Real)>,
+}
+
+impl SetupJoint {
+    /// A free hinge from A (None: the world) to B at the given anchors.
+    pub fn hinge(a: Option<usize>, b: usize, anchor_a: Vec2, anchor_b: Vec2) -> SetupJoint {
+        SetupJoint {
+            a,
+            b,
+            anchor_a,
+            anchor_b,
+            motor: None,
+            limit: None,
+            spring: None,
+        }
+    }
+
+    /// The engine's joint, bodies by their ids in `ids`.
+    fn to_def(self, ids: &[BodyId]) -> JointDef {
+        let hinge = JointKind::Revolute(Revolute {
+            motor: self.motor.map(|(speed, max)| Motor { speed, max }),
+            limit: self.limit.map(|(lower, upper)| Limit { lower, upper }),
+            spring: self.spring.map(|(hertz, damping_ratio)| Spring {
+                hertz,
+                damping_ratio,
+            }),
+            ..Revolute::free()
+        });
+        JointDef::new(hinge, self.a.map(|a| ids[a]), ids[self.b])
+            .with_anchors(self.anchor_a, self.anchor_b)
+    }
 }
 
 impl Setup {
     /// Step a World built by [`Setup::build`] once at 1/60 s, the driver (if any) aimed
     /// first; `k` is the step's index from 0.
-    pub fn step(&self, world: &mut World, k: usize) -> Result<(), PhysicsError> {
+    pub fn step(
+        &self,
+        world: &mut World,
+        spawned: &mut Spawned,
+        k: usize,
+    ) -> Result<(), PhysicsError> {
         const DT: Real = 1.0 / 60.0;
+        for spawn in self.spawner.map_or_else(Vec::new, |spawner| spawner(k)) {
+            if spawn.group >= spawned.groups.len() {
+                spawned.groups.resize(spawn.group + 1, Vec::new());
+            }
+            let group = &mut spawned.groups[spawn.group];
+            world.remove_bodies(group)?;
+            *group = add_all(world, &spawn.bodies, &spawn.joints)?;
+        }
         if let Some(driver) = &self.driver {
             // A World built from the set-up holds body i in slot i, never reused.
             let id = world
@@ -244,22 +315,25 @@ impl Setup {
             ..settings
         };
         let mut world = World::new(settings, self.gravity)?;
-        let ids = self
-            .bodies
-            .iter()
-            .map(|def| world.add_body(def))
-            .collect::<Result<Vec<_>, _>>()?;
-        for j in &self.joints {
-            let hinge = JointKind::Revolute(Revolute {
-                motor: j.motor.map(|(speed, max)| Motor { speed, max }),
-                ..Revolute::free()
-            });
-            let a = j.a.map(|a| ids[a]);
-            let def = JointDef::new(hinge, a, ids[j.b]).with_anchors(j.anchor_a, j.anchor_b);
-            world.add_joint(&def)?;
-        }
+        add_all(&mut world, &self.bodies, &self.joints)?;
         Ok(world)
     }
+}
+
+/// Add `bodies`, then `joints` between them; their ids.
+fn add_all(
+    world: &mut World,
+    bodies: &[BodyDef],
+    joints: &[SetupJoint],
+) -> Result<Vec<BodyId>, PhysicsError> {
+    let ids = bodies
+        .iter()
+        .map(|def| world.add_body(def))
+        .collect::<Result<Vec<_>, _>>()?;
+    for j in joints {
+        world.add_joint(&j.to_def(&ids))?;
+    }
+    Ok(ids)
 }
 
 /// A scene as Box2D's `benchmarks.c` runs it: gravity 10 m/s^2 down, sleep on, timed from the
@@ -274,6 +348,7 @@ fn box2d_scene(name: &'static str, bodies: Vec<BodyDef>, steps: usize) -> Setup 
         warm_up: 0,
         joints: Vec::new(),
         driver: None,
+        spawner: None,
     }
 }
 
@@ -354,6 +429,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             sleep: false,
             warm_up: 0,
             driver: None,
+            spawner: None,
             joints: Vec::new(),
         },
         Setup {
@@ -364,6 +440,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             sleep: false,
             warm_up: 0,
             driver: None,
+            spawner: None,
             joints: Vec::new(),
         },
         Setup {
@@ -374,6 +451,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             sleep: false,
             warm_up: 0,
             driver: None,
+            spawner: None,
             joints: Vec::new(),
         },
         Setup {
@@ -384,6 +462,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             sleep: false,
             warm_up: 0,
             driver: None,
+            spawner: None,
             joints: Vec::new(),
         },
         Setup {
@@ -394,6 +473,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             sleep: true,
             warm_up: 300,
             driver: None,
+            spawner: None,
             joints: Vec::new(),
         },
         joint_grid(100),
@@ -404,6 +484,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
         spinner(),
         washer(),
         junkyard(),
+        rain(),
         Setup {
             name: "mixed_shapes",
             gravity: g,
@@ -412,6 +493,7 @@ pub fn benchmark_setups() -> Vec<Setup> {
             sleep: false,
             warm_up: 0,
             driver: None,
+            spawner: None,
             joints: Vec::new(),
         },
     ]
@@ -445,24 +527,22 @@ pub fn joint_grid(n: usize) -> Setup {
             let index = bodies.len();
             bodies.push(def.with_filter(filter));
             if i > 0 {
-                joints.push(SetupJoint {
-                    a: Some(index - 1),
-                    b: index,
-                    anchor_a: Vec2::new(0.0, -0.5),
-                    anchor_b: Vec2::new(0.0, 0.5),
-                    motor: None,
-                });
+                joints.push(SetupJoint::hinge(
+                    Some(index - 1),
+                    index,
+                    Vec2::new(0.0, -0.5),
+                    Vec2::new(0.0, 0.5),
+                ));
             }
             // (Box2D also joins the static discs to each other; tiltbox refuses a joint with
             // no dynamic body, and such a joint does nothing.)
             if k > 0 && !(anchored(k, i) && anchored(k - 1, i)) {
-                joints.push(SetupJoint {
-                    a: Some(index - n),
-                    b: index,
-                    anchor_a: Vec2::new(0.5, 0.0),
-                    anchor_b: Vec2::new(-0.5, 0.0),
-                    motor: None,
-                });
+                joints.push(SetupJoint::hinge(
+                    Some(index - n),
+                    index,
+                    Vec2::new(0.5, 0.0),
+                    Vec2::new(-0.5, 0.0),
+                ));
             }
         }
     }
@@ -526,11 +606,8 @@ pub fn tumbler() -> Setup {
     }
     Setup {
         joints: vec![SetupJoint {
-            a: None,
-            b: 0,
-            anchor_a: Vec2::new(0.0, 10.0),
-            anchor_b: Vec2::new(-10.0, 0.0),
             motor: Some((25.0 * PI / 180.0, 1e8)),
+            ..SetupJoint::hinge(None, 0, Vec2::new(0.0, 10.0), Vec2::new(-10.0, 0.0))
         }],
         ..box2d_scene("tumbler", bodies, 750)
     }
@@ -629,11 +706,8 @@ pub fn spinner() -> Setup {
     }
     Setup {
         joints: vec![SetupJoint {
-            a: None,
-            b: paddle,
-            anchor_a: Vec2::new(0.0, 12.0),
-            anchor_b: Vec2::ZERO,
             motor: Some((5.0, f32::MAX as Real)),
+            ..SetupJoint::hinge(None, paddle, Vec2::new(0.0, 12.0), Vec2::ZERO)
         }],
         ..box2d_scene("spinner", bodies, 500)
     }
@@ -930,6 +1004,115 @@ pub fn closed_box_defs(width: Real, height: Real, thickness: Real) -> Vec<BodyDe
     ]
 }
 
+/// Box2D v3's `rain` benchmark (`shared/benchmarks.c`, `shared/human.c`): five static rows,
+/// 45 m apart, of 501 boxes of 0.5 m side by side (x from -125 m); every 8 steps, a column of
+/// five groups of five ragdolls (one per row, 40 m above it; [`ragdoll_joints`] as
+/// `CreateHuman` at scale 1 with joint friction 0.05, springs of 5 Hz and damping 0.5, the
+/// i-th of a group in filter group -i) dropped into the next of 40 columns 6.25 m apart, and
+/// once all 40 are full, a column's groups taken away and dropped again, in turn. Gravity
+/// 10 m/s^2, sleep on, 1,000 steps. Box2D's ground is one body of 2,505 boxes; tiltbox's bodies
+/// have at most 1,024 shapes, so here (in every engine alike) each row is a body of 501.
+pub fn rain() -> Setup {
+    let mut bodies = Vec::with_capacity(RAIN_ROWS);
+    for row in 0..RAIN_ROWS {
+        let y = 45.0 * row as Real;
+        let x0 = -0.5 * RAIN_SPAN;
+        let cell = Shape::rect(RAIN_CELL, RAIN_CELL);
+        let mut ground = BodyDef::fixed(cell.clone(), Vec2::new(x0, y));
+        for j in 1..=(RAIN_SPAN / RAIN_CELL) as usize {
+            let offset = Vec2::new(j as Real * RAIN_CELL, 0.0);
+            ground.parts.push(PartDef::new(cell.clone(), offset));
+        }
+        bodies.push(ground);
+    }
+    Setup {
+        spawner: Some(rain_spawns),
+        ..box2d_scene("rain", bodies, 1000)
+    }
+}
+
+/// Rain's rows, columns and ragdolls a group; its ground's span and cell (m).
+const RAIN_ROWS: usize = 5;
+const RAIN_COLUMNS: usize = 40;
+const RAIN_GROUP: usize = 5;
+const RAIN_SPAN: Real = 250.0;
+const RAIN_CELL: Real = 0.5;
+
+/// Rain's spawns before step `k`: a column every 8 steps, the next empty one, then the
+/// oldest.
+fn rain_spawns(k: usize) -> Vec<SetupSpawn> {
+    if k % 8 != 0 {
+        return Vec::new();
+    }
+    let round = k / 8;
+    let column = if round < RAIN_COLUMNS {
+        round
+    } else {
+        (round - RAIN_COLUMNS) % RAIN_COLUMNS
+    };
+    (0..RAIN_ROWS)
+        .map(|row| {
+            let spacing = RAIN_SPAN / RAIN_COLUMNS as Real;
+            let mut at = Vec2::new(
+                -0.5 * RAIN_SPAN + spacing * (column as Real + 0.5),
+                40.0 + 45.0 * row as Real,
+            );
+            let mut spawn = SetupSpawn {
+                group: row * RAIN_COLUMNS + column,
+                bodies: Vec::new(),
+                joints: Vec::new(),
+            };
+            for i in 0..RAIN_GROUP {
+                let human = RagdollDef {
+                    position: at,
+                    scale: 1.0,
+                    friction_torque: 0.05,
+                    hertz: 5.0,
+                    damping_ratio: 0.5,
+                    group: -(i as i32 + 1),
+                };
+                let first = spawn.bodies.len();
+                let (bones, joints) = ragdoll_joints(&human);
+                spawn.bodies.extend(bones);
+                spawn.joints.extend(joints.into_iter().map(|j| SetupJoint {
+                    a: j.a.map(|a| a + first),
+                    b: j.b + first,
+                    ..j
+                }));
+                at.x += 0.5;
+            }
+            spawn
+        })
+        .collect()
+}
+
+/// A ragdoll's bodies (hip first) and its joints as a [`Setup`]'s, indices into its bodies.
+pub fn ragdoll_joints(def: &RagdollDef) -> (Vec<BodyDef>, Vec<SetupJoint>) {
+    let bones = ragdoll(def);
+    let frame = |d: &BodyDef| Transform {
+        p: d.position,
+        q: Rot::from_angle(d.angle),
+    };
+    let mut joints = Vec::with_capacity(bones.len());
+    for (i, bone) in bones.iter().enumerate() {
+        let Some((parent, point, JointKind::Revolute(r))) = &bone.joint else {
+            continue;
+        };
+        joints.push(SetupJoint {
+            motor: r.motor.map(|m| (m.speed, m.max)),
+            limit: r.limit.map(|l| (l.lower, l.upper)),
+            spring: r.spring.map(|s| (s.hertz, s.damping_ratio)),
+            ..SetupJoint::hinge(
+                Some(*parent),
+                i,
+                frame(&bones[*parent].def).apply_inv(*point),
+                frame(&bone.def).apply_inv(*point),
+            )
+        });
+    }
+    (bones.into_iter().map(|b| b.def).collect(), joints)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -960,5 +1143,34 @@ mod tests {
             let w = setup.build().unwrap();
             assert_eq!(w.body_count(), setup.bodies.len());
         }
+    }
+
+    /// Rain as Box2D's makes it: five rows of 501 ground boxes; every 8 steps a column of five
+    /// groups of five ragdolls (11 bones, 10 hinges each), the columns full after 40 drops,
+    /// then one column taken away and dropped again each time, so the count stays put.
+    #[test]
+    fn rain_drops_columns_of_ragdolls_every_8_steps_and_then_replaces_them() {
+        let rain = rain();
+        assert_eq!(rain.bodies.len(), 5);
+        assert!(rain.bodies.iter().all(|g| g.parts.len() == 500));
+        let spawner = rain.spawner.unwrap();
+        assert!(spawner(1).is_empty() && spawner(7).is_empty());
+        let first = spawner(0);
+        assert_eq!(first.len(), 5);
+        assert_eq!((first[0].bodies.len(), first[0].joints.len()), (55, 50));
+        // Column 0 of row 0: x = -125 + 6.25 / 2 m, 40 m up; the fifth ragdoll 2 m to the right.
+        assert_eq!(first[0].group, 0);
+        assert_eq!(first[4].group, 4 * 40);
+        assert_eq!(spawner(8 * 39)[0].group, 39);
+        assert_eq!(spawner(8 * 40)[0].group, 0, "the oldest column goes again");
+        assert_eq!(spawner(8 * 41)[2].group, 2 * 40 + 1);
+        let mut world = rain.build().unwrap();
+        let mut spawned = Spawned::default();
+        for k in 0..8 * 42 + 1 {
+            rain.step(&mut world, &mut spawned, k).unwrap();
+        }
+        // 40 columns of 5 x 55 bodies, and the 5 ground rows.
+        assert_eq!(world.body_count(), 5 + 40 * 5 * 55);
+        assert_eq!(world.joint_count(), 40 * 5 * 50);
     }
 }

@@ -67,6 +67,7 @@ fn setup(name: &'static str, bodies: Vec<BodyDef>) -> Setup {
         sleep: false,
         warm_up: 0,
         driver: None,
+        spawner: None,
         joints: Vec::new(),
     }
 }
@@ -125,13 +126,9 @@ fn cases() -> Vec<Case> {
         "pendulum_period",
         vec![BodyDef::dynamic(Shape::circle(r), centre).with_friction(0.0)],
     );
-    pendulum.joints.push(SetupJoint {
-        a: None,
-        b: 0,
-        anchor_a: Vec2::ZERO,
-        anchor_b: -centre,
-        motor: None,
-    });
+    pendulum
+        .joints
+        .push(SetupJoint::hinge(None, 0, Vec2::ZERO, -centre));
     let period = joint_forms::pendulum_period_closed_form(l as f64, r as f64, a0 as f64);
     vec![
         Case {

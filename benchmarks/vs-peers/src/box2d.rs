@@ -8,8 +8,8 @@
 use crate::{BodyState, Engine, Sanity};
 use boxdd_sys::ffi::*;
 use std::alloc::{GlobalAlloc, Layout};
-use tiltbox::measure::cases::Setup;
-use tiltbox::physics::{MassSpec, Mixing, Real, Rot, Settings, Shape, Transform};
+use tiltbox::measure::cases::{Setup, SetupJoint};
+use tiltbox::physics::{BodyDef, MassSpec, Mixing, Real, Rot, Settings, Shape, Transform};
 
 /// How the tables name this build of Box2D.
 pub const LABEL: &str = if cfg!(feature = "avx2") {
@@ -83,9 +83,18 @@ fn mixing(m: Mixing) -> unsafe extern "C" fn(f32, u64, f32, u64) -> f32 {
 
 // ---------------------------------------------------------------------------------------------
 
+/// The bodies one group of spawns holds, and their joints (bodies and local anchors).
+type Group = (Vec<b2BodyId>, Vec<(b2BodyId, b2BodyId, b2Vec2, b2Vec2)>);
+
 /// A Box2D world holding one scene.
 pub struct Box2d {
     world: b2WorldId,
+    /// A static body without shapes at the origin, for joints to the world.
+    ground: b2BodyId,
+    /// The scene's spawns, its sleep flag, and the bodies each group of spawns holds.
+    spawner: Option<fn(usize) -> Vec<tiltbox::measure::cases::SetupSpawn>>,
+    sleep: bool,
+    groups: Vec<Group>,
     /// The driven kinematic body and its driver, and the steps taken.
     driver: Option<(b2BodyId, tiltbox::measure::cases::SetupDriver)>,
     steps: usize,
@@ -130,100 +139,25 @@ impl Box2d {
             let mut dynamic = Vec::new();
             let mut all = Vec::with_capacity(setup.bodies.len());
             for d in &setup.bodies {
-                let mut bd = b2DefaultBodyDef();
-                let is_static = d.mass == MassSpec::Static;
-                let is_kinematic = d.mass == MassSpec::Kinematic;
-                bd.type_ = if is_static {
-                    b2BodyType_b2_staticBody
-                } else if is_kinematic {
-                    b2BodyType_b2_kinematicBody
-                } else {
-                    b2BodyType_b2_dynamicBody
-                };
-                bd.position = v(d.position.x as f32, d.position.y as f32);
-                // The exact rotation (Box2D's b2ComputeCosSin approximates to about 1e-3 rad).
-                let angle = d.angle as f32;
-                bd.rotation = b2Rot {
-                    c: angle.cos(),
-                    s: angle.sin(),
-                };
-                bd.linearVelocity = v(d.linear_velocity.x as f32, d.linear_velocity.y as f32);
-                bd.angularVelocity = d.angular_velocity as f32;
-                bd.enableSleep = setup.sleep;
-                bd.isAwake = d.awake;
-                let body = b2CreateBody(world, &bd);
-
-                let own_density = match d.mass {
-                    MassSpec::Static | MassSpec::Kinematic => 0.0,
-                    MassSpec::Density(rho) => rho as f32,
-                    // Box2D takes a density: the one that gives this mass.
-                    MassSpec::Mass(m) => {
-                        assert!(d.parts.is_empty(), "the peer scenes give parts by density");
-                        (m / d.shape.area()) as f32
-                    }
-                };
-                let own = (
-                    &d.shape,
-                    Transform::IDENTITY,
-                    d.filter,
-                    d.friction,
-                    d.restitution,
-                    own_density,
-                    d.flags,
-                );
-                let parts = d.parts.iter().map(|p| {
-                    let pose = Transform {
-                        p: p.offset,
-                        q: Rot::from_angle(p.angle),
-                    };
-                    let fixed = is_static || is_kinematic;
-                    let density = if fixed { 0.0 } else { p.density as f32 };
-                    let (f, r) = (p.friction, p.restitution);
-                    (&p.shape, pose, p.filter, f, r, density, p.flags)
-                });
-                for (shape, pose, filter, friction, restitution, density, flags) in
-                    std::iter::once(own).chain(parts)
-                {
-                    let mut sd = b2DefaultShapeDef();
-                    sd.filter.categoryBits = filter.category;
-                    sd.filter.maskBits = filter.mask;
-                    sd.filter.groupIndex = filter.group;
-                    sd.material.friction = friction as f32;
-                    sd.material.restitution = restitution as f32;
-                    sd.density = density;
-                    sd.isSensor = flags.sensor;
-                    sd.enableHitEvents = flags.hit_events;
-                    create_shape(body, &sd, shape, pose);
-                }
-                if !is_static && !is_kinematic {
+                let body = create_body(world, d, setup.sleep);
+                if d.mass != MassSpec::Static && d.mass != MassSpec::Kinematic {
                     dynamic.push(body);
                 }
                 all.push(body);
             }
-            let mut joints = Vec::with_capacity(setup.joints.len());
             // The world, for joints to it: a static body without shapes at the origin.
             let ground = b2CreateBody(world, &b2DefaultBodyDef());
-            for j in &setup.joints {
-                let mut jd = b2DefaultRevoluteJointDef();
-                let a = j.a.map_or(ground, |a| all[a]);
-                jd.base.bodyIdA = a;
-                jd.base.bodyIdB = all[j.b];
-                let (pa, pb) = (
-                    v(j.anchor_a.x as f32, j.anchor_a.y as f32),
-                    v(j.anchor_b.x as f32, j.anchor_b.y as f32),
-                );
-                jd.base.localFrameA.p = pa;
-                jd.base.localFrameB.p = pb;
-                if let Some((speed, max)) = j.motor {
-                    jd.enableMotor = true;
-                    jd.motorSpeed = speed as f32;
-                    jd.maxMotorTorque = max as f32;
-                }
-                b2CreateRevoluteJoint(world, &jd);
-                joints.push((a, all[j.b], pa, pb));
-            }
+            let joints = setup
+                .joints
+                .iter()
+                .map(|j| create_joint(world, ground, &all, j))
+                .collect();
             Box2d {
                 world,
+                ground,
+                spawner: setup.spawner,
+                sleep: setup.sleep,
+                groups: Vec::new(),
                 driver: setup.driver.map(|d| (all[d.body], d)),
                 steps: 0,
                 dynamic,
@@ -301,14 +235,145 @@ unsafe fn create_shape(body: b2BodyId, sd: &b2ShapeDef, shape: &Shape, pose: Tra
     }
 }
 
+/// Create `d` in `world` with its shapes; `sleep`: whether it may sleep.
+///
+/// # Safety
+/// `world` is a live Box2D world.
+unsafe fn create_body(world: b2WorldId, d: &BodyDef, sleep: bool) -> b2BodyId {
+    let mut bd = b2DefaultBodyDef();
+    let is_static = d.mass == MassSpec::Static;
+    let is_kinematic = d.mass == MassSpec::Kinematic;
+    bd.type_ = if is_static {
+        b2BodyType_b2_staticBody
+    } else if is_kinematic {
+        b2BodyType_b2_kinematicBody
+    } else {
+        b2BodyType_b2_dynamicBody
+    };
+    bd.position = v(d.position.x as f32, d.position.y as f32);
+    // The exact rotation (Box2D's b2ComputeCosSin approximates to about 1e-3 rad).
+    let angle = d.angle as f32;
+    bd.rotation = b2Rot {
+        c: angle.cos(),
+        s: angle.sin(),
+    };
+    bd.linearVelocity = v(d.linear_velocity.x as f32, d.linear_velocity.y as f32);
+    bd.angularVelocity = d.angular_velocity as f32;
+    bd.enableSleep = sleep;
+    bd.isAwake = d.awake;
+    let body = b2CreateBody(world, &bd);
+    let own_density = match d.mass {
+        MassSpec::Static | MassSpec::Kinematic => 0.0,
+        MassSpec::Density(rho) => rho as f32,
+        // Box2D takes a density: the one that gives this mass.
+        MassSpec::Mass(m) => {
+            assert!(d.parts.is_empty(), "the peer scenes give parts by density");
+            (m / d.shape.area()) as f32
+        }
+    };
+    let own = (
+        &d.shape,
+        Transform::IDENTITY,
+        d.filter,
+        d.friction,
+        d.restitution,
+        own_density,
+        d.flags,
+    );
+    let parts = d.parts.iter().map(|p| {
+        let pose = Transform {
+            p: p.offset,
+            q: Rot::from_angle(p.angle),
+        };
+        let fixed = is_static || is_kinematic;
+        let density = if fixed { 0.0 } else { p.density as f32 };
+        let (f, r) = (p.friction, p.restitution);
+        (&p.shape, pose, p.filter, f, r, density, p.flags)
+    });
+    for (shape, pose, filter, friction, restitution, density, flags) in
+        std::iter::once(own).chain(parts)
+    {
+        let mut sd = b2DefaultShapeDef();
+        sd.filter.categoryBits = filter.category;
+        sd.filter.maskBits = filter.mask;
+        sd.filter.groupIndex = filter.group;
+        sd.material.friction = friction as f32;
+        sd.material.restitution = restitution as f32;
+        sd.density = density;
+        sd.isSensor = flags.sensor;
+        sd.enableHitEvents = flags.hit_events;
+        create_shape(body, &sd, shape, pose);
+    }
+    body
+}
+
+/// Create hinge `j` between bodies of `all` (A None: `ground`); its bodies and anchors.
+///
+/// # Safety
+/// `world` is a live Box2D world holding `ground` and `all`.
+unsafe fn create_joint(
+    world: b2WorldId,
+    ground: b2BodyId,
+    all: &[b2BodyId],
+    j: &SetupJoint,
+) -> (b2BodyId, b2BodyId, b2Vec2, b2Vec2) {
+    let mut jd = b2DefaultRevoluteJointDef();
+    let a = j.a.map_or(ground, |a| all[a]);
+    jd.base.bodyIdA = a;
+    jd.base.bodyIdB = all[j.b];
+    let (pa, pb) = (
+        v(j.anchor_a.x as f32, j.anchor_a.y as f32),
+        v(j.anchor_b.x as f32, j.anchor_b.y as f32),
+    );
+    jd.base.localFrameA.p = pa;
+    jd.base.localFrameB.p = pb;
+    if let Some((speed, max)) = j.motor {
+        jd.enableMotor = true;
+        jd.motorSpeed = speed as f32;
+        jd.maxMotorTorque = max as f32;
+    }
+    if let Some((lower, upper)) = j.limit {
+        jd.enableLimit = true;
+        jd.lowerAngle = lower as f32;
+        jd.upperAngle = upper as f32;
+    }
+    if let Some((hertz, damping_ratio)) = j.spring {
+        jd.enableSpring = true;
+        jd.hertz = hertz as f32;
+        jd.dampingRatio = damping_ratio as f32;
+    }
+    b2CreateRevoluteJoint(world, &jd);
+    (a, all[j.b], pa, pb)
+}
+
 fn angle(r: b2Rot) -> f32 {
     r.s.atan2(r.c)
 }
 
 impl Engine for Box2d {
     fn step(&mut self) {
-        // SAFETY: a live world, and a live kinematic body in it.
+        // SAFETY: a live world, the bodies of live groups in it, and a live kinematic body.
         unsafe {
+            for spawn in self.spawner.map_or_else(Vec::new, |f| f(self.steps)) {
+                if spawn.group >= self.groups.len() {
+                    self.groups.resize(spawn.group + 1, Default::default());
+                }
+                // Destroying a body destroys its joints.
+                for body in self.groups[spawn.group].0.drain(..) {
+                    b2DestroyBody(body);
+                }
+                let made: Vec<b2BodyId> = spawn
+                    .bodies
+                    .iter()
+                    .map(|d| create_body(self.world, d, self.sleep))
+                    .collect();
+                let joints = spawn
+                    .joints
+                    .iter()
+                    .map(|j| create_joint(self.world, self.ground, &made, j))
+                    .collect();
+                self.groups[spawn.group] = (made, joints);
+            }
             if let Some((body, driver)) = self.driver {
                 let (p, angle) = driver.target(self.steps);
                 let angle = angle as f32;
@@ -352,8 +417,9 @@ impl Engine for Box2d {
             .collect()
     }
     fn sanity(&self) -> Sanity {
+        let spawned = self.groups.iter().flat_map(|g| &g.0);
         let mut sanity = crate::summarise(
-            self.dynamic.iter().map(|&b| {
+            self.dynamic.iter().chain(spawned).map(|&b| {
                 // SAFETY: live bodies of a live world.
                 unsafe { (b2Body_GetPosition(b).y, b2Body_IsAwake(b)) }
             }),
@@ -362,6 +428,7 @@ impl Engine for Box2d {
         sanity.joint_gap = self
             .joints
             .iter()
+            .chain(self.groups.iter().flat_map(|g| &g.1))
             .map(|&(a, b, pa, pb)| {
                 // SAFETY: live bodies of a live world.
                 let (wa, wb) =

@@ -41,18 +41,19 @@ mod box2d;
 mod remote;
 
 use rapier2d::prelude::{
-    CoefficientCombineRule, ColliderBuilder, Group, IntegrationParameters, InteractionGroups,
-    InteractionTestMode, MassProperties, PhysicsWorld, RevoluteJointBuilder, RigidBodyBuilder,
-    RigidBodyHandle, SharedShape, Vector,
+    ActiveHooks, CoefficientCombineRule, ColliderBuilder, ColliderHandle, Group,
+    IntegrationParameters, InteractionGroups, InteractionTestMode, MassProperties,
+    PairFilterContext, PhysicsHooks, PhysicsWorld, RevoluteJointBuilder, RigidBodyBuilder,
+    RigidBodyHandle, SharedShape, SolverFlags, Vector,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::time::Instant;
 use tiltbox::measure::accuracy::max_penetration;
-use tiltbox::measure::cases::{benchmark_setups, Setup, SetupDriver};
+use tiltbox::measure::cases::{benchmark_setups, Setup, SetupDriver, SetupJoint, Spawned};
 use tiltbox::measure::machine::cpu_model;
-use tiltbox::physics::{BodyDef, MassSpec, Mixing, Real, Settings, Shape, Vec2, World};
+use tiltbox::physics::{BodyDef, Filter, MassSpec, Mixing, Real, Settings, Shape, Vec2, World};
 
 // ---------------------------------------------------------------------------------------------
 // Counting allocator: live bytes and number of allocation calls.
@@ -172,6 +173,8 @@ pub(crate) struct Tiltbox {
     /// The set-up, for its driver, and the steps taken.
     setup: Setup,
     steps: usize,
+    /// What the set-up's spawns have put in.
+    spawned: Spawned,
 }
 
 impl Tiltbox {
@@ -181,6 +184,7 @@ impl Tiltbox {
             dt: DT,
             setup: setup.clone(),
             steps: 0,
+            spawned: Spawned::default(),
         }
     }
 
@@ -198,6 +202,7 @@ impl Tiltbox {
             dt,
             setup: setup.clone(),
             steps: 0,
+            spawned: Spawned::default(),
         }
     }
 }
@@ -242,9 +247,9 @@ pub(crate) fn summarise(ys: impl Iterator<Item = (f32, bool)>, floor: f32) -> Sa
 
 impl Engine for Tiltbox {
     fn step(&mut self) {
-        if self.setup.driver.is_some() {
+        if self.setup.driver.is_some() || self.setup.spawner.is_some() {
             self.setup
-                .step(&mut self.world, self.steps)
+                .step(&mut self.world, &mut self.spawned, self.steps)
                 .expect("tiltbox step failed");
         } else {
             self.world.step(self.dt as _).expect("tiltbox step failed");
@@ -302,8 +307,21 @@ impl Engine for Tiltbox {
     }
 }
 
+/// The bodies one group of spawns holds, and their joints (bodies and local anchors).
+type RapierGroup = (
+    Vec<RigidBodyHandle>,
+    Vec<(RigidBodyHandle, RigidBodyHandle, Vector, Vector)>,
+);
+
 pub(crate) struct Rapier {
     world: PhysicsWorld,
+    /// The fixed body joints to the world hang from, if any; the combine rules; the sleep
+    /// flag; the scene's spawns and the bodies each group of them holds.
+    ground: Option<RigidBodyHandle>,
+    rules: (CoefficientCombineRule, CoefficientCombineRule),
+    sleep: bool,
+    spawner: Option<fn(usize) -> Vec<tiltbox::measure::cases::SetupSpawn>>,
+    groups: Vec<RapierGroup>,
     /// The driven kinematic body and its driver, and the steps taken.
     driver: Option<(RigidBodyHandle, SetupDriver)>,
     steps: usize,
@@ -313,9 +331,10 @@ pub(crate) struct Rapier {
     joints: Vec<(RigidBodyHandle, RigidBodyHandle, Vector, Vector)>,
 }
 
-/// A tiltbox filter as rapier's interaction groups (32 bits; rapier has no group index).
+/// A tiltbox filter as rapier's interaction groups (32 bits). rapier has no group index: a
+/// negative one is left to the [`GroupIndex`] hook, and a positive one is not used.
 fn rapier_groups(f: tiltbox::physics::Filter) -> InteractionGroups {
-    assert_eq!(f.group, 0, "rapier has no group index");
+    assert!(f.group <= 0, "no positive group index in the peer scenes");
     InteractionGroups::new(
         Group::from_bits_truncate(f.category as u32),
         Group::from_bits_truncate(f.mask as u32),
@@ -393,131 +412,197 @@ impl Rapier {
             num_solver_iterations: substeps,
             ..IntegrationParameters::default()
         };
+        let rules = (friction_rule, restitution_rule);
         let mut dynamic = Vec::new();
         let mut handles = Vec::with_capacity(setup.bodies.len());
         for def in &setup.bodies {
-            let builder = match def.mass {
-                MassSpec::Static => RigidBodyBuilder::fixed(),
-                MassSpec::Kinematic => RigidBodyBuilder::kinematic_velocity_based()
-                    .linvel(Vector::new(
-                        def.linear_velocity.x as f32,
-                        def.linear_velocity.y as f32,
-                    ))
-                    .angvel(def.angular_velocity as f32),
-                _ => RigidBodyBuilder::dynamic()
-                    .linvel(Vector::new(
-                        def.linear_velocity.x as f32,
-                        def.linear_velocity.y as f32,
-                    ))
-                    .angvel(def.angular_velocity as f32)
-                    .can_sleep(setup.sleep)
-                    .sleeping(!def.awake),
-            }
-            .translation(Vector::new(def.position.x as f32, def.position.y as f32))
-            .rotation(def.angle as f32);
-            let material = |c: ColliderBuilder, friction: Real, restitution: Real, filter| {
-                c.friction(friction as f32)
-                    .friction_combine_rule(friction_rule)
-                    .restitution(restitution as f32)
-                    .restitution_combine_rule(restitution_rule)
-                    .collision_groups(rapier_groups(filter))
-            };
-            let collider = material(
-                rapier_collider(&def.shape),
-                def.friction,
-                def.restitution,
-                def.filter,
-            );
-            // (rapier has no event for a hit's approach speed: shapes that report hits in
-            // tiltbox and Box2D report nothing here.)
-            let collider = collider.sensor(def.flags.sensor);
-            let collider = match (def.mass, &def.shape) {
-                (MassSpec::Static | MassSpec::Kinematic, _) => collider,
-                // parry2d 0.31 moves a capsule's two half discs out by 3r/8 (a 3D hemisphere's
-                // centroid) where a half disc's is 4r/(3 pi), so its 2D capsule inertia is low
-                // (3 % for mixed_shapes' capsule); tiltbox's closed form is checked against a
-                // numerical integral. Give rapier tiltbox's mass and inertia so that both step
-                // the same bodies; every other shape's mass properties agree to 1e-6.
-                (MassSpec::Density(_) | MassSpec::Mass(_), Shape::Capsule { .. }) => {
-                    let mass = match def.mass {
-                        MassSpec::Density(d) => d * def.shape.area(),
-                        MassSpec::Mass(m) => m,
-                        MassSpec::Static | MassSpec::Kinematic => unreachable!(),
-                    };
-                    collider.mass_properties(MassProperties::new(
-                        Vector::ZERO,
-                        mass as f32,
-                        def.shape.inertia(mass) as f32,
-                    ))
-                }
-                (MassSpec::Density(d), _) => collider.density(d as f32),
-                (MassSpec::Mass(m), _) => {
-                    assert!(
-                        def.parts.is_empty(),
-                        "the peer scenes give parts by density"
-                    );
-                    collider.mass(m as f32)
-                }
-            };
-            let (handle, _) = world.insert(builder, collider);
-            // A body's further shapes, each at its pose in the body's frame.
-            for part in &def.parts {
-                assert!(
-                    !matches!(part.shape, Shape::Capsule { .. }),
-                    "the peer scenes have no capsule parts"
-                );
-                let c = material(
-                    rapier_collider(&part.shape),
-                    part.friction,
-                    part.restitution,
-                    part.filter,
-                )
-                .translation(Vector::new(part.offset.x as f32, part.offset.y as f32))
-                .rotation(part.angle as f32);
-                let c = if matches!(def.mass, MassSpec::Static | MassSpec::Kinematic) {
-                    c.sensor(part.flags.sensor)
-                } else {
-                    c.density(part.density as f32).sensor(part.flags.sensor)
-                };
-                world.insert_collider(c, Some(handle));
-            }
+            let handle = insert_body(&mut world, def, rules, setup.sleep);
             if !matches!(def.mass, MassSpec::Static | MassSpec::Kinematic) {
                 dynamic.push(handle);
             }
             handles.push(handle);
         }
-        let mut joints = Vec::with_capacity(setup.joints.len());
         // The world, for joints to it: a fixed body without colliders at the origin.
         let ground = setup
             .joints
             .iter()
             .any(|j| j.a.is_none())
             .then(|| world.insert_body(RigidBodyBuilder::fixed()));
-        for j in &setup.joints {
-            let anchor = |p: Vec2| Vector::new(p.x as f32, p.y as f32);
-            let mut hinge = RevoluteJointBuilder::new()
-                .local_anchor1(anchor(j.anchor_a))
-                .local_anchor2(anchor(j.anchor_b))
-                .contacts_enabled(false);
-            if let Some((speed, max)) = j.motor {
-                // A velocity motor (rapier's damping factor: how hard it pulls to the speed).
-                hinge = hinge
-                    .motor_velocity(speed as f32, 100.0)
-                    .motor_max_force(max as f32);
-            }
-            let a =
-                j.a.map_or_else(|| ground.expect("made above"), |a| handles[a]);
-            world.insert_impulse_joint(a, handles[j.b], hinge);
-            joints.push((a, handles[j.b], anchor(j.anchor_a), anchor(j.anchor_b)));
-        }
+        let joints = setup
+            .joints
+            .iter()
+            .map(|j| insert_joint(&mut world, ground, &handles, j))
+            .collect();
         Rapier {
             world,
+            ground,
+            rules,
+            sleep: setup.sleep,
+            spawner: setup.spawner,
+            groups: Vec::new(),
             driver: setup.driver.map(|d| (handles[d.body], d)),
             steps: 0,
             dynamic,
             floor: lowest_static(&setup.bodies),
             joints,
         }
+    }
+}
+
+/// Insert `def` (its shapes, material, filter and mass) into `world`; `rules`: the friction and
+/// restitution combine rules; `sleep`: whether it may sleep.
+fn insert_body(
+    world: &mut PhysicsWorld,
+    def: &BodyDef,
+    (friction_rule, restitution_rule): (CoefficientCombineRule, CoefficientCombineRule),
+    sleep: bool,
+) -> RigidBodyHandle {
+    let builder = match def.mass {
+        MassSpec::Static => RigidBodyBuilder::fixed(),
+        MassSpec::Kinematic => RigidBodyBuilder::kinematic_velocity_based()
+            .linvel(Vector::new(
+                def.linear_velocity.x as f32,
+                def.linear_velocity.y as f32,
+            ))
+            .angvel(def.angular_velocity as f32),
+        _ => RigidBodyBuilder::dynamic()
+            .linvel(Vector::new(
+                def.linear_velocity.x as f32,
+                def.linear_velocity.y as f32,
+            ))
+            .angvel(def.angular_velocity as f32)
+            .can_sleep(sleep)
+            .sleeping(!def.awake),
+    }
+    .translation(Vector::new(def.position.x as f32, def.position.y as f32))
+    .rotation(def.angle as f32);
+    let material = |c: ColliderBuilder, friction: Real, restitution: Real, filter: Filter| {
+        let c = c
+            .friction(friction as f32)
+            .friction_combine_rule(friction_rule)
+            .restitution(restitution as f32)
+            .restitution_combine_rule(restitution_rule)
+            .collision_groups(rapier_groups(filter));
+        if filter.group < 0 {
+            c.user_data(filter.group as u32 as u128)
+                .active_hooks(ActiveHooks::FILTER_CONTACT_PAIRS)
+        } else {
+            c
+        }
+    };
+    let collider = material(
+        rapier_collider(&def.shape),
+        def.friction,
+        def.restitution,
+        def.filter,
+    );
+    // (rapier has no event for a hit's approach speed: shapes that report hits in
+    // tiltbox and Box2D report nothing here.)
+    let collider = collider.sensor(def.flags.sensor);
+    let collider = match (def.mass, &def.shape) {
+        (MassSpec::Static | MassSpec::Kinematic, _) => collider,
+        // parry2d 0.31 moves a capsule's two half discs out by 3r/8 (a 3D hemisphere's
+        // centroid) where a half disc's is 4r/(3 pi), so its 2D capsule inertia is low
+        // (3 % for mixed_shapes' capsule); tiltbox's closed form is checked against a
+        // numerical integral. Give rapier tiltbox's mass and inertia so that both step
+        // the same bodies; every other shape's mass properties agree to 1e-6.
+        (MassSpec::Density(_) | MassSpec::Mass(_), Shape::Capsule { .. }) => {
+            let mass = match def.mass {
+                MassSpec::Density(d) => d * def.shape.area(),
+                MassSpec::Mass(m) => m,
+                MassSpec::Static | MassSpec::Kinematic => unreachable!(),
+            };
+            collider.mass_properties(MassProperties::new(
+                Vector::ZERO,
+                mass as f32,
+                def.shape.inertia(mass) as f32,
+            ))
+        }
+        (MassSpec::Density(d), _) => collider.density(d as f32),
+        (MassSpec::Mass(m), _) => {
+            assert!(
+                def.parts.is_empty(),
+                "the peer scenes give parts by density"
+            );
+            collider.mass(m as f32)
+        }
+    };
+    let (handle, _) = world.insert(builder, collider);
+    // A body's further shapes, each at its pose in the body's frame.
+    for part in &def.parts {
+        assert!(
+            !matches!(part.shape, Shape::Capsule { .. }),
+            "the peer scenes have no capsule parts"
+        );
+        let c = material(
+            rapier_collider(&part.shape),
+            part.friction,
+            part.restitution,
+            part.filter,
+        )
+        .translation(Vector::new(part.offset.x as f32, part.offset.y as f32))
+        .rotation(part.angle as f32);
+        let c = if matches!(def.mass, MassSpec::Static | MassSpec::Kinematic) {
+            c.sensor(part.flags.sensor)
+        } else {
+            c.density(part.density as f32).sensor(part.flags.sensor)
+        };
+        world.insert_collider(c, Some(handle));
+    }
+    handle
+}
+
+/// Insert hinge `j` between bodies of `handles` (A None: `ground`); its bodies and anchors.
+/// rapier has one motor per axis: a joint with both a spring and friction (a motor at rest)
+/// gets a position motor toward the angle it was made at with the spring's stiffness and
+/// damping (rapier's acceleration-based model: (2 pi f)^2 and 2 zeta 2 pi f), capped at the
+/// friction torque.
+fn insert_joint(
+    world: &mut PhysicsWorld,
+    ground: Option<RigidBodyHandle>,
+    handles: &[RigidBodyHandle],
+    j: &SetupJoint,
+) -> (RigidBodyHandle, RigidBodyHandle, Vector, Vector) {
+    let anchor = |p: Vec2| Vector::new(p.x as f32, p.y as f32);
+    let mut hinge = RevoluteJointBuilder::new()
+        .local_anchor1(anchor(j.anchor_a))
+        .local_anchor2(anchor(j.anchor_b))
+        .contacts_enabled(false);
+    if let Some((lower, upper)) = j.limit {
+        hinge = hinge.limits([lower as f32, upper as f32]);
+    }
+    match (j.spring, j.motor) {
+        (Some((hertz, zeta)), motor) => {
+            let omega = 2.0 * std::f32::consts::PI * hertz as f32;
+            hinge = hinge.motor_position(0.0, omega * omega, 2.0 * zeta as f32 * omega);
+            if let Some((_, max)) = motor {
+                hinge = hinge.motor_max_force(max as f32);
+            }
+        }
+        (None, Some((speed, max))) => {
+            // A velocity motor (rapier's damping factor: how hard it pulls to the speed).
+            hinge = hinge
+                .motor_velocity(speed as f32, 100.0)
+                .motor_max_force(max as f32);
+        }
+        (None, None) => {}
+    }
+    let a =
+        j.a.map_or_else(|| ground.expect("a world body"), |a| handles[a]);
+    world.insert_impulse_joint(a, handles[j.b], hinge);
+    (a, handles[j.b], anchor(j.anchor_a), anchor(j.anchor_b))
+}
+
+/// Box2D's negative group index (shapes of one group never collide), which rapier's
+/// interaction groups cannot say: colliders of a negative group carry it as user data and ask
+/// this hook, which drops their pairs within a group.
+struct GroupIndex;
+
+impl PhysicsHooks for GroupIndex {
+    fn filter_contact_pair(&self, c: &PairFilterContext) -> Option<SolverFlags> {
+        let group = |h: ColliderHandle| c.colliders[h].user_data as i32;
+        let (a, b) = (group(c.collider1), group(c.collider2));
+        (a >= 0 || a != b).then(SolverFlags::default)
     }
 }
 
@@ -536,7 +621,27 @@ impl Engine for Rapier {
             body.set_linvel((target - here) / dt, true);
             body.set_angvel(turn / dt, true);
         }
-        self.world.step();
+        for spawn in self.spawner.map_or_else(Vec::new, |f| f(self.steps)) {
+            if spawn.group >= self.groups.len() {
+                self.groups.resize(spawn.group + 1, Default::default());
+            }
+            // Removing a body removes its colliders and joints.
+            for body in self.groups[spawn.group].0.drain(..) {
+                self.world.remove_body(body);
+            }
+            let made: Vec<RigidBodyHandle> = spawn
+                .bodies
+                .iter()
+                .map(|d| insert_body(&mut self.world, d, self.rules, self.sleep))
+                .collect();
+            let joints = spawn
+                .joints
+                .iter()
+                .map(|j| insert_joint(&mut self.world, self.ground, &made, j))
+                .collect();
+            self.groups[spawn.group] = (made, joints);
+        }
+        self.world.step_with_events(&GroupIndex, &());
         self.steps += 1;
     }
     fn max_penetration(&self) -> f64 {
@@ -580,13 +685,15 @@ impl Engine for Rapier {
         let gap = self
             .joints
             .iter()
+            .chain(self.groups.iter().flat_map(|g| &g.1))
             .map(|&(a, b, pa, pb)| {
                 let world = |h: RigidBodyHandle, p: Vector| bodies[h].position() * p;
                 (world(a, pa) - world(b, pb)).length()
             })
             .fold(0.0, f32::max);
+        let spawned = self.groups.iter().flat_map(|g| &g.0);
         let mut sanity = summarise(
-            self.dynamic.iter().map(|&h| {
+            self.dynamic.iter().chain(spawned).map(|&h| {
                 let b = &self.world.bodies[h];
                 (b.translation().y, !b.is_sleeping())
             }),
@@ -1089,6 +1196,7 @@ pub(crate) fn pyramid_setup(base: usize) -> Setup {
         sleep: false,
         warm_up: 0,
         driver: None,
+        spawner: None,
         joints: Vec::new(),
     }
 }

@@ -501,9 +501,16 @@ fn solve_span(
 fn solve_one(set: &mut JointSet, k: usize, bodies: &mut [SolverBody], pass: (bool, Real)) {
     let j = &mut set.constraints[k];
     let (a, b) = two_mut(bodies, j.a, j.b);
+    // An angle row's effective mass is the same at every pose: one division for all of them.
+    let turn = a.inv_inertia + b.inv_inertia;
+    let axial = if turn > 0.0 { 1.0 / turn } else { 0.0 };
     for row in &mut set.rows[j.row_range()] {
-        let pose = j.pose(a, b);
-        solve_row(row, masses(a, b), (a, b), &pose, pass);
+        if row.measure == Measure::Angle {
+            solve_angle_row(row, axial, j.frame.angle, (a, b), pass);
+        } else {
+            let pose = j.pose(a, b);
+            solve_row(row, masses(a, b), (a, b), &pose, pass);
+        }
     }
     if j.point.is_some() {
         let pose = j.pose(a, b);
@@ -718,7 +725,7 @@ fn solve_row(
     masses: [Real; 4],
     (a, b): (&mut SolverBody, &mut SolverBody),
     pose: &Pose,
-    (biased, inv_h): (bool, Real),
+    pass: (bool, Real),
 ) {
     let jac = jacobian(row.measure, pose);
     let sign = row.sign();
@@ -729,6 +736,48 @@ fn solve_row(
     let mass = 1.0 / k;
     let cdot = sign * (jac.u.dot(b.v - a.v) + jac.kb * b.w - jac.ka * a.w);
     let error = sign * (jac.value - row.target);
+    let old = row.impulse;
+    let new = row_impulse(row, mass, cdot, error, pass);
+    row.impulse = new;
+    apply_row(masses, a, b, &jac, sign * (new - old));
+}
+
+/// Solve an angle row (`axial`: 1 / (iA + iB), 0 if neither turns; `start_angle`: the joint
+/// angle at the start of the step). Its Jacobian is [0, -1, 0, 1] at every pose, so it needs
+/// neither the pose nor the bodies' linear velocities (as Box2D's axial rows).
+#[inline(always)]
+fn solve_angle_row(
+    row: &mut Row,
+    axial: Real,
+    start_angle: Real,
+    (a, b): (&mut SolverBody, &mut SolverBody),
+    pass: (bool, Real),
+) {
+    if axial == 0.0 {
+        return;
+    }
+    let sign = row.sign();
+    let cdot = sign * (b.w - a.w);
+    let error = sign * (start_angle + b.dtheta - a.dtheta - row.target);
+    let old = row.impulse;
+    let new = row_impulse(row, axial, cdot, error, pass);
+    row.impulse = new;
+    let lambda = sign * (new - old);
+    a.w -= a.inv_inertia * lambda;
+    b.w += b.inv_inertia * lambda;
+}
+
+/// A row's new accumulated impulse (N s, within its cap) for effective mass `mass` (kg or
+/// kg m^2), velocity error `cdot` and position error `error` (both signed as the row's
+/// value), in the `biased` pass or not, `inv_h` 1 / substep.
+#[inline(always)]
+fn row_impulse(
+    row: &Row,
+    mass: Real,
+    cdot: Real,
+    error: Real,
+    (biased, inv_h): (bool, Real),
+) -> Real {
     let old = row.impulse;
     let new = match row.role {
         Role::Motor(speed) => old - mass * (cdot - speed),
@@ -752,9 +801,7 @@ fn solve_row(
             raw.max(0.0)
         }
     };
-    let new = new.clamp(-row.max_impulse, row.max_impulse);
-    row.impulse = new;
-    apply_row(masses, a, b, &jac, sign * (new - old));
+    new.clamp(-row.max_impulse, row.max_impulse)
 }
 
 /// Apply impulse `lambda` along a row's Jacobian `jac` to bodies of inverse masses `masses`.

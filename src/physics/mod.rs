@@ -28,6 +28,7 @@ pub mod segment;
 pub mod settings;
 pub mod shape;
 pub(crate) mod solver;
+pub(crate) mod team;
 pub mod world;
 
 pub use body::{Body, BodyDef, BodyId, MassSpec};

@@ -16,7 +16,7 @@ use super::contact_solver::{
 };
 use super::graph::{COLOURS, OVERFLOW};
 use super::lanes::{eight_lanes_available, prefetch, Lanes1, Lanes4, Lanes8, Wide};
-use super::{PassKind, Selected, SolverBody};
+use super::{BodyRows, PassKind, Selected, SolverBody};
 use crate::physics::contact::Contact;
 use crate::physics::math::Real;
 
@@ -172,7 +172,7 @@ impl<L: Wide> Packed<L> {
             for (list, &slot) in self.packed.iter_mut().zip(&self.slots) {
                 before_colour(&mut joints, bodies, slot);
                 for bundle in list {
-                    bundle.warm_start(bodies);
+                    bundle.warm_start(BodyRows::new(bodies));
                 }
             }
         } else {
@@ -212,7 +212,7 @@ impl<L: Wide> Packed<L> {
                     round: rounds.get(bundle.round_index as usize),
                     bounce: bounces.get_mut(bundle.bounce_index as usize),
                 };
-                bundle.solve(bodies, pass, sides, friction);
+                bundle.solve(BodyRows::new(bodies), pass, sides, friction);
             }
         }
     }
@@ -224,7 +224,7 @@ impl<L: Wide> Packed<L> {
         for bundle in self.packed.iter_mut().flatten() {
             if bundle.bounce_index != NO_BOUNCE {
                 let bounce = &self.bounces[bundle.bounce_index as usize];
-                bundle.apply_restitution(bounce, bodies, threshold);
+                bundle.apply_restitution(bounce, BodyRows::new(bodies), threshold);
             }
         }
     }

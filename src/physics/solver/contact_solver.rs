@@ -17,7 +17,7 @@
 
 use super::constraint::ContactConstraint;
 use super::lanes::Wide;
-use super::SolverBody;
+use super::{BodyRows, SolverBody};
 use crate::physics::contact::Contact;
 use crate::physics::math::Real;
 
@@ -69,6 +69,10 @@ impl<L: Wide> PointLanes<L> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Bundle<L: Wide> {
     pub kind: BundleKind,
+    /// The lanes whose body A (`fixed[0]`) or B (`fixed[1]`) is fixed (static, kinematic, or
+    /// the dummy of an empty lane), bit i for lane i: their rows are read, never written, so
+    /// that any number of bundles solved at once may share a fixed body (the parallel step).
+    fixed: [u8; 2],
     /// Where the bundle's restitution lanes are ([`BounceLanes`]), or [`NO_BOUNCE`].
     pub bounce_index: u32,
     /// Where the bundle's rounding lanes are ([`RoundLanes`]), or [`NO_ROUNDING`].
@@ -236,9 +240,9 @@ impl<L: Wide> BodyLanes<L> {
     /// body's first eight words (`SolverBody::state`), transposed into one value per field.
     /// The inverse masses do not change within a step: they come packed in the bundle.
     #[inline(always)]
-    fn gather(bodies: &[SolverBody], idx: &L::Index, inv_mass: L, inv_inertia: L) -> Self {
-        let [vx, vy, w, dpx, dpy, qc, qs, _] =
-            L::columns(|lane| bodies[idx.as_ref()[lane] as usize].state());
+    fn gather(rows: BodyRows, idx: &L::Index, inv_mass: L, inv_inertia: L) -> Self {
+        let rows = &rows;
+        let [vx, vy, w, dpx, dpy, qc, qs, _] = L::columns(|lane| rows.state(idx.as_ref()[lane]));
         BodyLanes {
             vx,
             vy,
@@ -253,12 +257,11 @@ impl<L: Wide> BodyLanes<L> {
     }
 
     /// Write velocities back, with the motion as it was read (a solve pass does not move
-    /// bodies): the first four words of each lane's body, one store a body. A fixed body's
-    /// lanes come back as they were read (its zero inverse mass and inertia take nothing from
-    /// an impulse), so every lane is written without asking which kind of body it holds.
+    /// bodies): the first four words of each lane's body, one store a body, but for the
+    /// lanes in `fixed`, whose bodies nothing moves.
     #[inline(always)]
-    fn scatter(&self, bodies: &mut [SolverBody], idx: &L::Index) {
-        L::scatter_rows([self.vx, self.vy, self.w, self.dpx], bodies, idx);
+    fn scatter(&self, rows: BodyRows, idx: &L::Index, fixed: u8) {
+        L::scatter_rows([self.vx, self.vy, self.w, self.dpx], rows, idx, fixed);
     }
 
     /// Relative velocity of B over A along (dx, dy) at arms (rA x d, rB x d):
@@ -305,6 +308,7 @@ impl<L: Wide> Bundle<L> {
         };
         Bundle {
             kind,
+            fixed: [((1u32 << L::WIDTH) - 1) as u8; 2],
             bounce_index: NO_BOUNCE,
             round_index: NO_ROUNDING,
             contact: L::index_splat(u32::MAX),
@@ -347,6 +351,11 @@ impl<L: Wide> Bundle<L> {
         self.b.as_mut()[lane] = c.b;
         let sf = k.softness;
         let (body_a, body_b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
+        for (fixed, body) in self.fixed.iter_mut().zip([body_a, body_b]) {
+            if body.inv_mass != 0.0 {
+                *fixed &= !(1 << lane);
+            }
+        }
         for (field, x) in [
             (&mut self.nx, c.normal.x),
             (&mut self.ny, c.normal.y),
@@ -402,18 +411,18 @@ impl<L: Wide> Bundle<L> {
 
     /// Both sides' body lanes.
     #[inline(always)]
-    fn gather(&self, bodies: &[SolverBody]) -> (BodyLanes<L>, BodyLanes<L>) {
+    fn gather(&self, rows: BodyRows) -> (BodyLanes<L>, BodyLanes<L>) {
         (
-            BodyLanes::gather(bodies, &self.a, self.inv_mass_a, self.inv_i_a),
-            BodyLanes::gather(bodies, &self.b, self.inv_mass_b, self.inv_i_b),
+            BodyLanes::gather(rows, &self.a, self.inv_mass_a, self.inv_i_a),
+            BodyLanes::gather(rows, &self.b, self.inv_mass_b, self.inv_i_b),
         )
     }
 
     /// Write both sides' velocities back.
     #[inline(always)]
-    fn scatter(&self, bodies: &mut [SolverBody], a: &BodyLanes<L>, b: &BodyLanes<L>) {
-        a.scatter(bodies, &self.a);
-        b.scatter(bodies, &self.b);
+    fn scatter(&self, rows: BodyRows, a: &BodyLanes<L>, b: &BodyLanes<L>) {
+        a.scatter(rows, &self.a, self.fixed[0]);
+        b.scatter(rows, &self.b, self.fixed[1]);
     }
 
     /// The normal and the tangent t = (n_y, -n_x).
@@ -424,15 +433,15 @@ impl<L: Wide> Bundle<L> {
 
     /// Warm start: apply each point's accumulated impulses (the start of a substep).
     #[inline(always)]
-    pub fn warm_start(&mut self, bodies: &mut [SolverBody]) {
-        let (mut a, mut b) = self.gather(bodies);
+    pub fn warm_start(&mut self, rows: BodyRows) {
+        let (mut a, mut b) = self.gather(rows);
         let (n, t) = self.axes();
         for p in &mut self.p {
             p.total_normal_impulse += p.normal_impulse;
             BodyLanes::apply(&mut a, &mut b, n, normal_arms(p), p.normal_impulse);
             BodyLanes::apply(&mut a, &mut b, t, p.tangent_arms(), p.tangent_impulse);
         }
-        self.scatter(bodies, &a, &b);
+        self.scatter(rows, &a, &b);
     }
 
     /// Warm starting off: zero the accumulated impulses instead (the start of a substep).
@@ -450,18 +459,12 @@ impl<L: Wide> Bundle<L> {
     /// then friction unless `friction` is false (a normal relax pass), with the bundle's side
     /// lanes (`sides`).
     #[inline(always)]
-    pub fn solve(
-        &mut self,
-        bodies: &mut [SolverBody],
-        pass: &Pass<L>,
-        sides: Sides<L>,
-        friction: bool,
-    ) {
+    pub fn solve(&mut self, rows: BodyRows, pass: &Pass<L>, sides: Sides<L>, friction: bool) {
         // One copy of the kernel for sharp bundles and one for rounded ones, so that neither
         // asks per point which it is.
         match sides.round {
-            None => self.solve_turning(bodies, (pass, Sharp), sides.bounce, friction),
-            Some(r) => self.solve_turning(bodies, (pass, r), sides.bounce, friction),
+            None => self.solve_turning(rows, (pass, Sharp), sides.bounce, friction),
+            Some(r) => self.solve_turning(rows, (pass, r), sides.bounce, friction),
         }
     }
 
@@ -469,12 +472,12 @@ impl<L: Wide> Bundle<L> {
     #[inline(always)]
     fn solve_turning<T: Turning<L>>(
         &mut self,
-        bodies: &mut [SolverBody],
+        rows: BodyRows,
         (pass, round): (&Pass<L>, T),
         bounce: Option<&mut BounceLanes<L>>,
         friction: bool,
     ) {
-        let (mut a, mut b) = self.gather(bodies);
+        let (mut a, mut b) = self.gather(rows);
         let (n, t) = self.axes();
         let dp_n = (b.dpx - a.dpx) * n.0 + (b.dpy - a.dpy) * n.1;
         // (Written out, here and below, rather than mapped by a closure: a closure does not
@@ -528,7 +531,7 @@ impl<L: Wide> Bundle<L> {
                 BodyLanes::apply(&mut a, &mut b, t, p.tangent_arms(), applied);
             }
         }
-        self.scatter(bodies, &a, &b);
+        self.scatter(rows, &a, &b);
     }
 
     /// Point `p`'s normal velocity (m/s) and whether its surfaces meet (separation <= 0),
@@ -636,12 +639,7 @@ impl<L: Wide> Bundle<L> {
     /// and two lanes. Where both points of a block bounce they are aimed at vn' = -e vn0
     /// together, so a flat face hitting a flat face rebounds by exactly e.
     #[inline(always)]
-    pub fn apply_restitution(
-        &mut self,
-        bounce: &BounceLanes<L>,
-        bodies: &mut [SolverBody],
-        threshold: L,
-    ) {
+    pub fn apply_restitution(&mut self, bounce: &BounceLanes<L>, rows: BodyRows, threshold: L) {
         let bounces = [
             self.bounces(0, bounce, threshold),
             self.bounces(1, bounce, threshold),
@@ -650,7 +648,7 @@ impl<L: Wide> Bundle<L> {
             // Nothing hit hard enough: a resting bundle costs a compare.
             return;
         }
-        let (mut a, mut b) = self.gather(bodies);
+        let (mut a, mut b) = self.gather(rows);
         let (n, _) = self.axes();
         let e = bounce.restitution;
         let v0 = bounce.approach;
@@ -681,7 +679,7 @@ impl<L: Wide> Bundle<L> {
             p.normal_impulse = new;
             BodyLanes::apply(&mut a, &mut b, n, normal_arms(p), applied);
         }
-        self.scatter(bodies, &a, &b);
+        self.scatter(rows, &a, &b);
     }
 
     /// Which lanes' point `j` bounces: its surfaces met this step (a biased pass pushed it),

@@ -21,6 +21,8 @@ pub(crate) mod sequential;
 pub(crate) mod soft_step;
 pub(crate) mod softness;
 
+use std::marker::PhantomData;
+
 use super::math::{Real, Rot, Vec2};
 
 /// What a soft-step solve pass solves: the biased pass (normal and friction, with the soft
@@ -103,6 +105,82 @@ impl SolverBody {
         dtheta: 0.0,
         dq: Rot::IDENTITY,
     };
+}
+
+/// The solver bodies as rows the contact kernels read and write by index (each row's first
+/// eight words, [`SolverBody::state`]). Within one thread it is the slice it was made from;
+/// [`SharedRows`] hands the same rows to several workers at once, which the constraint graph
+/// makes safe: the bundles of one colour share no dynamic body, and no kernel writes a fixed
+/// body's row (`Bundle::fixed`).
+#[derive(Clone, Copy)]
+pub(crate) struct BodyRows<'a> {
+    ptr: *mut SolverBody,
+    len: usize,
+    _rows: PhantomData<&'a mut [SolverBody]>,
+}
+
+impl<'a> BodyRows<'a> {
+    /// The rows of `bodies`, for this thread.
+    #[inline(always)]
+    pub fn new(bodies: &'a mut [SolverBody]) -> BodyRows<'a> {
+        BodyRows {
+            ptr: bodies.as_mut_ptr(),
+            len: bodies.len(),
+            _rows: PhantomData,
+        }
+    }
+
+    /// Row `i`'s eight words, to read. Panics past the end, as indexing does.
+    #[inline(always)]
+    pub fn state(&self, i: u32) -> &[Real; 8] {
+        assert!((i as usize) < self.len, "body row {i} of {}", self.len);
+        // SAFETY: in bounds; the row is not written while this thread reads it (within a
+        // thread the kernels read a bundle's rows before they write them; across threads see
+        // `SharedRows`).
+        unsafe { (*self.ptr.add(i as usize)).state() }
+    }
+
+    /// Where row `i`'s words start, to write the first four of them. Panics past the end.
+    #[inline(always)]
+    pub fn words(&self, i: u32) -> *mut Real {
+        assert!((i as usize) < self.len, "body row {i} of {}", self.len);
+        // SAFETY: in bounds of the slice the rows were made from.
+        unsafe { self.ptr.add(i as usize).cast::<Real>() }
+    }
+}
+
+/// [`BodyRows`] that several workers may use at once (the parallel step).
+#[derive(Clone, Copy)]
+pub(crate) struct SharedRows<'a>(BodyRows<'a>);
+
+// SAFETY: made only by the unsafe `SharedRows::new`, whose caller promises that no row is
+// written through one worker's copy while another reads or writes it.
+unsafe impl Send for SharedRows<'_> {}
+unsafe impl Sync for SharedRows<'_> {}
+
+impl<'a> SharedRows<'a> {
+    /// The rows of `bodies`, for several workers.
+    ///
+    /// # Safety
+    /// While any copy is in use, no two workers may touch one row at the same time unless
+    /// both only read it, and nothing else may use `bodies`' rows.
+    pub unsafe fn new(bodies: &'a mut [SolverBody]) -> SharedRows<'a> {
+        SharedRows(BodyRows::new(bodies))
+    }
+
+    /// This worker's handle on the rows.
+    #[inline(always)]
+    pub fn rows(self) -> BodyRows<'a> {
+        self.0
+    }
+
+    /// The rows as a slice again, for work that one worker does while every other waits.
+    ///
+    /// # Safety
+    /// No other worker may use the rows until the slice is dropped.
+    pub unsafe fn exclusive(&self) -> &'a mut [SolverBody] {
+        std::slice::from_raw_parts_mut(self.0.ptr, self.0.len)
+    }
 }
 
 /// Limits applied while integrating.

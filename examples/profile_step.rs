@@ -1,5 +1,5 @@
 //! Steps one benchmark scene and prints ms/step: a target for `perf record` while optimising.
-//! Usage: cargo run --release --no-default-features --features measure --example profile_step [SCENE] [STEPS] [WARM_UP]
+//! Usage: cargo run --release --no-default-features --features measure --example profile_step [SCENE] [STEPS] [WARM_UP] [WORKERS]
 //! (SCENE: a benchmark set-up's name, or `pile_N` for N boxes in a pile 20 deep.)
 //! (WARM_UP: untimed steps first; the scene's own warm-up when left out).
 use std::time::Instant;
@@ -9,6 +9,7 @@ fn main() {
     let name = args.next().unwrap_or_else(|| "large_pyramid".to_string());
     let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(500);
     let warm_up: Option<usize> = args.next().and_then(|s| s.parse().ok());
+    let workers: u32 = args.next().and_then(|s| s.parse().ok()).unwrap_or(1);
     // `pile_N`: N boxes in a pile 20 deep (how the cost grows with the count).
     let pile = name
         .strip_prefix("pile_")
@@ -29,6 +30,10 @@ fn main() {
             std::process::exit(1);
         }
     };
+    if let Err(e) = world.set_workers(workers) {
+        eprintln!("{e}");
+        std::process::exit(2);
+    }
     let warm_up = warm_up.unwrap_or(setup.warm_up);
     let mut spawned = Default::default();
     for k in 0..warm_up {

@@ -53,6 +53,14 @@ pub enum PhysicsError {
     /// A list of bodies names one of them twice.
     #[error("body {0} is listed twice")]
     ListedTwice(BodyId),
+    /// The system would not start the worker threads `Settings::workers` asks for.
+    #[error("workers = {workers}: cannot start the worker threads: {reason}")]
+    NoWorkers {
+        /// The workers asked for.
+        workers: u32,
+        /// The system's reason.
+        reason: String,
+    },
     /// The World already holds as many bodies as a body id can address.
     #[error("the world is full ({0} bodies)")]
     Full(usize),

@@ -154,6 +154,10 @@ pub struct Settings {
     /// Approach speed above which a contact of a shape with hit events reports a hit (m/s).
     /// Default 1 (Box2D's `hitEventThreshold`).
     pub hit_event_threshold: Real,
+    /// Threads that share a step: the one that steps the World and `workers - 1` of the
+    /// World's own, which sleep between steps. The results are the same to the bit for any
+    /// number. Default 1 (no thread of its own); at most 64.
+    pub workers: u32,
 }
 
 impl Default for Settings {
@@ -194,6 +198,7 @@ impl Settings {
             max_linear_speed: 400.0,
             max_rotation: 0.25 * super::math::PI,
             hit_event_threshold: 1.0,
+            workers: 1,
         }
     }
 
@@ -244,6 +249,7 @@ impl Settings {
         };
         count("iterations", self.iterations, 1000)?;
         count("substeps", self.substeps, 64)?;
+        count("workers", self.workers, crate::physics::team::MAX_WORKERS)?;
         if self.relax_iterations > 64 {
             return Err(PhysicsError::OutOfRange {
                 field: "relax_iterations",

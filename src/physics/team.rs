@@ -17,7 +17,7 @@
 
 use std::cell::UnsafeCell;
 use std::marker::PhantomData;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 
@@ -27,25 +27,27 @@ pub const MAX_WORKERS: u32 = 64;
 /// How many times a waiting worker spins before it yields its core.
 const SPINS: u32 = 2_000;
 
-/// A stage's work as the workers see it: a block runner with its lifetime erased, and the
-/// first ticket of the stage.
-#[derive(Clone, Copy)]
-struct Task {
-    run: *const (dyn Fn(usize) + Sync),
-    base: usize,
-}
+/// The most blocks one range holds (its counters are 16 bits); a stage of more runs several
+/// blocks for each.
+const MAX_BLOCKS: usize = u16::MAX as usize;
 
 /// What the stepping thread and the workers share.
 struct Shared {
-    /// Tickets below this are open to take.
-    open: AtomicUsize,
-    /// The next ticket to take.
-    next: AtomicUsize,
-    /// Tickets whose block is done.
-    done: AtomicUsize,
-    /// The current stage: written by the stepping thread only while every ticket handed out
-    /// is done, read by a worker only after it has taken one of the stage's tickets.
-    task: UnsafeCell<Task>,
+    /// Workers, the stepping thread included.
+    workers: usize,
+    /// The current stage's number, published once its ranges are set.
+    stage: AtomicU32,
+    /// Each worker's range of the current stage's blocks, packed as stage number (32 bits),
+    /// next block (16) and end (16): its owner takes blocks from the front, the others, once
+    /// their own are gone, from the back. A range of an older stage gives nothing. (A cache
+    /// line each: an owner's takes do not contend with the others'.)
+    ranges: Box<[Line<AtomicU64>]>,
+    /// Blocks done, over all stages (each worker adds its count once per stage).
+    done: Line<AtomicUsize>,
+    /// The current stage's block runner, its lifetime erased: written by the stepping thread
+    /// while no block is taken, read by a worker only once it holds one of the stage's blocks
+    /// (the stage cannot end, nor the runner change, before that block is done).
+    run: UnsafeCell<*const (dyn Fn(usize) + Sync)>,
     /// Regions begun; a sleeping worker wakes for the next.
     regions: Mutex<u64>,
     wake: Condvar,
@@ -59,10 +61,10 @@ struct Shared {
     quit: AtomicBool,
 }
 
-// SAFETY: `task` is written only while no worker can read it (see `Shared::task`), and the
+// SAFETY: `run` is written only while no worker can read it (see `Shared::run`), and the
 // runner it points to is `Sync`; everything else is atomic or locked.
 unsafe impl Sync for Shared {}
-// SAFETY: as above; the raw pointer in `task` is used only under the same rule.
+// SAFETY: as above.
 unsafe impl Send for Shared {}
 
 /// The workers of one World.
@@ -83,13 +85,14 @@ impl Team {
     /// A team of `workers` (the calling thread and `workers - 1` new threads), clamped to
     /// 2..=[`MAX_WORKERS`]; the error is the system's, when it cannot start a thread.
     pub fn new(workers: u32) -> std::io::Result<Team> {
-        let workers = workers.clamp(2, MAX_WORKERS);
+        let workers = workers.clamp(2, MAX_WORKERS) as usize;
         let noop: &'static (dyn Fn(usize) + Sync) = &|_| {};
         let shared = Arc::new(Shared {
-            open: AtomicUsize::new(0),
-            next: AtomicUsize::new(0),
-            done: AtomicUsize::new(0),
-            task: UnsafeCell::new(Task { run: noop, base: 0 }),
+            workers,
+            stage: AtomicU32::new(0),
+            ranges: (0..workers).map(|_| Line(AtomicU64::new(0))).collect(),
+            done: Line(AtomicUsize::new(0)),
+            run: UnsafeCell::new(noop),
             regions: Mutex::new(0),
             wake: Condvar::new(),
             finished: AtomicBool::new(false),
@@ -101,11 +104,11 @@ impl Team {
             shared,
             threads: Vec::new(),
         };
-        for i in 1..workers {
+        for me in 1..workers {
             let shared = Arc::clone(&team.shared);
             let thread = std::thread::Builder::new()
-                .name(format!("tiltbox-worker-{i}"))
-                .spawn(move || worker(&shared))?;
+                .name(format!("tiltbox-worker-{me}"))
+                .spawn(move || worker(&shared, me))?;
             team.threads.push(thread);
         }
         Ok(team)
@@ -113,7 +116,7 @@ impl Team {
 
     /// How many workers, the stepping thread included.
     pub fn workers(&self) -> u32 {
-        self.threads.len() as u32 + 1
+        self.shared.workers as u32
     }
 
     /// Run `body` on this thread with the workers awake to take the blocks it hands out;
@@ -184,31 +187,40 @@ pub struct Region<'t> {
 impl Region<'_> {
     /// Run `run(k)` for every block k in `0..blocks`, spread over the workers (this thread
     /// among them); returns when all are done. Blocks must be independent of one another.
+    /// Worker w starts at the w-th of as many equal runs of the blocks, so that a worker
+    /// meets, stage after stage, much the same bodies (the colours' bundles lie in key
+    /// order, which follows the bodies' order), as Box2D's solver does.
     pub fn for_blocks(&self, blocks: usize, run: &(dyn Fn(usize) + Sync)) {
+        if blocks > MAX_BLOCKS {
+            let per = blocks.div_ceil(MAX_BLOCKS);
+            let grouped = |k: usize| (k * per..((k + 1) * per).min(blocks)).for_each(run);
+            return self.for_blocks(blocks.div_ceil(per), &grouped);
+        }
         if blocks == 0 {
             return;
         }
         let shared = self.shared;
-        let base = shared.open.load(Ordering::Relaxed);
-        // SAFETY: every ticket handed out so far is done (the last stage waited for them), so
-        // no worker reads `task` until the store to `open` below publishes it. The runner's
-        // lifetime is erased: this call does not return until every block has run, after
-        // which no worker calls it.
+        let target = shared.done.0.load(Ordering::Acquire) + blocks;
+        // SAFETY: every block of every earlier stage is done, so no worker holds one and none
+        // reads `run` until a range below publishes this stage. The lifetime is erased: this
+        // call returns only once every block has run, after which no worker calls it.
         unsafe {
             let run: *const (dyn Fn(usize) + Sync + '_) = run;
-            *shared.task.get() = Task {
-                run: std::mem::transmute::<
-                    *const (dyn Fn(usize) + Sync + '_),
-                    *const (dyn Fn(usize) + Sync + 'static),
-                >(run),
-                base,
-            };
+            *shared.run.get() = std::mem::transmute::<
+                *const (dyn Fn(usize) + Sync + '_),
+                *const (dyn Fn(usize) + Sync + 'static),
+            >(run);
         }
-        let end = base + blocks;
-        shared.open.store(end, Ordering::Release);
-        while take_and_run(shared) {}
+        let stage = shared.stage.load(Ordering::Relaxed).wrapping_add(1);
+        let workers = shared.workers;
+        for (w, range) in shared.ranges.iter().enumerate() {
+            let (start, end) = (w * blocks / workers, (w + 1) * blocks / workers);
+            range.0.store(pack(stage, start, end), Ordering::Release);
+        }
+        shared.stage.store(stage, Ordering::Release);
+        run_stage(shared, 0, stage);
         let mut spins = 0;
-        while shared.done.load(Ordering::Acquire) < end {
+        while shared.done.0.load(Ordering::Acquire) < target {
             pause(&mut spins);
         }
         if shared.panicked.swap(false, Ordering::Relaxed) {
@@ -217,35 +229,62 @@ impl Region<'_> {
     }
 }
 
-/// Take one open ticket and run its block; false when none is open.
-fn take_and_run(shared: &Shared) -> bool {
+/// A range: stage number, next block, end.
+fn pack(stage: u32, next: usize, end: usize) -> u64 {
+    u64::from(stage) << 32 | (next as u64) << 16 | end as u64
+}
+
+/// Take a block of `range` in `stage`, from the front or the back; None when it has none.
+fn take(range: &AtomicU64, stage: u32, front: bool) -> Option<usize> {
+    let mut v = range.load(Ordering::Acquire);
     loop {
-        let next = shared.next.load(Ordering::Relaxed);
-        if next >= shared.open.load(Ordering::Acquire) {
-            return false;
+        let (next, end) = ((v >> 16 & 0xFFFF) as usize, (v & 0xFFFF) as usize);
+        if (v >> 32) as u32 != stage || next >= end {
+            return None;
         }
-        if shared
-            .next
-            .compare_exchange_weak(next, next + 1, Ordering::Acquire, Ordering::Relaxed)
-            .is_ok()
-        {
-            // SAFETY: the ticket is ours and not done, so the stage it belongs to is the one
-            // in `task` (published before `open` passed it) and its runner is alive.
-            let task = unsafe { *shared.task.get() };
-            let run = unsafe { &*task.run };
-            let ran =
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(next - task.base)));
-            if ran.is_err() {
-                shared.panicked.store(true, Ordering::Relaxed);
-            }
-            shared.done.fetch_add(1, Ordering::Release);
-            return true;
+        let (taken, new) = if front {
+            (next, v + (1 << 16))
+        } else {
+            (end - 1, v - 1)
+        };
+        match range.compare_exchange_weak(v, new, Ordering::AcqRel, Ordering::Acquire) {
+            Ok(_) => return Some(taken),
+            Err(now) => v = now,
         }
     }
 }
 
-/// A worker thread: sleep until a region begins, take blocks until it ends, sleep again.
-fn worker(shared: &Shared) {
+/// Worker `me`'s part in `stage`: its own range from the front, then the others' from the
+/// back.
+fn run_stage(shared: &Shared, me: usize, stage: u32) {
+    let workers = shared.workers;
+    let ranges = &shared.ranges;
+    let order = (0..workers).map(|d| ((me + d) % workers, d == 0));
+    let mut done = 0;
+    for (w, own) in order {
+        while let Some(k) = take(&ranges[w].0, stage, own) {
+            // SAFETY: we hold block k of `stage` (and count it done only below), so the stage
+            // cannot end and its runner (published before the range) stays.
+            let run = unsafe { &**shared.run.get() };
+            let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(k)));
+            if ran.is_err() {
+                shared.panicked.store(true, Ordering::Relaxed);
+            }
+            done += 1;
+        }
+    }
+    if done > 0 {
+        shared.done.0.fetch_add(done, Ordering::Release);
+    }
+}
+
+/// A value alone on its cache line (two lines: processors fetch lines in pairs).
+#[repr(align(128))]
+struct Line<T>(T);
+
+/// Worker `me` (1 or more): sleep until a region begins, take part in each stage until it
+/// ends, sleep again.
+fn worker(shared: &Shared, me: usize) {
     let mut seen = 0u64;
     loop {
         {
@@ -258,9 +297,13 @@ fn worker(shared: &Shared) {
         if shared.quit.load(Ordering::Acquire) {
             return;
         }
-        let mut spins = 0;
+        let (mut last, mut spins) = (shared.stage.load(Ordering::Acquire), 0);
+        run_stage(shared, me, last);
         loop {
-            if take_and_run(shared) {
+            let stage = shared.stage.load(Ordering::Acquire);
+            if stage != last {
+                last = stage;
+                run_stage(shared, me, stage);
                 spins = 0;
             } else if shared.finished.load(Ordering::Acquire) {
                 break;
@@ -313,11 +356,6 @@ impl<'a, T> SharedSlice<'a, T> {
             len: items.len(),
             _items: PhantomData,
         }
-    }
-
-    /// How many items.
-    pub fn len(&self) -> usize {
-        self.len
     }
 
     /// Items `range`, to write. Panics past the end.

@@ -16,9 +16,10 @@ use super::contact_solver::{
 };
 use super::graph::{COLOURS, OVERFLOW};
 use super::lanes::{eight_lanes_available, prefetch, Lanes1, Lanes4, Lanes8, Wide};
-use super::{BodyRows, PassKind, Selected, SolverBody};
+use super::{BodyRows, PassKind, Selected, SharedRows, SolverBody};
 use crate::physics::contact::Contact;
 use crate::physics::math::Real;
+use crate::physics::team::{block, Region, SharedSlice};
 
 /// Contacts from which a solve packs eight to a bundle (where the processor can): below, the
 /// bundles of each colour are mostly empty lanes (falling_bricks, 8 contacts, stepped 50 %
@@ -65,6 +66,73 @@ const OVERFLOW_RANK: u8 = 0;
 fn before_colour(joints: &mut Joints, bodies: &mut [SolverBody], slot: u16) {
     if let Some(run) = joints.as_mut() {
         run(bodies, (slot / 2) as u8 + 1);
+    }
+}
+
+/// How many bundles a worker takes at a time in the parallel step: 32 contacts at eight
+/// lanes, a few microseconds of a solve pass, against some 0.1 microsecond to take them.
+const BUNDLES_PER_BLOCK: usize = 4;
+
+/// Contacts from which a solve spreads its colours over the workers: below, a pass over them
+/// takes a few microseconds, which handing out blocks would eat.
+const SHARED_FROM: usize = 1024;
+
+/// A stage's work on each bundle, as the parallel step hands bundles out: in plain numbers,
+/// which each block turns into lanes.
+#[derive(Clone, Copy)]
+pub(crate) enum Work {
+    /// Apply the accumulated impulses.
+    WarmStart,
+    /// A solve pass.
+    Solve(PassArgs),
+    /// Restitution above a threshold (m/s).
+    Restitution(Real),
+}
+
+/// What a block reads beside its bundles and the bodies: the rounding lanes, and the
+/// restitution lanes, each bundle's its own.
+struct SideLanes<'a, L> {
+    rounds: &'a [RoundLanes<L>],
+    bounces: SharedSlice<'a, BounceLanes<L>>,
+}
+
+impl<L> Clone for SideLanes<'_, L> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<L> Copy for SideLanes<'_, L> {}
+
+/// Runs one block: [`run_block`] at a width, compiled for it.
+type BlockRun<L> = fn(&mut [Bundle<L>], BodyRows, Work, SideLanes<L>);
+
+/// `work` on each of `bundles` (one block of a colour).
+#[inline(always)]
+fn run_block<L: Wide>(bundles: &mut [Bundle<L>], rows: BodyRows, work: Work, side: SideLanes<L>) {
+    match work {
+        Work::WarmStart => bundles.iter_mut().for_each(|b| b.warm_start(rows)),
+        Work::Solve((kind, inv_h, push_out)) => {
+            let (inv_h, push_out) = (L::splat(inv_h), L::splat(-push_out));
+            let pass = Pass::new(inv_h, kind == PassKind::Biased, push_out);
+            let friction = kind != PassKind::NormalRelax;
+            for bundle in bundles {
+                // SAFETY: a bundle's restitution lanes are its own, and it is in one block.
+                let sides = Sides {
+                    round: side.rounds.get(bundle.round_index as usize),
+                    bounce: unsafe { side.bounces.get(bundle.bounce_index as usize) },
+                };
+                bundle.solve(rows, &pass, sides, friction);
+            }
+        }
+        Work::Restitution(threshold) => {
+            let threshold = L::splat(threshold);
+            for bundle in bundles {
+                // SAFETY: as above.
+                if let Some(bounce) = unsafe { side.bounces.get(bundle.bounce_index as usize) } {
+                    bundle.apply_restitution(bounce, rows, threshold);
+                }
+            }
+        }
     }
 }
 
@@ -229,6 +297,38 @@ impl<L: Wide> Packed<L> {
         }
     }
 
+    /// `work` colour by colour, each colour's bundles in blocks spread over `region`'s
+    /// workers by `run`, with `joints` run before each colour by this thread alone.
+    fn run_shared(
+        &mut self,
+        region: &Region,
+        rows: SharedRows,
+        work: Work,
+        (mut joints, run): (Joints, BlockRun<L>),
+    ) {
+        // SAFETY: a bundle's restitution lanes are its own (`bounce_index`), and each bundle
+        // is in one block.
+        let bounces = unsafe { SharedSlice::new(&mut self.bounces) };
+        let side = SideLanes {
+            rounds: &self.rounds,
+            bounces,
+        };
+        for (list, &slot) in self.packed.iter_mut().zip(&self.slots) {
+            if let Some(run_joints) = joints.as_mut() {
+                // SAFETY: between colours no block runs: the other workers wait.
+                run_joints(unsafe { rows.exclusive() }, (slot / 2) as u8 + 1);
+            }
+            let len = list.len();
+            // SAFETY: each block is its own run of the colour's bundles.
+            let bundles = unsafe { SharedSlice::new(list) };
+            region.for_blocks(len.div_ceil(BUNDLES_PER_BLOCK), &|k| {
+                // SAFETY: block k's bundles are reached by the worker that took k alone.
+                let block = unsafe { bundles.range(block(k, BUNDLES_PER_BLOCK, len)) };
+                run(block, rows.rows(), work, side);
+            });
+        }
+    }
+
     /// Hand each contact its points' impulses. Bundles hold contacts from all over the array:
     /// while one bundle's are stored, the next bundle's are fetched (storing waited on those
     /// loads for three quarters of its time).
@@ -355,6 +455,59 @@ impl ContactBundles {
         }
     }
 
+    /// Whether the last build is worth spreading over workers ([`SHARED_FROM`] contacts).
+    pub fn worth_sharing(&self) -> bool {
+        let coloured = match self.built {
+            Some(Width::Eight) => self.eight.packed.iter().map(Vec::len).sum::<usize>() * 8,
+            Some(Width::One) => self.single.packed.iter().map(Vec::len).sum(),
+            _ => self.four.packed.iter().map(Vec::len).sum::<usize>() * 4,
+        };
+        coloured >= SHARED_FROM
+    }
+
+    /// A stage's `work` with the colours spread over `region`'s workers: the overflow first,
+    /// by this thread, then each colour's joints by this thread and its bundles by all.
+    /// (With warm starting off, the warm start only zeroes impulses: this thread does it.)
+    pub fn run_shared(
+        &mut self,
+        region: &Region,
+        bodies: &mut [SolverBody],
+        work: Work,
+        joints: Joints,
+    ) {
+        let mut joints = joints;
+        match work {
+            Work::Restitution(_) if !self.bouncy => return,
+            Work::Restitution(threshold) => self.overflow.apply_restitution(bodies, threshold),
+            _ => {
+                if let Some(run) = joints.as_mut() {
+                    run(bodies, OVERFLOW_RANK);
+                }
+                match work {
+                    Work::Solve(args) => self.overflow.solve(bodies, args, None),
+                    _ => self.overflow.warm_start(bodies, true, None),
+                }
+            }
+        }
+        // SAFETY: a colour's bundles share no dynamic body, kernels never write a fixed
+        // body's row, and only this thread touches the rows between colours.
+        let rows = unsafe { SharedRows::new(bodies) };
+        match self.built {
+            Some(Width::Eight) => {
+                let run: BlockRun<Lanes8> = eight::run_block;
+                self.eight.run_shared(region, rows, work, (joints, run))
+            }
+            Some(Width::One) => {
+                let run: BlockRun<Lanes1> = run_block::<Lanes1>;
+                self.single.run_shared(region, rows, work, (joints, run))
+            }
+            _ => {
+                let run: BlockRun<Lanes4> = run_block::<Lanes4>;
+                self.four.run_shared(region, rows, work, (joints, run))
+            }
+        }
+    }
+
     /// Hand each packed contact its points' impulses, for the store stage to write back.
     pub fn store(
         &self,
@@ -424,7 +577,9 @@ where
 /// The eight-lane stages: compiled for AVX2 on x86-64, where [`ContactBundles::build`] packs
 /// eight-lane bundles only if the processor has it; elsewhere never chosen.
 mod eight {
-    use super::{Joints, Lanes8, Packed, PassArgs, Real, SolverBody};
+    use super::{
+        BodyRows, Bundle, Joints, Lanes8, Packed, PassArgs, Real, SideLanes, SolverBody, Work,
+    };
 
     /// Runs `$body` compiled for AVX2 where `Lanes8` is an AVX register, plainly elsewhere.
     macro_rules! avx2 {
@@ -453,5 +608,8 @@ mod eight {
     });
     avx2!(apply_restitution(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], threshold: Real) {
         packed.apply_restitution(bodies, threshold)
+    });
+    avx2!(run_block(bundles: &mut [Bundle<Lanes8>], rows: BodyRows, work: Work, side: SideLanes<Lanes8>) {
+        super::run_block(bundles, rows, work, side)
     });
 }

@@ -24,6 +24,10 @@ pub(crate) mod softness;
 use std::marker::PhantomData;
 
 use super::math::{Real, Rot, Vec2};
+use super::team::{block, Region, SharedSlice};
+
+/// How many bodies a worker integrates at a time in the parallel step.
+const BODIES_PER_BLOCK: usize = 256;
 
 /// What a soft-step solve pass solves: the biased pass (normal and friction, with the soft
 /// bias), a relax pass (both, without), or a normal relax pass (the normal constraints only,
@@ -203,6 +207,42 @@ pub(crate) enum Moving<'a> {
 }
 
 impl Moving<'_> {
+    /// [`Moving::for_each`], in blocks of [`BODIES_PER_BLOCK`] spread over `region`'s
+    /// workers.
+    fn for_each_shared(
+        self,
+        region: &Region,
+        bodies: &mut [SolverBody],
+        f: &(impl Fn(&mut SolverBody) + Sync),
+    ) {
+        let len = match self {
+            Moving::All => bodies.len(),
+            Moving::Only(list) => list.len(),
+        };
+        // SAFETY: each block reaches its own bodies: a run of the array, or of a list that
+        // names each body once.
+        let rows = unsafe { SharedSlice::new(bodies) };
+        region.for_blocks(len.div_ceil(BODIES_PER_BLOCK), &|k| {
+            let run = block(k, BODIES_PER_BLOCK, len);
+            match self {
+                // SAFETY: block k's run is reached by the worker that took k alone.
+                Moving::All => unsafe { rows.range(run) }
+                    .iter_mut()
+                    .filter(|b| b.inv_mass != 0.0)
+                    .for_each(f),
+                Moving::Only(list) => {
+                    for &i in &list[run] {
+                        // SAFETY: as above.
+                        let b = unsafe { rows.get(i as usize) }.expect("a listed body exists");
+                        if b.inv_mass != 0.0 {
+                            f(b);
+                        }
+                    }
+                }
+            }
+        });
+    }
+
     /// Run `f` on every moving, dynamic body.
     #[inline]
     fn for_each(self, bodies: &mut [SolverBody], mut f: impl FnMut(&mut SolverBody)) {
@@ -264,20 +304,25 @@ impl Selected<'_> {
     }
 }
 
-/// Semi-implicit Euler, velocity half: v += h a, w += h alpha (appendix eqs. 1-2).
+/// Semi-implicit Euler, velocity half: v += h a, w += h alpha (appendix eqs. 1-2), on the
+/// moving bodies, spread over `region`'s workers if given.
 #[inline(always)]
 pub(crate) fn integrate_velocities(
     bodies: &mut [SolverBody],
     moving: Moving,
-    h: Real,
-    limits: Limits,
+    (h, limits): (Real, Limits),
+    region: Option<&Region>,
 ) {
     let max_v = limits.max_linear_speed;
-    moving.for_each(bodies, |b| {
+    let update = |b: &mut SolverBody| {
         b.v += h * b.accel;
         b.w += h * b.alpha;
         b.v = clamp_speed(b.v, max_v);
-    });
+    };
+    match region {
+        Some(r) => moving.for_each_shared(r, bodies, &update),
+        None => moving.for_each(bodies, update),
+    }
 }
 
 /// A kinematic body the solver moves: its index among the solver bodies and the velocity it
@@ -299,11 +344,11 @@ pub(crate) struct Kinematic {
 pub(crate) fn integrate_positions(
     bodies: &mut [SolverBody],
     (moving, kinematic): (Moving, &[Kinematic]),
-    h: Real,
-    limits: Limits,
+    (h, limits): (Real, Limits),
+    region: Option<&Region>,
 ) {
     let max_w = limits.max_rotation / h;
-    moving.for_each(bodies, |b| {
+    let update = |b: &mut SolverBody| {
         b.v = clamp_speed(b.v, limits.max_linear_speed);
         if b.w.is_nan() {
             b.w = 0.0;
@@ -311,7 +356,11 @@ pub(crate) fn integrate_positions(
             b.w = max_w.copysign(b.w);
         }
         b.advance(h);
-    });
+    };
+    match region {
+        Some(r) => moving.for_each_shared(r, bodies, &update),
+        None => moving.for_each(bodies, update),
+    }
     for k in kinematic {
         let b = &mut bodies[k.index as usize];
         (b.v, b.w) = (k.v, k.w);

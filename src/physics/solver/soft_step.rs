@@ -24,7 +24,7 @@
 //! joints run just before its contacts.
 
 use super::block::BlockMass;
-use super::bundles::{ContactBundles, PackInput};
+use super::bundles::{ContactBundles, PackInput, Work};
 use super::constraint::{Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
 use super::joint::{self, JointPass, JointSet, JointStep, JointWork};
@@ -37,6 +37,7 @@ use super::{
 use crate::physics::contact::Contact;
 use crate::physics::math::{Real, PI};
 use crate::physics::settings::Settings;
+use crate::physics::team::{Region, Team};
 
 /// How much work one solve does: the World's settings scaled by the stiffness tier of the
 /// islands it solves (`Settings::adaptive_stiffness`).
@@ -78,6 +79,8 @@ pub(crate) struct StepContext<'a> {
     pub settings: &'a Settings,
     /// The step (s).
     pub dt: Real,
+    /// The World's workers, if it has more than one (`Settings::workers`).
+    pub team: Option<&'a mut Team>,
 }
 
 /// What a solve works out once from its settings and effort.
@@ -155,17 +158,32 @@ pub(crate) fn solve(ctx: &mut StepContext, effort: &Effort) {
     restart_motion(ctx.bodies, ctx.kinematic);
     prepare_contacts(ctx, &plan);
     prepare_joints(ctx, &plan);
+    match ctx.team.take() {
+        Some(team) if ctx.bundles.worth_sharing() => {
+            team.region(|region| substeps(ctx, &plan, Some(region)));
+            ctx.team = Some(team);
+        }
+        team => {
+            ctx.team = team;
+            substeps(ctx, &plan, None);
+        }
+    }
+    store_impulses(ctx, &plan);
+}
+
+/// The substeps, recover and restitution: on this thread alone, or with each stage's blocks
+/// spread over `region`'s workers.
+fn substeps(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     for _ in 0..plan.substeps {
-        integrate_velocities(ctx.bodies, ctx.moving, plan.h, plan.limits);
-        warm_start(ctx);
-        solve_pass(ctx, &plan, PassKind::Biased);
+        integrate_velocities(ctx.bodies, ctx.moving, (plan.h, plan.limits), region);
+        warm_start(ctx, region);
+        solve_pass(ctx, plan, PassKind::Biased, region);
         let movers = (ctx.moving, ctx.kinematic);
-        integrate_positions(ctx.bodies, movers, plan.h, plan.limits);
-        relax(ctx, &plan);
+        integrate_positions(ctx.bodies, movers, (plan.h, plan.limits), region);
+        relax(ctx, plan, region);
     }
     recover(ctx);
-    apply_restitution(ctx);
-    store_impulses(ctx, &plan);
+    apply_restitution(ctx, region);
 }
 
 /// Prepare: each selected contact's constraint for this step (effective masses, adjusted
@@ -199,26 +217,41 @@ fn prepare_joints(ctx: &mut StepContext, plan: &Plan) {
 
 /// Warm start: apply each joint's and contact's accumulated impulses (zero them with warm
 /// starting off), colour by colour.
-fn warm_start(ctx: &mut StepContext) {
+fn warm_start(ctx: &mut StepContext, region: Option<&Region>) {
     let warm_starting = ctx.settings.warm_starting;
+    let region = region.filter(|_| warm_starting);
     if ctx.joints.is_empty() {
-        ctx.bundles.warm_start(ctx.bodies, warm_starting, None);
+        match region {
+            Some(r) => ctx.bundles.run_shared(r, ctx.bodies, Work::WarmStart, None),
+            None => ctx.bundles.warm_start(ctx.bodies, warm_starting, None),
+        }
         return;
     }
     let mut pass = JointPass::new(ctx.joints, ctx.joint_selected, JointWork::WarmStart);
     let mut run = |bodies: &mut [SolverBody], rank: u8| pass.run_until(bodies, rank);
-    ctx.bundles
-        .warm_start(ctx.bodies, warm_starting, Some(&mut run));
+    match region {
+        Some(r) => ctx
+            .bundles
+            .run_shared(r, ctx.bodies, Work::WarmStart, Some(&mut run)),
+        None => ctx
+            .bundles
+            .warm_start(ctx.bodies, warm_starting, Some(&mut run)),
+    }
     pass.run_until(ctx.bodies, u8::MAX);
 }
 
 /// One solve pass of `kind` over the joints (but for a normal relax pass) and the contacts,
 /// colour by colour: the overflow's joints, the overflow's contacts, then each colour's
 /// joints and contacts (Box2D v3's order).
-fn solve_pass(ctx: &mut StepContext, plan: &Plan, kind: PassKind) {
+fn solve_pass(ctx: &mut StepContext, plan: &Plan, kind: PassKind, region: Option<&Region>) {
     let args = (kind, plan.inv_h, ctx.settings.max_push_out_speed);
     if kind == PassKind::NormalRelax || ctx.joints.is_empty() {
-        ctx.bundles.solve(ctx.bodies, args, None);
+        match region {
+            Some(r) => ctx
+                .bundles
+                .run_shared(r, ctx.bodies, Work::Solve(args), None),
+            None => ctx.bundles.solve(ctx.bodies, args, None),
+        }
         return;
     }
     let work = JointWork::Solve {
@@ -227,7 +260,12 @@ fn solve_pass(ctx: &mut StepContext, plan: &Plan, kind: PassKind) {
     };
     let mut pass = JointPass::new(ctx.joints, ctx.joint_selected, work);
     let mut run = |bodies: &mut [SolverBody], rank: u8| pass.run_until(bodies, rank);
-    ctx.bundles.solve(ctx.bodies, args, Some(&mut run));
+    match region {
+        Some(r) => ctx
+            .bundles
+            .run_shared(r, ctx.bodies, Work::Solve(args), Some(&mut run)),
+        None => ctx.bundles.solve(ctx.bodies, args, Some(&mut run)),
+    }
     pass.run_until(ctx.bodies, u8::MAX);
 }
 
@@ -237,19 +275,25 @@ fn recover(ctx: &mut StepContext) {
 }
 
 /// Relax: the relax passes, then the normal relax passes.
-fn relax(ctx: &mut StepContext, plan: &Plan) {
+fn relax(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     for _ in 0..plan.relax_passes {
-        solve_pass(ctx, plan, PassKind::Relax);
+        solve_pass(ctx, plan, PassKind::Relax, region);
     }
     for _ in 0..plan.normal_relax_passes {
-        solve_pass(ctx, plan, PassKind::NormalRelax);
+        solve_pass(ctx, plan, PassKind::NormalRelax, region);
     }
 }
 
 /// Restitution: reverse e times the approach speed where a point bounced.
-fn apply_restitution(ctx: &mut StepContext) {
+fn apply_restitution(ctx: &mut StepContext, region: Option<&Region>) {
     let threshold = ctx.settings.restitution_threshold;
-    ctx.bundles.apply_restitution(ctx.bodies, threshold);
+    match region {
+        Some(r) => {
+            let work = Work::Restitution(threshold);
+            ctx.bundles.run_shared(r, ctx.bodies, work, None)
+        }
+        None => ctx.bundles.apply_restitution(ctx.bodies, threshold),
+    }
 }
 
 /// Store: each joint's and contact's impulses back into it, per step, and its load.

@@ -22,6 +22,7 @@ use super::solver::graph::ConstraintGraph;
 use super::solver::recover::Recovery;
 use super::solver::sequential::SplitImpulse;
 use super::solver::{clamp_speed, Kinematic, SolverBody};
+use super::team::Team;
 
 /// Export and import of the full state (checkpoints); a child module so it reads private fields.
 pub mod snapshot;
@@ -71,6 +72,36 @@ pub struct World {
     queries: queries::QueryIndex,
     /// The last step's events and what finding the next ones reads (`events.rs`).
     events: EventState,
+    /// The threads that share the step (`Settings::workers`).
+    workers: Workers,
+}
+
+/// A World's own worker threads: none for `Settings::workers = 1`.
+#[derive(Debug, Default)]
+struct Workers(Option<Team>);
+
+impl Workers {
+    /// Workers for `settings`: this thread alone for one, a [`Team`] for more.
+    fn start(workers: u32) -> Result<Workers, PhysicsError> {
+        if workers <= 1 {
+            return Ok(Workers(None));
+        }
+        Team::new(workers)
+            .map(|team| Workers(Some(team)))
+            .map_err(|e| PhysicsError::NoWorkers {
+                workers,
+                reason: e.to_string(),
+            })
+    }
+}
+
+impl Clone for Workers {
+    /// A team of the same size (or this thread alone, if the system starts no thread: the
+    /// results are the same either way).
+    fn clone(&self) -> Self {
+        let team = self.0.as_ref().and_then(|t| Team::new(t.workers()).ok());
+        Workers(team)
+    }
 }
 
 /// The bodies: a slot array with a free list.
@@ -218,7 +249,10 @@ impl World {
     pub fn new(settings: Settings, gravity: Vec2) -> Result<World, PhysicsError> {
         settings.validate()?;
         finite_vec(["gravity.x", "gravity.y"], gravity)?;
-        Ok(World::with_settings(settings, gravity))
+        let workers = Workers::start(settings.workers)?;
+        let mut world = World::with_settings(settings, gravity);
+        world.workers = workers;
+        Ok(world)
     }
 
     fn with_settings(settings: Settings, gravity: Vec2) -> World {
@@ -236,6 +270,7 @@ impl World {
             joints: Default::default(),
             queries: Default::default(),
             events: Default::default(),
+            workers: Workers::default(),
         }
     }
 
@@ -247,8 +282,28 @@ impl World {
     /// Replace the settings (validated first; on error nothing changes).
     pub fn set_settings(&mut self, settings: Settings) -> Result<(), PhysicsError> {
         settings.validate()?;
+        let have = self.workers.0.as_ref().map_or(1, Team::workers);
+        if settings.workers != have {
+            self.workers = Workers::start(settings.workers)?;
+        }
         self.settings = settings;
         self.wake_all();
+        Ok(())
+    }
+
+    /// Share the step among `workers` threads (`Settings::workers`): the results are the
+    /// same to the bit, so nothing else changes and nothing wakes.
+    pub fn set_workers(&mut self, workers: u32) -> Result<(), PhysicsError> {
+        Settings {
+            workers,
+            ..self.settings.clone()
+        }
+        .validate()?;
+        let have = self.workers.0.as_ref().map_or(1, Team::workers);
+        if workers != have {
+            self.workers = Workers::start(workers)?;
+        }
+        self.settings.workers = workers;
         Ok(())
     }
 

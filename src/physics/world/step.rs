@@ -85,7 +85,7 @@ impl World {
         solver
             .constraints
             .resize(contacts.len(), ContactConstraint::default());
-        integrate_velocities(&mut solver.bodies, Moving::All, dt, limits);
+        integrate_velocities(&mut solver.bodies, Moving::All, (dt, limits), None);
         let (bodies, constraints) = (&mut solver.bodies, &mut solver.constraints);
         let joints = &mut self.joints.constraints;
         let step = JointStep {
@@ -112,7 +112,7 @@ impl World {
         );
         joint::store(joints, Selected::All, bodies, step);
         let movers = (Moving::All, solver.kinematic.as_slice());
-        integrate_positions(&mut solver.bodies, movers, dt, limits);
+        integrate_positions(&mut solver.bodies, movers, (dt, limits), None);
         let (bodies, constraints) = (&mut solver.bodies, &solver.constraints);
         let split = &mut solver.split_impulse;
         split.correct(bodies, contacts, constraints, &self.settings, dt);
@@ -215,6 +215,7 @@ impl World {
             joint_selected: joints,
             settings: &self.settings,
             dt,
+            team: self.workers.0.as_mut(),
         };
         soft_step::solve(&mut ctx, &tier.effort(&self.settings));
     }

@@ -35,6 +35,8 @@ pub(crate) type Lanes4 = glam::DVec4;
 /// A lane type for the wide kernels: `WIDTH` independent [`Real`]s.
 pub(crate) trait Wide:
     Copy
+    + Send
+    + Sync
     + Add<Output = Self>
     + Sub<Output = Self>
     + Mul<Output = Self>
@@ -52,7 +54,7 @@ pub(crate) trait Wide:
     /// A lane-wise truth value, from a comparison.
     type Mask: Copy + BitAnd<Output = Self::Mask> + BitOr<Output = Self::Mask>;
     /// One `u32` per lane (contact and body indices).
-    type Index: Copy + std::fmt::Debug + AsRef<[u32]> + AsMut<[u32]>;
+    type Index: Copy + Send + Sync + std::fmt::Debug + AsRef<[u32]> + AsMut<[u32]>;
     /// The lanes as plain numbers.
     type Array: Copy + AsRef<[Real]>;
     /// Every lane `x`.

@@ -119,6 +119,12 @@ impl Team {
         self.shared.workers as u32
     }
 
+    /// Regions run so far.
+    #[cfg(test)]
+    pub fn regions(&self) -> u64 {
+        *self.shared.regions.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
     /// Run `body` on this thread with the workers awake to take the blocks it hands out;
     /// returns when they have all left.
     pub fn region<R>(&mut self, body: impl FnOnce(&Region) -> R) -> R {

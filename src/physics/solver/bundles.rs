@@ -369,6 +369,9 @@ pub(crate) struct ContactBundles {
     /// Bundle width; `None` picks four below [`EIGHT_LANES_FROM`] contacts and
     /// [`Width::detect`] from there, at each build (tests set it to compare).
     pub width: Option<Width>,
+    /// Contacts from which a solve is spread over the workers; `None`: [`SHARED_FROM`]
+    /// (tests lower it so that small worlds take the parallel path).
+    pub share_from: Option<usize>,
     /// The width of the bundles built last.
     built: Option<Width>,
 }
@@ -462,7 +465,7 @@ impl ContactBundles {
             Some(Width::One) => self.single.packed.iter().map(Vec::len).sum(),
             _ => self.four.packed.iter().map(Vec::len).sum::<usize>() * 4,
         };
-        coloured >= SHARED_FROM
+        coloured >= self.share_from.unwrap_or(SHARED_FROM)
     }
 
     /// A stage's `work` with the colours spread over `region`'s workers: the overflow first,

@@ -208,6 +208,61 @@ fn one_four_and_eight_lanes_step_bit_identically() {
     );
 }
 
+/// One, two and three workers give the same World bit for bit (`team.rs`): the mixed pile
+/// with a hinged chain (joints to each other and to the world, solved before each colour by
+/// the stepping thread) and a kinematic paddle (a fixed body many bundles of a colour share),
+/// at four and eight lanes, every solve spread over the workers however few its contacts.
+#[test]
+fn one_two_and_three_workers_step_bit_identically() {
+    use crate::physics::joint::{JointDef, JointKind, Revolute};
+    let world = |workers: u32, width: Width| {
+        let mut w = mixed_pile();
+        w.set_workers(workers).unwrap();
+        w.solver.bundles.width = Some(width);
+        w.solver.bundles.share_from = Some(0);
+        let paddle = BodyDef::kinematic(Shape::rect(3.0, 0.2), vec2(0.0, 6.0), vec2(0.0, 0.0))
+            .with_angular_velocity(1.5);
+        w.add_body(&paddle).unwrap();
+        let mut last = None;
+        for i in 0..8 {
+            let at = vec2(-3.0 + 0.5 * i as Real, 9.0);
+            let link = w
+                .add_body(&BodyDef::dynamic(Shape::rect(0.5, 0.1), at))
+                .unwrap();
+            let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), last, link)
+                .with_anchors(at - vec2(0.25, 0.0), vec2(-0.25, 0.0));
+            w.add_joint(&hinge).unwrap();
+            last = Some(link);
+        }
+        w
+    };
+    let widths: &[Width] = if Width::detect() == Width::Eight {
+        &[Width::Four, Width::Eight]
+    } else {
+        &[Width::Four]
+    };
+    for &width in widths {
+        let mut worlds: Vec<World> = [1, 2, 3].map(|n| world(n, width)).into();
+        for step in 0..180 {
+            for w in &mut worlds {
+                w.step(1.0 / 60.0).unwrap();
+            }
+            for (w, n) in worlds.iter().zip(1..).skip(1) {
+                assert!(
+                    worlds[0].state_bits().eq(w.state_bits()),
+                    "{n} workers differ from one after step {step} at {width:?}"
+                );
+            }
+        }
+        for (w, n) in worlds.iter().zip(1..).skip(1) {
+            let team = w.workers.0.as_ref().expect("a team");
+            assert_eq!(team.workers(), n);
+            assert!(team.regions() >= 180, "{n} workers: every step shared its solve");
+        }
+        assert!(worlds[0].joints().count() == 8 && worlds[0].contact_count() > 100);
+    }
+}
+
 /// How far a box `width` m wide and 1 m tall resting on the floor has sunk (m), after 2 s
 /// on `settings`.
 fn rest_compression(settings: Settings, width: Real) -> Real {

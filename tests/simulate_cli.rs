@@ -183,6 +183,48 @@ fn closed_pipe_is_a_normal_end() {
     assert!(!err.contains("panicked"), "{err}");
 }
 
+/// `--workers` shares each step among threads and changes nothing in the output: a pyramid
+/// of 1,275 boxes (3,800 contacts, enough for its solve to be shared) with a few discs
+/// dropped on it prints the same frames, to the last digit, on 1, 2 and 3 workers. A scene's
+/// own `workers = 0` is refused with the field and the range.
+#[test]
+fn workers_share_the_step_and_change_nothing() {
+    let mut text = String::from("[[pyramid]]\nbase = 50\nsize = 1.0\n\n");
+    text += "[[body]]\nshape = { type = \"rect\", width = 80, height = 1 }\nposition = [0, -0.5]\nstatic = true\n";
+    for i in 0..5 {
+        text += &format!(
+            "\n[[body]]\nshape = {{ type = \"circle\", radius = 0.5 }}\nposition = [{}, 60]\ndensity = 5\n",
+            -10 + 5 * i
+        );
+    }
+    let scene = TempScene::new("workers", &text);
+    let run = |workers: &str| {
+        let o = tiltbox(&[
+            "simulate",
+            scene.path(),
+            "--seconds",
+            "1",
+            "--every",
+            "20",
+            "--format",
+            "jsonl",
+            "--workers",
+            workers,
+        ]);
+        assert!(o.status.success(), "stderr: {}", stderr(&o));
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let one = run("1");
+    assert_eq!(one.lines().count(), 4, "frames 0, 20, 40, 60");
+    assert_eq!(run("2"), one);
+    assert_eq!(run("3"), one);
+    let refused = TempScene::new("workers0", "[settings]\nworkers = 0\n");
+    assert_refused(
+        &tiltbox(&["simulate", refused.path()]),
+        &["workers = 0", "1..=64"],
+    );
+}
+
 #[test]
 fn bad_flags_name_the_flag_and_value() {
     // (flag, value given, how the refusal shows the value)
@@ -195,6 +237,9 @@ fn bad_flags_name_the_flag_and_value() {
         ("--seconds", "inf", "inf"),
         ("--format", "xml", "xml"),
         ("--solver", "magic", "magic"),
+        ("--workers", "0", "0"),
+        ("--workers", "65", "65"),
+        ("--workers", "-1", "-1"),
     ] {
         assert_refused(&tiltbox(&["simulate", BRICKS, flag, value]), &[flag, shown]);
     }

@@ -38,6 +38,10 @@ pub struct SimulateArgs {
     /// Override the scene's solver.
     #[arg(long, value_enum)]
     pub solver: Option<SolverArg>,
+    /// Threads that share each step (overrides the scene's `settings.workers`): the output is
+    /// the same for any number, only the time it takes changes.
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "journal")]
+    pub workers: Option<i64>,
     /// Commands at given simulated times (TOML `[[at]]` tables: gravity, tilt, spawn,
     /// remove, velocity; docs/scenes.md), validated and applied as the daemon applies commands.
     #[arg(long, value_name = "FILE", conflicts_with = "journal")]
@@ -101,6 +105,10 @@ fn plan(args: &SimulateArgs) -> anyhow::Result<Plan> {
     if args.every < 1 {
         bail!("--every {}: must be >= 1", args.every);
     }
+    let most = i64::from(tiltbox::physics::settings::MAX_WORKERS);
+    if let Some(n) = args.workers.filter(|n| !(1..=most).contains(n)) {
+        bail!("--workers {n}: must be within 1..={most}");
+    }
     let steps = (args.seconds / args.dt).round();
     if steps < 1.0 {
         bail!(
@@ -147,6 +155,10 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode, Failure> {
     );
     if let Some(solver) = args.solver {
         scene.settings.solver = solver.into();
+    }
+    if let Some(workers) = args.workers {
+        // (Within 1..=MAX_WORKERS: checked by `plan`.)
+        scene.settings.workers = workers as u32;
     }
     if let Some(timeline) = &args.timeline {
         #[cfg(feature = "net")]

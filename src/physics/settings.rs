@@ -46,6 +46,9 @@ impl Mixing {
     }
 }
 
+/// The most workers a World may have ([`Settings::workers`]).
+pub const MAX_WORKERS: u32 = 64;
+
 /// The engine's tunables. `Settings::default()` is the soft-step solver with Box2D v3's
 /// defaults; `Settings::sequential()` is the appendix / box2d-lite configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -249,7 +252,7 @@ impl Settings {
         };
         count("iterations", self.iterations, 1000)?;
         count("substeps", self.substeps, 64)?;
-        count("workers", self.workers, crate::physics::team::MAX_WORKERS)?;
+        count("workers", self.workers, MAX_WORKERS)?;
         if self.relax_iterations > 64 {
             return Err(PhysicsError::OutOfRange {
                 field: "relax_iterations",

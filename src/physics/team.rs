@@ -21,8 +21,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering}
 use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 
-/// The most workers a World may have (`Settings::workers`).
-pub const MAX_WORKERS: u32 = 64;
+pub use crate::physics::settings::MAX_WORKERS;
 
 /// How many times a waiting worker spins before it yields its core.
 const SPINS: u32 = 2_000;
@@ -122,7 +121,11 @@ impl Team {
     /// Regions run so far.
     #[cfg(test)]
     pub fn regions(&self) -> u64 {
-        *self.shared.regions.lock().unwrap_or_else(|e| e.into_inner())
+        *self
+            .shared
+            .regions
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
     }
 
     /// Run `body` on this thread with the workers awake to take the blocks it hands out;

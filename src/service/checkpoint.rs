@@ -36,7 +36,8 @@ use std::thread::JoinHandle;
 /// touch (solver history version 2).
 /// 12: the solver history carries the joints' colours in the constraint graph (version 3).
 /// 13: bodies carry their own shape's flags (events, sensor); parts carry theirs.
-pub const FORMAT_VERSION: u32 = 13;
+/// 14: `Settings` has `workers` (threads that share the step).
+pub const FORMAT_VERSION: u32 = 14;
 const MAGIC: &[u8; 8] = b"TILTCKPT";
 const HEADER: usize = 8 + 4 + 8 + 8;
 

@@ -103,6 +103,9 @@ impl<L> Clone for SideLanes<'_, L> {
 }
 impl<L> Copy for SideLanes<'_, L> {}
 
+/// What the store stage does with a contact and its points' impulses, from any worker.
+pub(crate) type StoreFn<'a> = dyn Fn(&mut Contact, &[PointImpulses; 2]) + Sync + 'a;
+
 /// Runs one block: [`run_block`] at a width, compiled for it.
 type BlockRun<L> = fn(&mut [Bundle<L>], BodyRows, Work, SideLanes<L>);
 
@@ -329,6 +332,26 @@ impl<L: Wide> Packed<L> {
         }
     }
 
+    /// [`Packed::store`] colour by colour, each colour's bundles in blocks spread over
+    /// `region`'s workers.
+    fn store_shared(&self, region: &Region, contacts: SharedSlice<Contact>, then: &StoreFn) {
+        for list in &self.packed {
+            let len = list.len();
+            region.for_blocks(len.div_ceil(BUNDLES_PER_BLOCK), &|k| {
+                for bundle in &list[block(k, BUNDLES_PER_BLOCK, len)] {
+                    let ends = bundle.impulses(self.bounces.get(bundle.bounce_index as usize));
+                    for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
+                        // SAFETY: a contact is in one lane of one bundle, reached by the
+                        // worker that took that bundle's block alone.
+                        if let Some(c) = unsafe { contacts.get(ci as usize) } {
+                            then(c, end);
+                        }
+                    }
+                }
+            });
+        }
+    }
+
     /// Hand each contact its points' impulses. Bundles hold contacts from all over the array:
     /// while one bundle's are stored, the next bundle's are fetched (storing waited on those
     /// loads for three quarters of its time).
@@ -522,6 +545,18 @@ impl ContactBundles {
             Some(Width::Eight) => self.eight.store(contacts, &mut then),
             Some(Width::One) => self.single.store(contacts, &mut then),
             _ => self.four.store(contacts, &mut then),
+        }
+    }
+
+    /// [`ContactBundles::store`] with the colours' bundles spread over `region`'s workers.
+    pub fn store_shared(&self, region: &Region, contacts: &mut [Contact], then: &StoreFn) {
+        self.overflow.store(contacts, &mut |c, ends| then(c, ends));
+        // SAFETY: each contact is in one bundle's lane (`Packed::store_shared`).
+        let contacts = unsafe { SharedSlice::new(contacts) };
+        match self.built {
+            Some(Width::Eight) => self.eight.store_shared(region, contacts, then),
+            Some(Width::One) => self.single.store_shared(region, contacts, then),
+            _ => self.four.store_shared(region, contacts, then),
         }
     }
 

@@ -160,15 +160,18 @@ pub(crate) fn solve(ctx: &mut StepContext, effort: &Effort) {
     prepare_joints(ctx, &plan);
     match ctx.team.take() {
         Some(team) if ctx.bundles.worth_sharing() => {
-            team.region(|region| substeps(ctx, &plan, Some(region)));
+            team.region(|region| {
+                substeps(ctx, &plan, Some(region));
+                store_impulses(ctx, &plan, Some(region));
+            });
             ctx.team = Some(team);
         }
         team => {
             ctx.team = team;
             substeps(ctx, &plan, None);
+            store_impulses(ctx, &plan, None);
         }
     }
-    store_impulses(ctx, &plan);
 }
 
 /// The substeps, recover and restitution: on this thread alone, or with each stage's blocks
@@ -297,13 +300,16 @@ fn apply_restitution(ctx: &mut StepContext, region: Option<&Region>) {
 }
 
 /// Store: each joint's and contact's impulses back into it, per step, and its load.
-fn store_impulses(ctx: &mut StepContext, plan: &Plan) {
+fn store_impulses(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     if !ctx.joints.is_empty() {
         joint::store(ctx.joints, ctx.joint_selected, ctx.bodies, plan.joints);
     }
     let (substeps, inv_dt) = (plan.substeps as Real, 1.0 / ctx.dt);
-    ctx.bundles
-        .store(ctx.contacts, |c, ends| finish(c, ends, substeps, inv_dt));
+    let then = |c: &mut Contact, ends: &[PointImpulses; 2]| finish(c, ends, substeps, inv_dt);
+    match region {
+        Some(r) => ctx.bundles.store_shared(r, ctx.contacts, &then),
+        None => ctx.bundles.store(ctx.contacts, then),
+    }
 }
 
 /// Contact `c`'s constraint for this step between bodies `a` and `b`. The impulses it carries

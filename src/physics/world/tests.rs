@@ -257,7 +257,10 @@ fn one_two_and_three_workers_step_bit_identically() {
         for (w, n) in worlds.iter().zip(1..).skip(1) {
             let team = w.workers.0.as_ref().expect("a team");
             assert_eq!(team.workers(), n);
-            assert!(team.regions() >= 180, "{n} workers: every step shared its solve");
+            assert!(
+                team.regions() >= 180,
+                "{n} workers: every step shared its solve"
+            );
         }
         assert!(worlds[0].joints().count() == 8 && worlds[0].contact_count() > 100);
     }

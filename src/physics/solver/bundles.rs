@@ -73,8 +73,8 @@ fn before_colour(joints: &mut Joints, bodies: &mut [SolverBody], slot: u16) {
 /// lanes, a few microseconds of a solve pass, against some 0.1 microsecond to take them.
 const BUNDLES_PER_BLOCK: usize = 4;
 
-/// Contacts from which a solve spreads its colours over the workers: below, a pass over them
-/// takes a few microseconds, which handing out blocks would eat.
+/// Contacts and joints from which a solve spreads its colours over the workers: below, a pass
+/// over them takes a few microseconds, which handing out blocks would eat.
 const SHARED_FROM: usize = 1024;
 
 /// A stage's work on each bundle, as the parallel step hands bundles out: in plain numbers,
@@ -481,14 +481,10 @@ impl ContactBundles {
         }
     }
 
-    /// Whether the last build is worth spreading over workers ([`SHARED_FROM`] contacts).
-    pub fn worth_sharing(&self) -> bool {
-        let coloured = match self.built {
-            Some(Width::Eight) => self.eight.packed.iter().map(Vec::len).sum::<usize>() * 8,
-            Some(Width::One) => self.single.packed.iter().map(Vec::len).sum(),
-            _ => self.four.packed.iter().map(Vec::len).sum::<usize>() * 4,
-        };
-        coloured >= self.share_from.unwrap_or(SHARED_FROM)
+    /// Whether a solve of `constraints` contacts and joints is worth spreading over workers
+    /// ([`SHARED_FROM`]).
+    pub fn worth_sharing(&self, constraints: usize) -> bool {
+        constraints >= self.share_from.unwrap_or(SHARED_FROM)
     }
 
     /// A stage's `work` with the colours spread over `region`'s workers: the overflow first,

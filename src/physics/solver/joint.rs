@@ -18,9 +18,10 @@
 
 use super::graph::OVERFLOW;
 use super::softness::Softness;
-use super::{Selected, SolverBody};
+use super::{Selected, SharedRows, SolverBody};
 use crate::physics::joint::{JointImpulses, JointKind, Limit, Motor, Spring};
 use crate::physics::math::{cross, Real, Vec2};
+use crate::physics::team::{block, Region, SharedSlice};
 
 /// What a row measures.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -452,11 +453,17 @@ fn warm_start_span(
 fn warm_start_one(set: &JointSet, k: usize, bodies: &mut [SolverBody]) {
     let j = &set.constraints[k];
     let (a, b) = two_mut(bodies, j.a, j.b);
+    warm_start_joint(j, &set.rows[j.row_range()], (a, b));
+}
+
+/// Warm start joint `j`, with its `rows`, on its bodies `a` and `b`.
+#[inline(always)]
+fn warm_start_joint(j: &JointConstraint, rows: &[Row], (a, b): (&mut SolverBody, &mut SolverBody)) {
     let pose = j.pose(a, b);
     if let Some(p) = &j.point {
         j.apply_point(a, b, &pose, p.impulse);
     }
-    for row in &set.rows[j.row_range()] {
+    for row in rows {
         let jac = jacobian(row.measure, &pose);
         j.apply_row(a, b, &jac, row.sign() * row.impulse);
     }
@@ -501,10 +508,22 @@ fn solve_span(
 fn solve_one(set: &mut JointSet, k: usize, bodies: &mut [SolverBody], pass: (bool, Real)) {
     let j = &mut set.constraints[k];
     let (a, b) = two_mut(bodies, j.a, j.b);
+    let rows = &mut set.rows[j.row_range()];
+    solve_joint(j, rows, (a, b), pass);
+}
+
+/// Solve joint `j`'s `rows`, then its point block, on its bodies `a` and `b`.
+#[inline(always)]
+fn solve_joint(
+    j: &mut JointConstraint,
+    rows: &mut [Row],
+    (a, b): (&mut SolverBody, &mut SolverBody),
+    pass: (bool, Real),
+) {
     // An angle row's effective mass is the same at every pose: one division for all of them.
     let turn = a.inv_inertia + b.inv_inertia;
     let axial = if turn > 0.0 { 1.0 / turn } else { 0.0 };
-    for row in &mut set.rows[j.row_range()] {
+    for row in rows {
         if row.measure == Measure::Angle {
             solve_angle_row(row, axial, j.frame.angle, (a, b), pass);
         } else {
@@ -564,18 +583,105 @@ impl<'a> JointPass<'a> {
         }
     }
 
-    /// Run the joints not yet done whose solve rank is at most `rank`.
-    pub fn run_until(&mut self, bodies: &mut [SolverBody], rank: u8) {
+    /// The selected joints not yet done whose solve rank is at most `rank`, now done: their
+    /// positions in the selection.
+    fn take_until(&mut self, rank: u8) -> std::ops::Range<usize> {
         let n = self.selected.count(self.set.constraints.len());
         let start = self.done;
         let mut end = start;
         while end < n && self.set.ranks[self.selected.at(end)] <= rank {
             end += 1;
         }
+        self.done = end;
+        start..end
+    }
+
+    /// [`JointPass::run_until`], each colour's joints spread over `region`'s workers in
+    /// blocks, one colour after another. A colour's joints share no dynamic body; a fixed body
+    /// (the world, a kinematic body) is read from its row and written to a worker's own copy.
+    pub fn run_until_shared(&mut self, region: &Region, bodies: &mut [SolverBody], rank: u8) {
+        let span = self.take_until(rank);
+        let mut start = span.start;
+        while start < span.end {
+            // The joints are in rank order: this colour's are a run.
+            let colour = self.set.ranks[self.selected.at(start)];
+            let mut end = start + 1;
+            while end < span.end && self.set.ranks[self.selected.at(end)] == colour {
+                end += 1;
+            }
+            if end - start < JOINTS_PER_BLOCK {
+                self.run_span(start..end, bodies);
+            } else {
+                self.run_colour_shared(region, start..end, bodies);
+            }
+            start = end;
+        }
+    }
+
+    /// The joints at positions `span` of the selection, all of one colour, in blocks spread
+    /// over `region`'s workers.
+    fn run_colour_shared(
+        &mut self,
+        region: &Region,
+        span: std::ops::Range<usize>,
+        bodies: &mut [SolverBody],
+    ) {
+        let (selected, work, n) = (self.selected, self.work, span.len());
+        // SAFETY: the joints of one colour share no dynamic body; each block reaches its own
+        // joints and their rows; fixed bodies' rows are only read (below).
+        let (bodies, joints, rows) = unsafe {
+            (
+                SharedRows::new(bodies),
+                SharedSlice::new(&mut self.set.constraints),
+                SharedSlice::new(&mut self.set.rows),
+            )
+        };
+        region.for_blocks(n.div_ceil(JOINTS_PER_BLOCK), &|k| {
+            for m in block(k, JOINTS_PER_BLOCK, n) {
+                // SAFETY: as above.
+                let j = unsafe { joints.get(selected.at(span.start + m)) }.expect("a joint");
+                let jr = unsafe { rows.range(j.row_range()) };
+                // A fixed body's row is read into a copy of this worker's own (many joints
+                // of one colour may share it, and nothing they give it changes it).
+                let (mut copy_a, mut copy_b);
+                // SAFETY: as above.
+                let (a, b) = unsafe {
+                    let a = if bodies.inv_mass(j.a) == 0.0 {
+                        copy_a = bodies.read(j.a);
+                        &mut copy_a
+                    } else {
+                        bodies.body(j.a)
+                    };
+                    let b = if bodies.inv_mass(j.b) == 0.0 {
+                        copy_b = bodies.read(j.b);
+                        &mut copy_b
+                    } else {
+                        bodies.body(j.b)
+                    };
+                    (a, b)
+                };
+                match work {
+                    JointWork::WarmStart => warm_start_joint(j, jr, (a, b)),
+                    JointWork::Solve { biased, inv_h } => {
+                        solve_joint(j, jr, (a, b), (biased, inv_h))
+                    }
+                }
+            }
+        });
+    }
+
+    /// Run the joints not yet done whose solve rank is at most `rank`.
+    pub fn run_until(&mut self, bodies: &mut [SolverBody], rank: u8) {
+        let span = self.take_until(rank);
+        self.run_span(span, bodies);
+    }
+
+    /// Run the joints at positions `span` of the selection.
+    fn run_span(&mut self, span: std::ops::Range<usize>, bodies: &mut [SolverBody]) {
+        let (start, end) = (span.start, span.end);
         if end == start {
             return;
         }
-        self.done = end;
         match self.work {
             JointWork::WarmStart => warm_start_span(self.set, self.selected, start..end, bodies),
             JointWork::Solve { biased, inv_h } => {
@@ -584,6 +690,10 @@ impl<'a> JointPass<'a> {
         }
     }
 }
+
+/// How many joints a worker takes at a time in the parallel step (and the fewest a span
+/// must have to be spread).
+const JOINTS_PER_BLOCK: usize = 32;
 
 /// Store: the impulses back to per step, and each joint's force and torque on B (N, N m)
 /// from its impulses over the substep.

@@ -178,6 +178,35 @@ impl<'a> SharedRows<'a> {
         self.0
     }
 
+    /// Body `i`'s inverse mass (1/kg). Panics past the end.
+    ///
+    /// # Safety
+    /// No other worker may write body `i` meanwhile.
+    #[inline(always)]
+    pub unsafe fn inv_mass(&self, i: u32) -> Real {
+        assert!((i as usize) < self.0.len, "body row {i} of {}", self.0.len);
+        (*self.0.ptr.add(i as usize)).inv_mass
+    }
+
+    /// A copy of body `i`. Panics past the end.
+    ///
+    /// # Safety
+    /// No other worker may write body `i` meanwhile.
+    pub unsafe fn read(&self, i: u32) -> SolverBody {
+        assert!((i as usize) < self.0.len, "body row {i} of {}", self.0.len);
+        std::ptr::read(self.0.ptr.add(i as usize))
+    }
+
+    /// Body `i`, to read and write. Panics past the end.
+    ///
+    /// # Safety
+    /// No other worker may reach body `i` while the reference lives, unless all only read.
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn body(&self, i: u32) -> &'a mut SolverBody {
+        assert!((i as usize) < self.0.len, "body row {i} of {}", self.0.len);
+        &mut *self.0.ptr.add(i as usize)
+    }
+
     /// The rows as a slice again, for work that one worker does while every other waits.
     ///
     /// # Safety

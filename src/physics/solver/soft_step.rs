@@ -37,7 +37,7 @@ use super::{
 use crate::physics::contact::Contact;
 use crate::physics::math::{Real, PI};
 use crate::physics::settings::Settings;
-use crate::physics::team::{Region, Team};
+use crate::physics::team::{block, Region, SharedSlice, Team};
 
 /// How much work one solve does: the World's settings scaled by the stiffness tier of the
 /// islands it solves (`Settings::adaptive_stiffness`).
@@ -71,6 +71,8 @@ pub(crate) struct StepContext<'a> {
     pub selected: Selected<'a>,
     /// Where the selected contacts are packed for the lanes.
     pub bundles: &'a mut ContactBundles,
+    /// The selected contacts' constraints, in order, when the workers prepare them.
+    pub prepared: &'a mut Vec<ContactConstraint>,
     /// The points overlapping deeper than the spring reaches (`recover.rs`).
     pub recovery: &'a mut Recovery,
     /// This step's joints; the solve works on the `joint_selected` ones.
@@ -156,26 +158,30 @@ impl Plan {
 pub(crate) fn solve(ctx: &mut StepContext, effort: &Effort) {
     let plan = Plan::new(ctx.settings, effort, ctx.dt);
     restart_motion(ctx.bodies, ctx.kinematic);
-    prepare_contacts(ctx, &plan);
-    prepare_joints(ctx, &plan);
+    let selected = ctx.selected.count(ctx.contacts.len())
+        + ctx.joint_selected.count(ctx.joints.constraints.len());
     match ctx.team.take() {
-        Some(team) if ctx.bundles.worth_sharing() => {
-            team.region(|region| {
-                substeps(ctx, &plan, Some(region));
-                store_impulses(ctx, &plan, Some(region));
-            });
+        Some(team) if ctx.bundles.worth_sharing(selected) => {
+            team.region(|region| stages(ctx, &plan, Some(region)));
             ctx.team = Some(team);
         }
         team => {
             ctx.team = team;
-            substeps(ctx, &plan, None);
-            store_impulses(ctx, &plan, None);
+            stages(ctx, &plan, None);
         }
     }
 }
 
-/// The substeps, recover and restitution: on this thread alone, or with each stage's blocks
-/// spread over `region`'s workers.
+/// Every stage but the restart: on this thread alone, or with each stage's blocks spread
+/// over `region`'s workers.
+fn stages(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
+    prepare_contacts(ctx, plan, region);
+    prepare_joints(ctx, plan);
+    substeps(ctx, plan, region);
+    store_impulses(ctx, plan, region);
+}
+
+/// The substeps, recover and restitution.
 fn substeps(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     for _ in 0..plan.substeps {
         integrate_velocities(ctx.bodies, ctx.moving, (plan.h, plan.limits), region);
@@ -192,22 +198,57 @@ fn substeps(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
 /// Prepare: each selected contact's constraint for this step (effective masses, adjusted
 /// separations, approach speeds, spring, block), packed into its bundle's lane.
 /// The contacts overlapping deeper than their springs reach are noted for the recover stage.
-fn prepare_contacts(ctx: &mut StepContext, plan: &Plan) {
+fn prepare_contacts(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     let stiffness = &plan.stiffness;
+    if let Some(region) = region {
+        prepare_shared(ctx, stiffness, region);
+    }
     let recovery = &mut *ctx.recovery;
     recovery.begin_solve();
     let limits = (1.0 / ctx.dt, ctx.settings.max_push_out_speed);
+    let mut prepared = region.map(|_| ctx.prepared.iter());
     ctx.bundles.build(PackInput {
         bodies: ctx.bodies,
         contacts: ctx.contacts,
         selected: ctx.selected,
         prepare: |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
-            let k = prepare_contact(a, b, c, stiffness);
+            let k = match prepared.as_mut() {
+                Some(done) => *done.next().expect("one constraint per selected contact"),
+                None => prepare_contact(a, b, c, stiffness),
+            };
             if k.reach > 0.0 {
                 recovery.note(c, (a, b), k.reach, limits);
             }
             k
         },
+    });
+}
+
+/// How many contacts a worker prepares at a time.
+const PREPARED_PER_BLOCK: usize = 64;
+
+/// Prepare the selected contacts' constraints, in order, into `ctx.prepared`, spread over
+/// `region`'s workers (packing them stays with this thread: bundles fill in key order).
+fn prepare_shared(ctx: &mut StepContext, stiffness: &Stiffness, region: &Region) {
+    let (selected, n) = (ctx.selected, ctx.selected.count(ctx.contacts.len()));
+    ctx.prepared.clear();
+    ctx.prepared.resize(n, ContactConstraint::default());
+    // SAFETY: the selected contacts are distinct (ascending indices), and each block
+    // reaches its own run of them and of the constraints.
+    let (out, contacts) = unsafe {
+        (
+            SharedSlice::new(ctx.prepared),
+            SharedSlice::new(ctx.contacts),
+        )
+    };
+    let bodies = &*ctx.bodies;
+    region.for_blocks(n.div_ceil(PREPARED_PER_BLOCK), &|k| {
+        for m in block(k, PREPARED_PER_BLOCK, n) {
+            // SAFETY: as above.
+            let (c, k) = unsafe { (contacts.get(selected.at(m)), out.get(m)) };
+            let (c, k) = (c.expect("a selected contact"), k.expect("its constraint"));
+            *k = prepare_contact(&bodies[c.a as usize], &bodies[c.b as usize], c, stiffness);
+        }
     });
 }
 
@@ -231,16 +272,21 @@ fn warm_start(ctx: &mut StepContext, region: Option<&Region>) {
         return;
     }
     let mut pass = JointPass::new(ctx.joints, ctx.joint_selected, JointWork::WarmStart);
-    let mut run = |bodies: &mut [SolverBody], rank: u8| pass.run_until(bodies, rank);
     match region {
-        Some(r) => ctx
-            .bundles
-            .run_shared(r, ctx.bodies, Work::WarmStart, Some(&mut run)),
-        None => ctx
-            .bundles
-            .warm_start(ctx.bodies, warm_starting, Some(&mut run)),
+        Some(r) => {
+            let mut run =
+                |bodies: &mut [SolverBody], rank: u8| pass.run_until_shared(r, bodies, rank);
+            ctx.bundles
+                .run_shared(r, ctx.bodies, Work::WarmStart, Some(&mut run));
+            pass.run_until_shared(r, ctx.bodies, u8::MAX);
+        }
+        None => {
+            let mut run = |bodies: &mut [SolverBody], rank: u8| pass.run_until(bodies, rank);
+            ctx.bundles
+                .warm_start(ctx.bodies, warm_starting, Some(&mut run));
+            pass.run_until(ctx.bodies, u8::MAX);
+        }
     }
-    pass.run_until(ctx.bodies, u8::MAX);
 }
 
 /// One solve pass of `kind` over the joints (but for a normal relax pass) and the contacts,
@@ -262,14 +308,20 @@ fn solve_pass(ctx: &mut StepContext, plan: &Plan, kind: PassKind, region: Option
         inv_h: plan.inv_h,
     };
     let mut pass = JointPass::new(ctx.joints, ctx.joint_selected, work);
-    let mut run = |bodies: &mut [SolverBody], rank: u8| pass.run_until(bodies, rank);
     match region {
-        Some(r) => ctx
-            .bundles
-            .run_shared(r, ctx.bodies, Work::Solve(args), Some(&mut run)),
-        None => ctx.bundles.solve(ctx.bodies, args, Some(&mut run)),
+        Some(r) => {
+            let mut run =
+                |bodies: &mut [SolverBody], rank: u8| pass.run_until_shared(r, bodies, rank);
+            let work = Work::Solve(args);
+            ctx.bundles.run_shared(r, ctx.bodies, work, Some(&mut run));
+            pass.run_until_shared(r, ctx.bodies, u8::MAX);
+        }
+        None => {
+            let mut run = |bodies: &mut [SolverBody], rank: u8| pass.run_until(bodies, rank);
+            ctx.bundles.solve(ctx.bodies, args, Some(&mut run));
+            pass.run_until(ctx.bodies, u8::MAX);
+        }
     }
-    pass.run_until(ctx.bodies, u8::MAX);
 }
 
 /// Recover: the overlap beyond the springs' reach pushed out in position (`recover.rs`).

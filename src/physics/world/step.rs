@@ -210,6 +210,7 @@ impl World {
             contacts: &mut self.contacts.awake,
             selected,
             bundles: &mut self.solver.bundles,
+            prepared: &mut self.solver.constraints,
             recovery: &mut self.solver.recovery,
             joints: &mut self.joints.constraints,
             joint_selected: joints,

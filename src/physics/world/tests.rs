@@ -209,9 +209,9 @@ fn one_four_and_eight_lanes_step_bit_identically() {
 }
 
 /// One, two and three workers give the same World bit for bit (`team.rs`): the mixed pile
-/// with a hinged chain (joints to each other and to the world, solved before each colour by
-/// the stepping thread) and a kinematic paddle (a fixed body many bundles of a colour share),
-/// at four and eight lanes, every solve spread over the workers however few its contacts.
+/// with a hinged chain (joints to each other and to the world, each colour's spread over the
+/// workers) and a kinematic paddle (a fixed body many bundles of a colour share), at four and
+/// eight lanes, every solve spread over the workers however few its contacts.
 #[test]
 fn one_two_and_three_workers_step_bit_identically() {
     use crate::physics::joint::{JointDef, JointKind, Revolute};
@@ -223,14 +223,15 @@ fn one_two_and_three_workers_step_bit_identically() {
         let paddle = BodyDef::kinematic(Shape::rect(3.0, 0.2), vec2(0.0, 6.0), vec2(0.0, 0.0))
             .with_angular_velocity(1.5);
         w.add_body(&paddle).unwrap();
+        // 80 links: each of the chain's two colours holds 40 joints, enough to be spread.
         let mut last = None;
-        for i in 0..8 {
-            let at = vec2(-3.0 + 0.5 * i as Real, 9.0);
+        for i in 0..80 {
+            let at = vec2(-10.0 + 0.25 * i as Real, 9.0);
             let link = w
-                .add_body(&BodyDef::dynamic(Shape::rect(0.5, 0.1), at))
+                .add_body(&BodyDef::dynamic(Shape::rect(0.25, 0.05), at))
                 .unwrap();
             let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), last, link)
-                .with_anchors(at - vec2(0.25, 0.0), vec2(-0.25, 0.0));
+                .with_anchors(at - vec2(0.125, 0.0), vec2(-0.125, 0.0));
             w.add_joint(&hinge).unwrap();
             last = Some(link);
         }
@@ -262,7 +263,7 @@ fn one_two_and_three_workers_step_bit_identically() {
                 "{n} workers: every step shared its solve"
             );
         }
-        assert!(worlds[0].joints().count() == 8 && worlds[0].contact_count() > 100);
+        assert!(worlds[0].joints().count() == 80 && worlds[0].contact_count() > 100);
     }
 }
 

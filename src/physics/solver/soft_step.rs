@@ -37,7 +37,7 @@ use super::{
 use crate::physics::contact::Contact;
 use crate::physics::math::{Real, PI};
 use crate::physics::settings::Settings;
-use crate::physics::team::{block, Region, SharedSlice, Team};
+use crate::physics::team::{block, Region, SharedSlice};
 
 /// How much work one solve does: the World's settings scaled by the stiffness tier of the
 /// islands it solves (`Settings::adaptive_stiffness`).
@@ -81,8 +81,9 @@ pub(crate) struct StepContext<'a> {
     pub settings: &'a Settings,
     /// The step (s).
     pub dt: Real,
-    /// The World's workers, if it has more than one (`Settings::workers`).
-    pub team: Option<&'a mut Team>,
+    /// The World's workers, awake for this step, if it has more than one
+    /// (`Settings::workers`).
+    pub region: Option<&'a Region<'a>>,
 }
 
 /// What a solve works out once from its settings and effort.
@@ -160,16 +161,8 @@ pub(crate) fn solve(ctx: &mut StepContext, effort: &Effort) {
     restart_motion(ctx.bodies, ctx.kinematic);
     let selected = ctx.selected.count(ctx.contacts.len())
         + ctx.joint_selected.count(ctx.joints.constraints.len());
-    match ctx.team.take() {
-        Some(team) if ctx.bundles.worth_sharing(selected) => {
-            team.region(|region| stages(ctx, &plan, Some(region)));
-            ctx.team = Some(team);
-        }
-        team => {
-            ctx.team = team;
-            stages(ctx, &plan, None);
-        }
-    }
+    let region = ctx.region.filter(|_| ctx.bundles.worth_sharing(selected));
+    stages(ctx, &plan, region);
 }
 
 /// Every stage but the restart: on this thread alone, or with each stage's blocks spread

@@ -17,6 +17,18 @@ use crate::physics::math::Transform;
 use crate::physics::part_tree::PartTree;
 use crate::physics::shape::{Aabb, Shape};
 use crate::physics::solver::graph::UNCOLOURED;
+use crate::physics::team::{block, Region, SharedSlice};
+
+/// How many bodies' boxes a worker updates at a time.
+const PROXIES_PER_BLOCK: usize = 512;
+
+/// The proxy of an empty slot.
+const NO_PROXY: Proxy = Proxy {
+    aabb: Aabb {
+        min: Vec2::ZERO,
+        max: Vec2::ZERO,
+    },
+};
 
 impl World {
     /// Find this step's contacts, then wake what they must wake.
@@ -24,8 +36,8 @@ impl World {
     /// Points are kept up to `Settings::speculative_distance` apart, plus however far the pair
     /// can close in `dt` (so fast bodies meet the surface instead of tunnelling). A sleeping
     /// body that an awake one is about to touch wakes with its island.
-    pub(super) fn find_contacts(&mut self, dt: Real) {
-        self.update_proxies(dt);
+    pub(super) fn find_contacts(&mut self, dt: Real, region: Option<&Region>) {
+        self.update_proxies(dt, region);
         let bp = &mut self.broad_phase;
         bp.sweep
             .find_pairs(&bp.proxies, &bp.pieces, &mut bp.pair_keys);
@@ -34,13 +46,11 @@ impl World {
     }
 
     /// Each body's box grown by half the speculative distance plus how far it can travel
-    /// this step.
-    fn update_proxies(&mut self, dt: Real) {
+    /// this step (spread over `region`'s workers if given).
+    fn update_proxies(&mut self, dt: Real, region: Option<&Region>) {
         let g = self.gravity;
         let margin = 0.5 * self.settings.speculative_distance;
-        let proxies = &mut self.broad_phase.proxies;
-        proxies.clear();
-        proxies.extend(self.bodies.slots.iter().map(|slot| match &slot.body {
+        let proxy = |slot: &Slot| match &slot.body {
             Some(b) => {
                 let reach = if b.is_active() || b.kinematic {
                     travel(b, g, dt)
@@ -51,13 +61,29 @@ impl World {
                     aabb: b.aabb().inflated(margin + reach),
                 }
             }
-            None => Proxy {
-                aabb: crate::physics::shape::Aabb {
-                    min: Vec2::ZERO,
-                    max: Vec2::ZERO,
-                },
-            },
-        }));
+            None => NO_PROXY,
+        };
+        let (slots, proxies) = (&self.bodies.slots, &mut self.broad_phase.proxies);
+        match region {
+            Some(region) => {
+                let n = slots.len();
+                proxies.resize(n, NO_PROXY);
+                // SAFETY: each block writes its own run of the proxies.
+                let out = unsafe { SharedSlice::new(proxies) };
+                region.for_blocks(n.div_ceil(PROXIES_PER_BLOCK), &|k| {
+                    let run = block(k, PROXIES_PER_BLOCK, n);
+                    // SAFETY: as above.
+                    let out = unsafe { out.range(run.clone()) };
+                    for (p, slot) in out.iter_mut().zip(&slots[run]) {
+                        *p = proxy(slot);
+                    }
+                });
+            }
+            None => {
+                proxies.clear();
+                proxies.extend(slots.iter().map(proxy));
+            }
+        }
         self.update_pieces(margin);
     }
 

@@ -6,6 +6,11 @@ use super::tiers::Tier;
 use super::*;
 use crate::physics::solver::joint::{self, JointConstraint, JointStep};
 use crate::physics::solver::soft_step::{self, StepContext};
+use crate::physics::team::Region;
+
+/// Awake bodies from which a World with workers wakes them for a step: below, the step takes
+/// some tens of microseconds, about what waking them costs.
+const SHARED_STEP_FROM: usize = 256;
 
 /// The sequential solver's joint bias factor (box2d-lite's `k_biasFactor`): the fraction of a
 /// joint's position error its velocity removes per step.
@@ -25,6 +30,27 @@ impl World {
     /// islands fall asleep. Forces and torques are cleared after the step.
     pub fn step(&mut self, dt: Real) -> Result<(), PhysicsError> {
         positive("dt", dt)?;
+        // The World's workers, if it has any and enough is awake to share: taken out while
+        // they are in use (the step borrows the rest of the World).
+        let mut workers = std::mem::take(&mut self.workers);
+        // (Tests that lower the solve's threshold lower this one with it.)
+        let from = self
+            .solver
+            .bundles
+            .share_from
+            .map_or(SHARED_STEP_FROM, |n| n.min(SHARED_STEP_FROM));
+        match workers.0.as_mut() {
+            Some(team) if self.awake_count() >= from => {
+                team.region(|region| self.step_with(dt, Some(region)))
+            }
+            _ => self.step_with(dt, None),
+        }
+        self.workers = workers;
+        Ok(())
+    }
+
+    /// [`World::step`], with its stages' blocks spread over `region`'s workers if given.
+    fn step_with(&mut self, dt: Real, region: Option<&Region>) {
         self.events.begin_step();
         if self.islands.unsettled {
             self.settle_created_asleep();
@@ -33,10 +59,10 @@ impl World {
         if !self.broad_phase.sweep.active_is_empty() {
             // (Otherwise everything is static or asleep, and anything pushed would have been
             // woken: nothing moves, nothing to find or solve.)
-            self.find_contacts(dt);
+            self.find_contacts(dt, region);
             // Bodies created asleep that just woke have no contacts among them yet.
             while std::mem::take(&mut self.islands.refind) {
-                self.find_contacts(dt);
+                self.find_contacts(dt, region);
             }
             if self.bodies.flagged > 0 {
                 self.find_hit_candidates();
@@ -49,7 +75,7 @@ impl World {
             self.solver.recovery.clear();
             match self.settings.solver {
                 SolverKind::Sequential => self.solve_sequential(dt),
-                SolverKind::SoftStep => self.solve_soft_step(dt),
+                SolverKind::SoftStep => self.solve_soft_step(dt, region),
             }
             self.finalize_bodies();
             if !self.events.hit_candidates.is_empty() {
@@ -73,7 +99,6 @@ impl World {
         if self.bodies.asking.sensors > 0 || !self.events.overlapping.is_empty() {
             self.find_sensor_events();
         }
-        Ok(())
     }
 
     /// The appendix's pipeline once per step: velocities, sequential impulses, positions,
@@ -120,7 +145,7 @@ impl World {
 
     /// The soft step. With adaptive stiffness, islands whose load calls for it are solved
     /// apart with their tier's work (`tiers.rs`); the rest, usually everything, in one solve.
-    fn solve_soft_step(&mut self, dt: Real) {
+    fn solve_soft_step(&mut self, dt: Real, region: Option<&Region>) {
         let top = if self.settings.adaptive_stiffness {
             self.assign_tiers()
         } else {
@@ -128,7 +153,7 @@ impl World {
         };
         if top == Tier::Base {
             let all = Selected::All;
-            self.solve_tier(Tier::Base, (Moving::All, all, all), dt);
+            self.solve_tier(Tier::Base, (Moving::All, all, all), (dt, region));
             return;
         }
         let ranges = self.group_by_tier();
@@ -168,7 +193,8 @@ impl World {
                 None => Selected::Only(&[]),
             };
             self.tier_joints(tier, &mut joints);
-            self.solve_tier(tier, (moving, selected, Selected::Only(&joints)), dt);
+            let parts = (moving, selected, Selected::Only(&joints));
+            self.solve_tier(tier, parts, (dt, region));
         }
         (self.tiers.tier_bodies, self.tiers.tier_contacts) = (bodies, contacts);
         self.tiers.tier_joints = joints;
@@ -201,7 +227,7 @@ impl World {
         &mut self,
         tier: Tier,
         (moving, selected, joints): (Moving, Selected, Selected),
-        dt: Real,
+        (dt, region): (Real, Option<&Region>),
     ) {
         let mut ctx = StepContext {
             bodies: &mut self.solver.bodies,
@@ -216,7 +242,7 @@ impl World {
             joint_selected: joints,
             settings: &self.settings,
             dt,
-            team: self.workers.0.as_mut(),
+            region,
         };
         soft_step::solve(&mut ctx, &tier.effort(&self.settings));
     }

@@ -367,6 +367,20 @@ impl<'a, T> SharedSlice<'a, T> {
         }
     }
 
+    /// How many items.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Where item `i` is, to read or write one field of it. Panics past the end.
+    ///
+    /// # Safety
+    /// What is read through it must not be written by another worker meanwhile.
+    pub unsafe fn item(&self, i: usize) -> *const T {
+        assert!(i < self.len);
+        self.ptr.add(i)
+    }
+
     /// Items `range`, to write. Panics past the end.
     ///
     /// # Safety

@@ -22,6 +22,56 @@ use crate::physics::team::{block, Region, SharedSlice};
 /// How many bodies' boxes a worker updates at a time.
 const PROXIES_PER_BLOCK: usize = 512;
 
+/// How many pairs a worker collides at a time...
+const PAIRS_PER_BLOCK: usize = 128;
+/// ...and the fewest candidate pairs for which the workers collide them before the merge.
+const SHARED_PAIRS_FROM: usize = 512;
+
+/// What the workers found for a pair before the merge ([`PairInput::collide_first`]).
+#[derive(Clone, Copy)]
+#[repr(u8)]
+enum Found {
+    /// No contact to keep: filtered, or a body gone.
+    Skip,
+    /// Bodies of several shapes: the merge collides them.
+    Parts,
+    /// Last step's contact, its manifold recycled in place.
+    Recycled,
+    /// A fresh manifold.
+    Fresh,
+    /// Collided, and nothing to keep.
+    Nothing,
+}
+
+/// Where the contacts of pair `key` and after begin among `old` (in pair order), reading
+/// only their keys and shapes.
+///
+/// # Safety
+/// No worker may write a contact's key or shapes meanwhile.
+unsafe fn first_of(old: SharedSlice<Contact>, key: u64) -> usize {
+    let order = |i: usize| {
+        let c = old.item(i);
+        (
+            std::ptr::addr_of!((*c).key).read(),
+            std::ptr::addr_of!((*c).shapes).read(),
+        )
+    };
+    let (mut lo, mut hi) = (0, old.len());
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if order(mid) < (key, 0) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// Wake bits beside a [`Found`]: body A, body B.
+const WAKE_A: u8 = 1 << 4;
+const WAKE_B: u8 = 1 << 5;
+
 /// The proxy of an empty slot.
 const NO_PROXY: Proxy = Proxy {
     aabb: Aabb {
@@ -41,8 +91,82 @@ impl World {
         let bp = &mut self.broad_phase;
         bp.sweep
             .find_pairs(&bp.proxies, &bp.pieces, &mut bp.pair_keys);
-        self.merge_contacts(dt);
+        // (Tests that lower the solve's threshold lower this one with it.)
+        let from = self
+            .solver
+            .bundles
+            .share_from
+            .map_or(SHARED_PAIRS_FROM, |n| n.min(SHARED_PAIRS_FROM));
+        let collided = match region {
+            Some(region) if bp.pair_keys.len() >= from => {
+                self.collide_pairs(dt, region);
+                true
+            }
+            _ => false,
+        };
+        self.merge_contacts(dt, collided);
         self.wake_queued();
+    }
+
+    /// The narrow phase of the pairs of single shapes, spread over `region`'s workers, before
+    /// the merge: each pair's [`Found`] (with its wake bits) into `found`, a fresh manifold
+    /// into `manifolds`, and a recycled manifold straight into last step's contact (the merge
+    /// then keeps it as it is). Pairs of bodies of several shapes are left to the merge.
+    fn collide_pairs(&mut self, dt: Real, region: &Region) {
+        let World {
+            settings,
+            gravity,
+            bodies,
+            contacts,
+            broad_phase,
+            joints,
+            ..
+        } = self;
+        let pairs = PairInput {
+            slots: &bodies.slots,
+            flagged: bodies.flagged > 0,
+            settings,
+            gravity: *gravity,
+            dt,
+        };
+        let n = broad_phase.pair_keys.len();
+        broad_phase.found.resize(n, 0);
+        broad_phase.manifolds.resize(n, Manifold::EMPTY);
+        let sorting = joints.keeps_pairs_apart() || bodies.filtered > 0 || bodies.flagged > 0;
+        let keys = &broad_phase.pair_keys;
+        let (joints, bodies) = (&*joints, &*bodies);
+        // SAFETY: each block writes its own run of `found` and `manifolds`, and only the
+        // contacts of its own pairs (contacts are ordered by pair, and a pair is one block's).
+        let (found, manifolds, old) = unsafe {
+            (
+                SharedSlice::new(&mut broad_phase.found),
+                SharedSlice::new(&mut broad_phase.manifolds),
+                SharedSlice::new(&mut contacts.awake),
+            )
+        };
+        region.for_blocks(n.div_ceil(PAIRS_PER_BLOCK), &|k| {
+            let run = block(k, PAIRS_PER_BLOCK, n);
+            // SAFETY: as above.
+            let (found, manifolds) =
+                unsafe { (found.range(run.clone()), manifolds.range(run.clone())) };
+            // This block's pairs' contacts: from its first key's to the next block's.
+            let (lo, hi) = unsafe {
+                let start = |key: u64| first_of(old, key);
+                (
+                    start(keys[run.start]),
+                    keys.get(run.end).map_or(old.len(), |&k| start(k)),
+                )
+            };
+            let old = unsafe { old.range(lo..hi) };
+            let mut at = 0;
+            for ((&key, f), m) in keys[run].iter().zip(found).zip(manifolds) {
+                *f = if sorting && !(joints.may_collide(key) && filters_allow(key, bodies)) {
+                    Found::Skip as u8
+                } else {
+                    pairs.collide_first(key, (old, &mut at), m)
+                };
+            }
+        });
     }
 
     /// Each body's box grown by half the speculative distance plus how far it can travel
@@ -109,7 +233,7 @@ impl World {
 
     /// Walk the candidate pairs in key order beside last step's contacts: each pair's contact
     /// updated or begun, the pairs no longer in contact ended.
-    fn merge_contacts(&mut self, dt: Real) {
+    fn merge_contacts(&mut self, dt: Real, collided: bool) {
         let World {
             settings,
             gravity,
@@ -133,7 +257,24 @@ impl World {
         // Pairs kept apart by a joint, by their filters or by a sensor keep no contact (any
         // they had ends here); a World with none pays one test per step for it.
         let sorting = joints.keeps_pairs_apart() || bodies.filtered > 0 || bodies.flagged > 0;
-        for &key in &broad_phase.pair_keys {
+        for (p, &key) in broad_phase.pair_keys.iter().enumerate() {
+            if collided {
+                let (found, manifold) = (broad_phase.found[p], &broad_phase.manifolds[p]);
+                let wake = &mut islands.wake_queue;
+                let out = (&mut merge, &mut *contacts, wake);
+                match pairs.merge_found(key, (found, manifold), out) {
+                    Some(Some(input)) => tiers.inputs.push(input),
+                    Some(None) => {}
+                    None => {
+                        // Bodies of several shapes: below.
+                        let (a, b) = pairs.bodies(key).expect("a pair with bodies");
+                        let wake = &mut islands.wake_queue;
+                        let out = (wake, &mut tiers.inputs, &mut broad_phase.shape_pairs);
+                        pairs.update_parts(key, (a, b), &mut merge, contacts, out);
+                    }
+                }
+                continue;
+            }
             if sorting && !(joints.may_collide(key) && filters_allow(key, bodies)) {
                 continue;
             }
@@ -531,17 +672,29 @@ impl<'a> PairInput<'a> {
     #[inline(always)]
     fn collide(
         &self,
-        (sa, sb): (Side, Side),
+        sides: (Side, Side),
         (ia, ib): (u32, u32),
         wake_queue: &mut Vec<u32>,
     ) -> Option<Manifold> {
+        let (manifold, wakes) = self.collide_pair(sides);
+        for (bit, i) in [(WAKE_A, ia), (WAKE_B, ib)] {
+            if wakes & bit != 0 {
+                wake_queue.push(i);
+            }
+        }
+        manifold
+    }
+
+    /// [`PairInput::collide`], with the bodies to wake as bits ([`WAKE_A`], [`WAKE_B`]).
+    #[inline(always)]
+    fn collide_pair(&self, (sa, sb): (Side, Side)) -> (Option<Manifold>, u8) {
         let (a, b) = (sa.body, sb.body);
         let (g, dt) = (self.gravity, self.dt);
         let reach = closing_reach(a, b, g, dt);
         let margin = self.settings.speculative_distance + reach;
         let manifold = collide(sa.shape, sa.pose, sb.shape, sb.pose, margin);
         if manifold.count == 0 {
-            return None;
+            return (None, 0);
         }
         let nearest = manifold
             .points()
@@ -549,20 +702,101 @@ impl<'a> PairInput<'a> {
             .map(|p| p.separation)
             .fold(Real::INFINITY, Real::min);
         let resting_kinematic = |x: &Body| x.kinematic && !x.is_moving_kinematic();
-        let mut woken = false;
+        let mut wakes = 0;
         if nearest <= reach + self.settings.linear_slop
             && !resting_kinematic(a)
             && !resting_kinematic(b)
         {
-            for (i, body) in [ia, ib].into_iter().zip([a, b]) {
+            for (bit, body) in [(WAKE_A, a), (WAKE_B, b)] {
                 if !body.awake {
-                    wake_queue.push(i);
-                    woken = true;
+                    wakes |= bit;
                 }
             }
         }
         // A sleeper beside a kinematic body at rest: nothing to solve.
-        (a.is_active() || b.is_active() || woken).then_some(manifold)
+        let solve = a.is_active() || b.is_active() || wakes != 0;
+        (solve.then_some(manifold), wakes)
+    }
+
+    /// The first half of [`PairInput::update`] for pair `key`, run by the workers before the
+    /// merge: last step's contact for it (found from `at` on among the `old` contacts, which
+    /// are in pair order) recycled in place, or the pair collided afresh into `out`. Returns
+    /// the [`Found`] with the wake bits above it.
+    #[inline(always)]
+    fn collide_first(
+        &self,
+        key: u64,
+        (old, at): (&mut [Contact], &mut usize),
+        out: &mut Manifold,
+    ) -> u8 {
+        let Some((a, b)) = self.bodies(key) else {
+            return Found::Skip as u8;
+        };
+        if a.compound().is_some() || b.compound().is_some() {
+            return Found::Parts as u8;
+        }
+        let order = (key, 0);
+        while old.get(*at).is_some_and(|c| c.order() < order) {
+            *at += 1;
+        }
+        let sides = (Side::whole(a), Side::whole(b));
+        if let Some(last) = old.get_mut(*at).filter(|c| c.order() == order) {
+            if let Some(manifold) = self.recycled(last, a, b) {
+                self.set_geometry(last, &manifold, sides);
+                return Found::Recycled as u8;
+            }
+        }
+        match self.collide_pair(sides) {
+            (Some(manifold), wakes) => {
+                *out = manifold;
+                Found::Fresh as u8 | wakes
+            }
+            (None, _) => Found::Nothing as u8,
+        }
+    }
+
+    /// The second half of [`PairInput::update`], in the merge: what the workers found for pair
+    /// `key` (`found`, and its fresh `manifold`) written as this step's contact. None for a
+    /// pair of bodies of several shapes (the merge collides those itself); else what adaptive
+    /// stiffness reads of the contact written, if any.
+    #[inline(always)]
+    fn merge_found(
+        &self,
+        key: u64,
+        (found, manifold): (u8, &Manifold),
+        (merge, contacts, wake_queue): (&mut Merge, &mut Contacts, &mut Vec<u32>),
+    ) -> Option<Option<TierInput>> {
+        let order = (key, 0);
+        let slop = self.settings.linear_slop;
+        let kind = found & !(WAKE_A | WAKE_B);
+        if kind == Found::Skip as u8 {
+            return Some(None);
+        }
+        if kind == Found::Parts as u8 {
+            return None;
+        }
+        let continued = merge.seek(contacts, order);
+        if kind == Found::Recycled as u8 {
+            debug_assert!(continued, "a recycled contact was last step's");
+            return Some(Some(TierInput::of(merge.keep(contacts), slop)));
+        }
+        if kind == Found::Nothing as u8 {
+            return Some(None);
+        }
+        let (ia, ib) = pair_of(key);
+        for (bit, i) in [(WAKE_A, ia), (WAKE_B, ib)] {
+            if found & bit != 0 {
+                wake_queue.push(i);
+            }
+        }
+        let (a, b) = self.bodies(key).expect("a pair with bodies");
+        let previous = continued.then(|| *merge.last(contacts));
+        let sides = (Side::whole(a), Side::whole(b));
+        let contact = self.fresh_contact(order, manifold, sides, previous.as_ref());
+        let input = TierInput::of(&contact, slop);
+        let begins = (!continued).then_some([a.inv_mass > 0.0, b.inv_mass > 0.0]);
+        merge.write(contacts, contact, begins);
+        Some(Some(input))
     }
 
     /// A contact from a fresh `manifold` between `a` and `b`: it continues last step's

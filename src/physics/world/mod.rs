@@ -182,6 +182,10 @@ struct BroadPhase {
     pair_keys: Vec<u64>,
     /// Scratch for a pair of bodies of several shapes: its pairs of shapes whose boxes meet.
     shape_pairs: Vec<u32>,
+    /// When the workers collide the pairs first: what each pair came to ([`contacts::Found`]
+    /// and the wake bits), and the fresh manifolds, indexed like `pair_keys`.
+    found: Vec<u8>,
+    manifolds: Vec<crate::physics::collide::Manifold>,
     /// The static bodies of several shapes, swept shape by shape (see [`Piece`]), by slot.
     pieced_slots: Vec<u32>,
     /// Their shapes' boxes for this step.

@@ -187,7 +187,7 @@ impl<L: Wide> RoundLanes<L> {
 }
 
 /// A point's impulses at the end of the solve, read out of its lane for the store stage.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct PointImpulses {
     /// Accumulated normal impulse (N s, per substep).
     pub normal: Real,
@@ -198,6 +198,19 @@ pub(crate) struct PointImpulses {
     /// The approach speed a point that has not met its surface yet carries to the next step
     /// (m/s, <= 0; see [`BounceLanes`]), 0 otherwise.
     pub approach: Real,
+}
+
+impl PointImpulses {
+    /// These impulses, or all zero if any is not finite.
+    #[inline]
+    pub fn finite_or_zero(&self) -> PointImpulses {
+        let all = [self.normal, self.tangent, self.total_normal, self.approach];
+        if all.iter().all(|x| x.is_finite()) {
+            *self
+        } else {
+            PointImpulses::default()
+        }
+    }
 }
 
 /// What a solve pass does: 1 / substep (1/s), whether it applies the soft bias, and the

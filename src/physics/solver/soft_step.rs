@@ -425,6 +425,8 @@ fn hold_if_deep(c: &Contact, k: &mut ContactConstraint, deepest: Real, min_reach
 fn finish(c: &mut Contact, ends: &[PointImpulses; 2], substeps: Real, inv_dt: Real) {
     let mut force = 0.0;
     for (p, end) in c.points[..c.count as usize].iter_mut().zip(ends) {
+        // (A body blown apart by a joint may bring NaN here: it does not stay.)
+        let end = &end.finite_or_zero();
         let max_f = (c.friction * end.normal).max(0.0);
         p.normal_impulse = end.normal * substeps;
         p.tangent_impulse = end.tangent.clamp(-max_f, max_f) * substeps;

@@ -332,6 +332,7 @@ impl World {
     /// (awake dynamic ones, and kinematic ones by their own velocity); clear forces.
     /// The dynamic bodies that moved far for their size are listed for continuous collision.
     fn finalize_bodies(&mut self) {
+        let max_speed = self.settings.max_linear_speed;
         let fast = &mut self.solver.fast;
         let slots = self.bodies.slots.iter_mut().zip(&self.solver.bodies);
         for (i, (slot, sb)) in slots.enumerate() {
@@ -341,8 +342,10 @@ impl World {
             b.force = Vec2::ZERO;
             b.torque = 0.0;
             if b.is_active() {
-                b.linear_velocity = sb.v;
-                b.angular_velocity = sb.w;
+                // The relax passes after the last position update may leave a body faster
+                // than the cap, and a blown-apart joint (see `joint::store`) not finite.
+                b.linear_velocity = clamp_speed(sb.v, max_speed);
+                b.angular_velocity = if sb.w.is_finite() { sb.w } else { 0.0 };
                 let limit = FAST_FRACTION * b.min_extent;
                 // Turning moves the shape's core at most its reach (a disc's not at all).
                 let rounding = if b.compound().is_none() {

@@ -112,8 +112,10 @@ type BlockRun<L> = fn(&mut [Bundle<L>], BodyRows, Work, SideLanes<L>);
 /// `work` on each of `bundles` (one block of a colour).
 #[inline(always)]
 fn run_block<L: Wide>(bundles: &mut [Bundle<L>], rows: BodyRows, work: Work, side: SideLanes<L>) {
+    let mut rows = rows;
+    let rows = &mut rows;
     match work {
-        Work::WarmStart => bundles.iter_mut().for_each(|b| b.warm_start(rows)),
+        Work::WarmStart => bundles.iter_mut().for_each(|b| b.warm_start(&mut *rows)),
         Work::Solve((kind, inv_h, push_out)) => {
             let (inv_h, push_out) = (L::splat(inv_h), L::splat(-push_out));
             let pass = Pass::new(inv_h, kind == PassKind::Biased, push_out);
@@ -243,7 +245,7 @@ impl<L: Wide> Packed<L> {
             for (list, &slot) in self.packed.iter_mut().zip(&self.slots) {
                 before_colour(&mut joints, bodies, slot);
                 for bundle in list {
-                    bundle.warm_start(BodyRows::new(bodies));
+                    bundle.warm_start(bodies);
                 }
             }
         } else {
@@ -283,7 +285,7 @@ impl<L: Wide> Packed<L> {
                     round: rounds.get(bundle.round_index as usize),
                     bounce: bounces.get_mut(bundle.bounce_index as usize),
                 };
-                bundle.solve(BodyRows::new(bodies), pass, sides, friction);
+                bundle.solve(bodies, pass, sides, friction);
             }
         }
     }
@@ -295,7 +297,7 @@ impl<L: Wide> Packed<L> {
         for bundle in self.packed.iter_mut().flatten() {
             if bundle.bounce_index != NO_BOUNCE {
                 let bounce = &self.bounces[bundle.bounce_index as usize];
-                bundle.apply_restitution(bounce, BodyRows::new(bodies), threshold);
+                bundle.apply_restitution(bounce, bodies, threshold);
             }
         }
     }

@@ -65,14 +65,52 @@ impl<L: Wide> PointLanes<L> {
     }
 }
 
+/// Where a kernel reads and writes its bundles' bodies: the solver bodies themselves, on one
+/// thread, or rows that other workers share ([`BodyRows`]), where no fixed body's row is
+/// written.
+pub(crate) trait Rows {
+    /// Body `i`'s first eight words (`SolverBody::state`).
+    fn state(&self, i: u32) -> &[Real; 8];
+    /// Four columns back into the lanes' bodies ([`Wide::scatter_rows`]); `inv_mass` is the
+    /// lanes' bodies' inverse masses (zero: a fixed body, or an empty lane's dummy).
+    fn scatter<L: Wide>(&mut self, columns: [L; 4], idx: &L::Index, inv_mass: L);
+}
+
+impl Rows for [SolverBody] {
+    #[inline(always)]
+    fn state(&self, i: u32) -> &[Real; 8] {
+        self[i as usize].state()
+    }
+    /// Every lane, fixed or not: on one thread, writing a fixed body's row back unchanged
+    /// costs less than asking which lanes hold one.
+    #[inline(always)]
+    fn scatter<L: Wide>(&mut self, columns: [L; 4], idx: &L::Index, _inv_mass: L) {
+        L::scatter_rows(columns, self, idx);
+    }
+}
+
+impl Rows for BodyRows<'_> {
+    #[inline(always)]
+    fn state(&self, i: u32) -> &[Real; 8] {
+        BodyRows::state(self, i)
+    }
+    #[inline(always)]
+    /// Not the fixed bodies' lanes: bundles solved at once may share a fixed body.
+    fn scatter<L: Wide>(&mut self, columns: [L; 4], idx: &L::Index, inv_mass: L) {
+        let fixed = inv_mass.to_lanes();
+        let skip = fixed
+            .as_ref()
+            .iter()
+            .enumerate()
+            .fold(0u8, |bits, (lane, &m)| bits | u8::from(m == 0.0) << lane);
+        L::scatter_rows_shared(columns, *self, idx, skip);
+    }
+}
+
 /// Up to `L::WIDTH` contacts packed for the lanes.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Bundle<L: Wide> {
     pub kind: BundleKind,
-    /// The lanes whose body A (`fixed[0]`) or B (`fixed[1]`) is fixed (static, kinematic, or
-    /// the dummy of an empty lane), bit i for lane i: their rows are read, never written, so
-    /// that any number of bundles solved at once may share a fixed body (the parallel step).
-    fixed: [u8; 2],
     /// Where the bundle's restitution lanes are ([`BounceLanes`]), or [`NO_BOUNCE`].
     pub bounce_index: u32,
     /// Where the bundle's rounding lanes are ([`RoundLanes`]), or [`NO_ROUNDING`].
@@ -253,8 +291,7 @@ impl<L: Wide> BodyLanes<L> {
     /// body's first eight words (`SolverBody::state`), transposed into one value per field.
     /// The inverse masses do not change within a step: they come packed in the bundle.
     #[inline(always)]
-    fn gather(rows: BodyRows, idx: &L::Index, inv_mass: L, inv_inertia: L) -> Self {
-        let rows = &rows;
+    fn gather<R: Rows + ?Sized>(rows: &R, idx: &L::Index, inv_mass: L, inv_inertia: L) -> Self {
         let [vx, vy, w, dpx, dpy, qc, qs, _] = L::columns(|lane| rows.state(idx.as_ref()[lane]));
         BodyLanes {
             vx,
@@ -270,11 +307,13 @@ impl<L: Wide> BodyLanes<L> {
     }
 
     /// Write velocities back, with the motion as it was read (a solve pass does not move
-    /// bodies): the first four words of each lane's body, one store a body, but for the
-    /// lanes in `fixed`, whose bodies nothing moves.
+    /// bodies): the first four words of each lane's body, one store a body. A fixed body's
+    /// lanes come back as they were read (its zero inverse mass and inertia take nothing from
+    /// an impulse); where other workers share the rows, a fixed body's lanes (zero inverse
+    /// mass) are not written at all.
     #[inline(always)]
-    fn scatter(&self, rows: BodyRows, idx: &L::Index, fixed: u8) {
-        L::scatter_rows([self.vx, self.vy, self.w, self.dpx], rows, idx, fixed);
+    fn scatter<R: Rows + ?Sized>(&self, rows: &mut R, idx: &L::Index) {
+        rows.scatter([self.vx, self.vy, self.w, self.dpx], idx, self.inv_mass);
     }
 
     /// Relative velocity of B over A along (dx, dy) at arms (rA x d, rB x d):
@@ -321,7 +360,6 @@ impl<L: Wide> Bundle<L> {
         };
         Bundle {
             kind,
-            fixed: [((1u32 << L::WIDTH) - 1) as u8; 2],
             bounce_index: NO_BOUNCE,
             round_index: NO_ROUNDING,
             contact: L::index_splat(u32::MAX),
@@ -364,11 +402,6 @@ impl<L: Wide> Bundle<L> {
         self.b.as_mut()[lane] = c.b;
         let sf = k.softness;
         let (body_a, body_b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
-        for (fixed, body) in self.fixed.iter_mut().zip([body_a, body_b]) {
-            if body.inv_mass != 0.0 {
-                *fixed &= !(1 << lane);
-            }
-        }
         for (field, x) in [
             (&mut self.nx, c.normal.x),
             (&mut self.ny, c.normal.y),
@@ -424,7 +457,7 @@ impl<L: Wide> Bundle<L> {
 
     /// Both sides' body lanes.
     #[inline(always)]
-    fn gather(&self, rows: BodyRows) -> (BodyLanes<L>, BodyLanes<L>) {
+    fn gather<R: Rows + ?Sized>(&self, rows: &R) -> (BodyLanes<L>, BodyLanes<L>) {
         (
             BodyLanes::gather(rows, &self.a, self.inv_mass_a, self.inv_i_a),
             BodyLanes::gather(rows, &self.b, self.inv_mass_b, self.inv_i_b),
@@ -433,9 +466,9 @@ impl<L: Wide> Bundle<L> {
 
     /// Write both sides' velocities back.
     #[inline(always)]
-    fn scatter(&self, rows: BodyRows, a: &BodyLanes<L>, b: &BodyLanes<L>) {
-        a.scatter(rows, &self.a, self.fixed[0]);
-        b.scatter(rows, &self.b, self.fixed[1]);
+    fn scatter<R: Rows + ?Sized>(&self, rows: &mut R, a: &BodyLanes<L>, b: &BodyLanes<L>) {
+        a.scatter(rows, &self.a);
+        b.scatter(rows, &self.b);
     }
 
     /// The normal and the tangent t = (n_y, -n_x).
@@ -446,7 +479,7 @@ impl<L: Wide> Bundle<L> {
 
     /// Warm start: apply each point's accumulated impulses (the start of a substep).
     #[inline(always)]
-    pub fn warm_start(&mut self, rows: BodyRows) {
+    pub fn warm_start<R: Rows + ?Sized>(&mut self, rows: &mut R) {
         let (mut a, mut b) = self.gather(rows);
         let (n, t) = self.axes();
         for p in &mut self.p {
@@ -472,7 +505,13 @@ impl<L: Wide> Bundle<L> {
     /// then friction unless `friction` is false (a normal relax pass), with the bundle's side
     /// lanes (`sides`).
     #[inline(always)]
-    pub fn solve(&mut self, rows: BodyRows, pass: &Pass<L>, sides: Sides<L>, friction: bool) {
+    pub fn solve<R: Rows + ?Sized>(
+        &mut self,
+        rows: &mut R,
+        pass: &Pass<L>,
+        sides: Sides<L>,
+        friction: bool,
+    ) {
         // One copy of the kernel for sharp bundles and one for rounded ones, so that neither
         // asks per point which it is.
         match sides.round {
@@ -483,9 +522,9 @@ impl<L: Wide> Bundle<L> {
 
     /// [`Bundle::solve`] for points that turn as `round` says.
     #[inline(always)]
-    fn solve_turning<T: Turning<L>>(
+    fn solve_turning<T: Turning<L>, R: Rows + ?Sized>(
         &mut self,
-        rows: BodyRows,
+        rows: &mut R,
         (pass, round): (&Pass<L>, T),
         bounce: Option<&mut BounceLanes<L>>,
         friction: bool,
@@ -652,7 +691,12 @@ impl<L: Wide> Bundle<L> {
     /// and two lanes. Where both points of a block bounce they are aimed at vn' = -e vn0
     /// together, so a flat face hitting a flat face rebounds by exactly e.
     #[inline(always)]
-    pub fn apply_restitution(&mut self, bounce: &BounceLanes<L>, rows: BodyRows, threshold: L) {
+    pub fn apply_restitution<R: Rows + ?Sized>(
+        &mut self,
+        bounce: &BounceLanes<L>,
+        rows: &mut R,
+        threshold: L,
+    ) {
         let bounces = [
             self.bounces(0, bounce, threshold),
             self.bounces(1, bounce, threshold),

@@ -199,16 +199,28 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>)
     let recovery = &mut *ctx.recovery;
     recovery.begin_solve();
     let limits = (1.0 / ctx.dt, ctx.settings.max_push_out_speed);
-    let mut prepared = region.map(|_| ctx.prepared.iter());
+    if region.is_none() {
+        ctx.bundles.build(PackInput {
+            bodies: ctx.bodies,
+            contacts: ctx.contacts,
+            selected: ctx.selected,
+            prepare: |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
+                let k = prepare_contact(a, b, c, stiffness);
+                if k.reach > 0.0 {
+                    recovery.note(c, (a, b), k.reach, limits);
+                }
+                k
+            },
+        });
+        return;
+    }
+    let mut prepared = ctx.prepared.iter();
     ctx.bundles.build(PackInput {
         bodies: ctx.bodies,
         contacts: ctx.contacts,
         selected: ctx.selected,
         prepare: |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
-            let k = match prepared.as_mut() {
-                Some(done) => *done.next().expect("one constraint per selected contact"),
-                None => prepare_contact(a, b, c, stiffness),
-            };
+            let k = *prepared.next().expect("one constraint per selected contact");
             if k.reach > 0.0 {
                 recovery.note(c, (a, b), k.reach, limits);
             }

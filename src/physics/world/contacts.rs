@@ -72,6 +72,25 @@ unsafe fn first_of(old: SharedSlice<Contact>, key: u64) -> usize {
 const WAKE_A: u8 = 1 << 4;
 const WAKE_B: u8 = 1 << 5;
 
+/// The box of the body in `slot` for the broad phase: grown by `margin` (m) and by how far
+/// it can travel in `dt` under `g` (see [`travel`]).
+#[inline(always)]
+fn proxy_of(slot: &Slot, (g, dt): (Vec2, Real), margin: Real) -> Proxy {
+    match &slot.body {
+        Some(b) => {
+            let reach = if b.is_active() || b.kinematic {
+                travel(b, g, dt)
+            } else {
+                0.0
+            };
+            Proxy {
+                aabb: b.aabb().inflated(margin + reach),
+            }
+        }
+        None => NO_PROXY,
+    }
+}
+
 /// The proxy of an empty slot.
 const NO_PROXY: Proxy = Proxy {
     aabb: Aabb {
@@ -174,19 +193,7 @@ impl World {
     fn update_proxies(&mut self, dt: Real, region: Option<&Region>) {
         let g = self.gravity;
         let margin = 0.5 * self.settings.speculative_distance;
-        let proxy = |slot: &Slot| match &slot.body {
-            Some(b) => {
-                let reach = if b.is_active() || b.kinematic {
-                    travel(b, g, dt)
-                } else {
-                    0.0
-                };
-                Proxy {
-                    aabb: b.aabb().inflated(margin + reach),
-                }
-            }
-            None => NO_PROXY,
-        };
+        let proxy = |slot: &Slot| proxy_of(slot, (g, dt), margin);
         let (slots, proxies) = (&self.bodies.slots, &mut self.broad_phase.proxies);
         match region {
             Some(region) => {

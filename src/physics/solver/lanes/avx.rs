@@ -2,7 +2,7 @@
 //! function here must run only on a processor with AVX2 (see [`super::eight_lanes_available`]);
 //! they are inlined into the kernels compiled for it.
 
-use super::{BodyRows, Wide};
+use super::Wide;
 use crate::physics::math::Real;
 use std::arch::x86_64::*;
 use std::ops::{
@@ -157,10 +157,10 @@ impl Wide for Lanes8 {
         }
     }
     #[inline(always)]
-    fn scatter_rows(columns: [Self; 4], rows: BodyRows, idx: &[u32; 8], skip: u8) {
+    fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &[u32; 8]) {
         let [c0, c1, c2, c3] = columns.map(|c| c.0);
-        // SAFETY: as above; each store writes the first four of a row's eight f32s, in
-        // bounds (`BodyRows::words`).
+        // SAFETY: as above; each store writes the first four of a row's eight f32s,
+        // through an exclusive reference.
         unsafe {
             // The 8x4 transpose: lanes interleaved in pairs, then in fours; the low half
             // of v_k is lane k's four words and the high half lane k + 4's.
@@ -170,10 +170,8 @@ impl Wide for Lanes8 {
             let v1 = _mm256_shuffle_ps::<0xEE>(u0, u2);
             let v2 = _mm256_shuffle_ps::<0x44>(u1, u3);
             let v3 = _mm256_shuffle_ps::<0xEE>(u1, u3);
-            let store = |lane: usize, words: __m128| {
-                if skip >> lane & 1 == 0 {
-                    _mm_storeu_ps(rows.words(idx[lane]), words)
-                }
+            let mut store = |lane: usize, words: __m128| {
+                _mm_storeu_ps(rows[idx[lane] as usize].as_mut().as_mut_ptr(), words)
             };
             store(0, _mm256_castps256_ps128(v0));
             store(1, _mm256_castps256_ps128(v1));

@@ -80,10 +80,26 @@ pub(crate) trait Wide:
     /// The eight columns of `WIDTH` rows of eight numbers, lane i of column k being `row(i)[k]`:
     /// a transpose, so that what is laid out per body (row) comes out per field (column).
     fn columns<'a>(row: impl Fn(usize) -> &'a [Real; 8]) -> [Self; 8];
-    /// The inverse for four columns: lane i of column k becomes word k of row `idx[i]`
-    /// (words 4-7 untouched), but for the lanes whose bit is set in `skip` (bit i for lane
-    /// i), which write nothing.
-    fn scatter_rows(columns: [Self; 4], rows: BodyRows, idx: &Self::Index, skip: u8);
+    /// The inverse for four columns: lane i of column k becomes word k of `rows[idx[i]]`
+    /// (words 4-7 untouched). Where lanes name the same row, the last lane's words stay.
+    fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &Self::Index);
+
+    /// [`Wide::scatter_rows`] into rows other workers share (`BodyRows`), but for the lanes
+    /// whose bit is set in `skip` (bit i for lane i: a fixed body's), which write nothing.
+    /// Lane by lane: the parallel step's kernels only.
+    #[inline(always)]
+    fn scatter_rows_shared(columns: [Self; 4], rows: BodyRows, idx: &Self::Index, skip: u8) {
+        let columns = columns.map(Self::to_lanes);
+        for (lane, &i) in idx.as_ref().iter().enumerate() {
+            if skip >> lane & 1 == 0 {
+                let words = rows.words(i);
+                for (k, column) in columns.iter().enumerate() {
+                    // SAFETY: the first four of the row's eight words, in bounds (`words`).
+                    unsafe { *words.add(k) = column.as_ref()[lane] };
+                }
+            }
+        }
+    }
 
     /// `self.max(lo).min(hi)`, as glam's `clamp`.
     #[inline(always)]
@@ -212,7 +228,7 @@ impl Wide for Lanes4 {
         }
     }
     #[inline(always)]
-    fn scatter_rows(columns: [Self; 4], rows: BodyRows, idx: &[u32; 4], skip: u8) {
+    fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &[u32; 4]) {
         // The 4x4 transpose again, then one store of four words per row.
         let [c0, c1, c2, c3] = columns;
         #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
@@ -233,21 +249,16 @@ impl Wide for Lanes4 {
                     _mm_movelh_ps(t2, t3),
                     _mm_movehl_ps(t3, t2),
                 ];
-                for (lane, (&i, row)) in idx.iter().zip(out).enumerate() {
-                    if skip >> lane & 1 == 0 {
-                        _mm_storeu_ps(rows.words(i), row);
-                    }
+                for (&i, row) in idx.iter().zip(out) {
+                    _mm_storeu_ps(rows[i as usize].as_mut().as_mut_ptr(), row);
                 }
             }
         }
         #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
         for (lane, &i) in idx.iter().enumerate() {
-            if skip >> lane & 1 == 0 {
-                let words = rows.words(i);
-                for (k, column) in [c0, c1, c2, c3].into_iter().enumerate() {
-                    // SAFETY: the first four of the row's eight words, in bounds.
-                    unsafe { *words.add(k) = column[lane] };
-                }
+            let words = rows[i as usize].as_mut();
+            for (word, column) in words.iter_mut().zip([c0, c1, c2, c3]) {
+                *word = column[lane];
             }
         }
     }
@@ -288,7 +299,6 @@ pub(crate) fn prefetch<T>(x: &T) {
 #[cfg(all(test, target_arch = "x86_64", not(feature = "f64")))]
 mod tests {
     use super::*;
-    use crate::physics::solver::SolverBody;
 
     /// The eight-lane operations agree bit for bit with glam's four lanes, signs of zero
     /// included (the property the World's determinism across widths rests on).
@@ -344,27 +354,24 @@ mod tests {
 
     /// `columns` is a transpose at both widths: lane i of column k is row i's word k (rows
     /// numbered 10 i + k, so a swapped or misplaced word shows); `scatter_rows` puts the
-    /// first four columns back, in rows named by the lanes' indices, but for the lanes it is
-    /// told to skip, and nothing else.
+    /// first four columns back, in rows named by the lanes' indices, and nothing else.
     #[test]
     fn columns_and_scatter_rows_transpose_the_rows() {
         let rows: [[Real; 8]; 8] =
             std::array::from_fn(|i| std::array::from_fn(|k| (10 * i + k) as Real));
-        // Lane i writes row 7 - i, so a scatter that ignored the indices shows too; lane 2 is
-        // skipped (a fixed body's lane).
-        const SKIP: u8 = 1 << 2;
-        let blank = || {
-            [0; 8].map(|_| {
-                let mut body = SolverBody::FIXED;
-                *body.as_mut() = [-1.0; 8];
-                body
-            })
-        };
-        let expected = |written: &[SolverBody; 8], width: usize| {
+        // Lane i writes row 7 - i, so a scatter that ignored the indices shows too.
+        struct Row([Real; 8]);
+        impl AsMut<[Real; 8]> for Row {
+            fn as_mut(&mut self) -> &mut [Real; 8] {
+                &mut self.0
+            }
+        }
+        let blank = || [0; 8].map(|_| Row([-1.0; 8]));
+        let expected = |written: &[Row; 8], width: usize| {
             for (r, row) in written.iter().enumerate() {
                 let lane = 7 - r;
-                for (k, &word) in row.state().iter().enumerate() {
-                    let want = if lane < width && k < 4 && SKIP >> lane & 1 == 0 {
+                for (k, &word) in row.0.iter().enumerate() {
+                    let want = if lane < width && k < 4 {
                         rows[lane][k]
                     } else {
                         -1.0
@@ -384,9 +391,8 @@ mod tests {
         let mut written = blank();
         Lanes4::scatter_rows(
             [four[0], four[1], four[2], four[3]],
-            BodyRows::new(&mut written),
+            &mut written,
             &[7, 6, 5, 4],
-            SKIP,
         );
         expected(&written, 4);
         if !eight_lanes_available() {
@@ -403,8 +409,32 @@ mod tests {
         }
         let mut written = blank();
         let idx = [7, 6, 5, 4, 3, 2, 1, 0];
-        let columns = [eight[0], eight[1], eight[2], eight[3]];
-        Lanes8::scatter_rows(columns, BodyRows::new(&mut written), &idx, SKIP);
+        Lanes8::scatter_rows([eight[0], eight[1], eight[2], eight[3]], &mut written, &idx);
         expected(&written, 8);
+    }
+
+    /// `scatter_rows_shared` writes what `scatter_rows` writes, but nothing for the lanes it
+    /// is told to skip (a fixed body's, which bundles solved at once may share).
+    #[test]
+    fn a_shared_scatter_skips_the_fixed_lanes() {
+        use crate::physics::solver::SolverBody;
+        let rows: [[Real; 8]; 4] =
+            std::array::from_fn(|i| std::array::from_fn(|k| (10 * i + k) as Real));
+        let four = Lanes4::columns(|i| &rows[i]);
+        let columns = [four[0], four[1], four[2], four[3]];
+        let mut plain = [SolverBody::FIXED; 4];
+        *plain[1].as_mut() = [-1.0; 8];
+        let mut shared = plain;
+        Lanes4::scatter_rows(columns, &mut plain, &[3, 2, 1, 0]);
+        // Lane 2 (row 1) is skipped.
+        Lanes4::scatter_rows_shared(columns, BodyRows::new(&mut shared), &[3, 2, 1, 0], 1 << 2);
+        for (r, (p, s)) in plain.iter().zip(&shared).enumerate() {
+            if r == 1 {
+                assert_eq!(s.state(), &[-1.0; 8], "the skipped row is untouched");
+                assert_eq!(&p.state()[..4], &rows[2][..4], "the plain scatter wrote it");
+            } else {
+                assert_eq!(p.state(), s.state(), "row {r}");
+            }
+        }
     }
 }

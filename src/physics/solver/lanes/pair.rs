@@ -2,7 +2,7 @@
 //! by side. The solver never packs eight-lane bundles there ([`super::eight_lanes_available`]
 //! is false); this keeps the kernels compiling the same on every target.
 
-use super::{BodyRows, Lanes4, Wide};
+use super::{Lanes4, Wide};
 use crate::physics::math::Real;
 use std::ops::{
     Add, AddAssign, BitAnd, BitOr, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign,
@@ -107,10 +107,10 @@ impl Wide for Lanes8 {
         let hi = Lanes4::columns(|i| row(i + 4));
         std::array::from_fn(|k| Lanes8([lo[k], hi[k]]))
     }
-    fn scatter_rows(columns: [Self; 4], rows: BodyRows, idx: &[u32; 8], skip: u8) {
+    fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &[u32; 8]) {
         let lo = columns.map(|c| c.0[0]);
         let hi = columns.map(|c| c.0[1]);
-        Lanes4::scatter_rows(lo, rows, &[idx[0], idx[1], idx[2], idx[3]], skip & 0xF);
-        Lanes4::scatter_rows(hi, rows, &[idx[4], idx[5], idx[6], idx[7]], skip >> 4);
+        Lanes4::scatter_rows(lo, rows, &[idx[0], idx[1], idx[2], idx[3]]);
+        Lanes4::scatter_rows(hi, rows, &[idx[4], idx[5], idx[6], idx[7]]);
     }
 }

@@ -1,7 +1,7 @@
 //! [`Lanes1`]: one [`Real`] as a lane type, so that the contacts the colouring could not place
 //! (the overflow) run through the same kernels as the bundles, at width one.
 
-use super::{BodyRows, Wide};
+use super::Wide;
 use crate::physics::math::Real;
 use std::ops::{
     Add, AddAssign, BitAnd, BitOr, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign,
@@ -128,14 +128,10 @@ impl Wide for Lanes1 {
         row(0).map(Lanes1)
     }
     #[inline(always)]
-    fn scatter_rows(columns: [Self; 4], rows: BodyRows, idx: &[u32; 1], skip: u8) {
-        if skip & 1 != 0 {
-            return;
-        }
-        let words = rows.words(idx[0]);
-        for (k, column) in columns.into_iter().enumerate() {
-            // SAFETY: the first four of the row's eight words, in bounds.
-            unsafe { *words.add(k) = column.0 };
+    fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &[u32; 1]) {
+        let words = rows[idx[0] as usize].as_mut();
+        for (word, column) in words.iter_mut().zip(columns) {
+            *word = column.0;
         }
     }
 }

@@ -343,15 +343,31 @@ pub(crate) fn integrate_velocities(
     region: Option<&Region>,
 ) {
     let max_v = limits.max_linear_speed;
-    let update = |b: &mut SolverBody| {
-        b.v += h * b.accel;
-        b.w += h * b.alpha;
-        b.v = clamp_speed(b.v, max_v);
-    };
     match region {
-        Some(r) => moving.for_each_shared(r, bodies, &update),
-        None => moving.for_each(bodies, update),
+        Some(r) => moving.for_each_shared(r, bodies, &|b| accelerate(b, h, max_v)),
+        None => moving.for_each(bodies, |b| accelerate(b, h, max_v)),
     }
+}
+
+/// One body's velocity half of the step: v += h a, w += h alpha, the speed capped at `max_v`.
+#[inline(always)]
+fn accelerate(b: &mut SolverBody, h: Real, max_v: Real) {
+    b.v += h * b.accel;
+    b.w += h * b.alpha;
+    b.v = clamp_speed(b.v, max_v);
+}
+
+/// One body's position half: its speed capped (`max_v`, and `max_w` rad/s of spin), then
+/// moved by `h` s.
+#[inline(always)]
+fn advance(b: &mut SolverBody, h: Real, (max_v, max_w): (Real, Real)) {
+    b.v = clamp_speed(b.v, max_v);
+    if b.w.is_nan() {
+        b.w = 0.0;
+    } else if b.w.abs() > max_w {
+        b.w = max_w.copysign(b.w);
+    }
+    b.advance(h);
 }
 
 /// A kinematic body the solver moves: its index among the solver bodies and the velocity it
@@ -376,19 +392,10 @@ pub(crate) fn integrate_positions(
     (h, limits): (Real, Limits),
     region: Option<&Region>,
 ) {
-    let max_w = limits.max_rotation / h;
-    let update = |b: &mut SolverBody| {
-        b.v = clamp_speed(b.v, limits.max_linear_speed);
-        if b.w.is_nan() {
-            b.w = 0.0;
-        } else if b.w.abs() > max_w {
-            b.w = max_w.copysign(b.w);
-        }
-        b.advance(h);
-    };
+    let caps = (limits.max_linear_speed, limits.max_rotation / h);
     match region {
-        Some(r) => moving.for_each_shared(r, bodies, &update),
-        None => moving.for_each(bodies, update),
+        Some(r) => moving.for_each_shared(r, bodies, &|b| advance(b, h, caps)),
+        None => moving.for_each(bodies, |b| advance(b, h, caps)),
     }
     for k in kinematic {
         let b = &mut bodies[k.index as usize];

@@ -220,7 +220,9 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>)
         contacts: ctx.contacts,
         selected: ctx.selected,
         prepare: |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
-            let k = *prepared.next().expect("one constraint per selected contact");
+            let k = *prepared
+                .next()
+                .expect("one constraint per selected contact");
             if k.reach > 0.0 {
                 recovery.note(c, (a, b), k.reach, limits);
             }
@@ -496,6 +498,7 @@ impl Stiffness {
     /// falls by at most [`HERTZ_DECAY`] per step. That hold is not enough for a big pile,
     /// which is why stiffening is off by default (`Settings::load_aware_stiffness`). `points`
     /// are the contact's constraints this step.
+    #[inline(always)]
     fn softness(&self, c: &mut Contact, points: &[PointConstraint; 2]) -> Softness {
         let base = if c.touches_static {
             self.static_hertz

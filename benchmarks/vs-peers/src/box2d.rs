@@ -128,10 +128,17 @@ impl Box2d {
             let mut def = b2DefaultWorldDef();
             def.gravity = v(setup.gravity.x as f32, setup.gravity.y as f32);
             def.enableSleep = setup.sleep;
-            // Single-threaded: one worker, no task system.
-            def.workerCount = 1;
-            def.enqueueTask = None;
-            def.finishTask = None;
+            // Single-threaded (one worker, no task system), or `--workers N` through the pool.
+            let workers = crate::workers();
+            def.workerCount = workers as i32;
+            if workers > 1 {
+                tasks::start(workers - 1);
+                def.enqueueTask = Some(tasks::enqueue);
+                def.finishTask = Some(tasks::finish);
+            } else {
+                def.enqueueTask = None;
+                def.finishTask = None;
+            }
             def.frictionCallback = Some(mixing(settings.friction_mixing));
             def.restitutionCallback = Some(mixing(settings.restitution_mixing));
             // Continuous collision and everything else: Box2D's defaults.
@@ -462,5 +469,113 @@ impl Engine for Box2d {
             }
         }
         deepest
+    }
+}
+
+/// A task system for Box2D's workers (`--workers N`): N - 1 threads that run the tasks Box2D
+/// enqueues. A thread spins for a while before it sleeps, as a game's task scheduler does, so
+/// that Box2D's back-to-back tasks within a step do not each wait for a wake-up.
+mod tasks {
+    use std::collections::VecDeque;
+    use std::ffi::c_void;
+    use std::sync::{Arc, Condvar, Mutex, OnceLock};
+    use std::time::{Duration, Instant};
+
+    /// A task and its completion.
+    struct Job {
+        task: unsafe extern "C" fn(*mut c_void),
+        context: *mut c_void,
+        done: Arc<Done>,
+    }
+    // SAFETY: Box2D's task contexts are made to be run on other threads.
+    unsafe impl Send for Job {}
+
+    #[derive(Default)]
+    struct Done {
+        flag: Mutex<bool>,
+        signal: Condvar,
+    }
+
+    #[derive(Default)]
+    struct Pool {
+        queue: Mutex<VecDeque<Job>>,
+        signal: Condvar,
+    }
+
+    static POOL: OnceLock<Pool> = OnceLock::new();
+
+    /// Start `threads` threads (once per process).
+    pub fn start(threads: u32) {
+        let mut started = false;
+        POOL.get_or_init(|| {
+            started = true;
+            Pool::default()
+        });
+        if started {
+            for _ in 0..threads {
+                std::thread::spawn(run);
+            }
+        }
+    }
+
+    fn run() {
+        let pool = POOL.get().expect("started");
+        loop {
+            let job = take(pool);
+            // SAFETY: Box2D's task, called with its context, as its API asks.
+            unsafe { (job.task)(job.context) };
+            *job.done.flag.lock().unwrap() = true;
+            job.done.signal.notify_all();
+        }
+    }
+
+    /// The next job: spin up to 100 microseconds for it, then sleep until one comes.
+    fn take(pool: &Pool) -> Job {
+        let until = Instant::now() + Duration::from_micros(100);
+        while Instant::now() < until {
+            if let Some(job) = pool.queue.lock().unwrap().pop_front() {
+                return job;
+            }
+            std::hint::spin_loop();
+        }
+        let mut queue = pool.queue.lock().unwrap();
+        loop {
+            if let Some(job) = queue.pop_front() {
+                return job;
+            }
+            queue = pool.signal.wait(queue).unwrap();
+        }
+    }
+
+    /// Box2D's `enqueueTask`: queue the task, return its completion.
+    pub unsafe extern "C" fn enqueue(
+        task: Option<unsafe extern "C" fn(*mut c_void)>,
+        context: *mut c_void,
+        _user: *mut c_void,
+    ) -> *mut c_void {
+        let (Some(task), Some(pool)) = (task, POOL.get()) else {
+            return std::ptr::null_mut();
+        };
+        let done = Arc::new(Done::default());
+        pool.queue.lock().unwrap().push_back(Job {
+            task,
+            context,
+            done: Arc::clone(&done),
+        });
+        pool.signal.notify_one();
+        Arc::into_raw(done) as *mut c_void
+    }
+
+    /// Box2D's `finishTask`: wait for the task.
+    pub unsafe extern "C" fn finish(user_task: *mut c_void, _user: *mut c_void) {
+        if user_task.is_null() {
+            return;
+        }
+        // SAFETY: made by `Arc::into_raw` in `enqueue`, finished once.
+        let done = unsafe { Arc::from_raw(user_task as *const Done) };
+        let mut flag = done.flag.lock().unwrap();
+        while !*flag {
+            flag = done.signal.wait(flag).unwrap();
+        }
     }
 }

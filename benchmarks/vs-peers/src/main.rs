@@ -177,10 +177,22 @@ pub(crate) struct Tiltbox {
     spawned: Spawned,
 }
 
+/// Threads each engine steps with (`--workers N`; 1: single threaded, the default).
+pub(crate) static WORKERS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(1);
+
+/// [`WORKERS`].
+pub(crate) fn workers() -> u32 {
+    WORKERS.load(Relaxed)
+}
+
 impl Tiltbox {
     fn new(setup: &Setup) -> Tiltbox {
+        let mut world = setup.build().expect("tiltbox refused a benchmark set-up");
+        world
+            .set_workers(workers())
+            .expect("a worker count within 1..=64");
         Tiltbox {
-            world: setup.build().expect("tiltbox refused a benchmark set-up"),
+            world,
             dt: DT,
             setup: setup.clone(),
             steps: 0,
@@ -1289,6 +1301,13 @@ fn main() {
                 remote::serve(&scene);
                 return;
             }
+            "--workers" => match args.next().and_then(|n| n.parse::<u32>().ok()) {
+                Some(n) if (1..=64).contains(&n) => WORKERS.store(n, Relaxed),
+                _ => {
+                    eprintln!("--workers wants a number of threads within 1..=64");
+                    std::process::exit(2);
+                }
+            },
             "--quick" => quick = true,
             "--no-extras" => extras = false,
             "--chunks" => chunks = true,
@@ -1318,6 +1337,9 @@ fn main() {
             "-h" | "--help" => {
                 println!(
                     "usage: vs-peers [--quick] [--no-extras] [--chunks] [--settle[=SECONDS]] [--avx2 PATH | --no-avx2]\n\
+                     \x20               [--workers N]\n\
+                     --workers N: tiltbox and Box2D each step with N threads (Box2D through a task pool of\n\
+                     this tool's; rapier2d stays single threaded: its parallel feature is not built).\n\
                      \x20               [--accuracy OUT.csv] [SCENE|memory|largest_pyramid ...]\n\
                      --avx2 PATH: the AVX2 build of this tool (`./run.sh` builds it: cargo build --release\n\
                      --features avx2, copied to target/avx2/), run as a child process that times Box2D AVX2 chunk by\n\
@@ -1364,23 +1386,35 @@ fn main() {
 
     let which = engines(other_box2d);
     println!(
-        "# tiltbox vs Box2D v3 {} and rapier2d {} (single thread, dt 1/60{})\n",
+        "# tiltbox vs Box2D v3 {} and rapier2d {} ({}, dt 1/60{})\n",
         box2d::version(),
         rapier2d::VERSION,
+        match workers() {
+            1 => "single thread".to_string(),
+            n => format!("{n} workers for tiltbox and Box2D, rapier2d single thread"),
+        },
         if quick { ", --quick" } else { "" }
     );
     println!("machine: {}\n", machine());
     let s = Settings::default();
     println!(
-        "tiltbox: {:?} solver, {} substeps, friction mixing {:?}, restitution mixing {:?}; \
-         Box2D: b2World_Step(dt, 4 substeps), one worker, no task system, default continuous \
+        "tiltbox: {:?} solver, {} substeps, friction mixing {:?}, restitution mixing {:?}, {}; \
+         Box2D: b2World_Step(dt, 4 substeps), {}, default continuous \
          collision, friction and restitution mixing callbacks set to tiltbox's rules; \
-         rapier: default IntegrationParameters ({} solver iterations), combine rules {:?} / {:?}; \
-         engines: {}; they take turns every {CHUNK} steps{}.\n",
+         rapier: default IntegrationParameters ({} solver iterations), combine rules {:?} / {:?}, \
+         one thread; engines: {}; they take turns every {CHUNK} steps{}.\n",
         s.solver,
         s.substeps,
         s.friction_mixing,
         s.restitution_mixing,
+        match workers() {
+            1 => "one thread".to_string(),
+            n => format!("{n} workers"),
+        },
+        match workers() {
+            1 => "one worker, no task system".to_string(),
+            n => format!("{n} workers, this tool's task pool"),
+        },
         IntegrationParameters::default().num_solver_iterations,
         combine_rule(s.friction_mixing),
         combine_rule(s.restitution_mixing),

@@ -116,6 +116,8 @@ impl Remote {
     /// Start `binary --serve scene` and wait until the scene is built.
     pub fn spawn(binary: &Path, scene: &str) -> io::Result<Remote> {
         let mut child = Command::new(binary)
+            .arg("--workers")
+            .arg(crate::workers().to_string())
             .arg("--serve")
             .arg(scene)
             .stdin(Stdio::piped())

@@ -174,6 +174,15 @@ fn settings_are_validated_by_the_engine() {
     let e = Scene::from_toml_str("[settings]\nsubstep = 4\n").unwrap_err();
     let s = e.to_string();
     assert!(s.contains("substep") && s.contains("line 2"), "{s}");
+    for workers in [0, 65] {
+        let e = Scene::from_toml_str(&format!("[settings]\nworkers = {workers}\n")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!("[settings]: workers = {workers}: must be within 1..=64")
+        );
+    }
+    let e = Scene::from_toml_str("[settings]\nworkers = -1\n").unwrap_err();
+    assert!(e.to_string().contains("workers"), "{e}");
 }
 
 #[test]

@@ -152,31 +152,41 @@ impl World {
         broad_phase.found.resize(n, 0);
         broad_phase.manifolds.resize(n, Manifold::EMPTY);
         let sorting = joints.keeps_pairs_apart() || bodies.filtered > 0 || bodies.flagged > 0;
+        let blocks = n.div_ceil(PAIRS_PER_BLOCK);
+        broad_phase.found_from.resize(blocks + 1, 0);
         let keys = &broad_phase.pair_keys;
         let (joints, bodies) = (&*joints, &*bodies);
-        // SAFETY: each block writes its own run of `found` and `manifolds`, and only the
-        // contacts of its own pairs (contacts are ordered by pair, and a pair is one block's).
-        let (found, manifolds, old) = unsafe {
+        // SAFETY: each block writes its own run of `found`, `manifolds` and `found_from`, and
+        // only the contacts of its own pairs (contacts are ordered by pair, and a pair is one
+        // block's); the first stage only reads the contacts' keys.
+        let (found, manifolds, old, from) = unsafe {
             (
                 SharedSlice::new(&mut broad_phase.found),
                 SharedSlice::new(&mut broad_phase.manifolds),
                 SharedSlice::new(&mut contacts.awake),
+                SharedSlice::new(&mut broad_phase.found_from),
             )
         };
-        region.for_blocks(n.div_ceil(PAIRS_PER_BLOCK), &|k| {
-            let run = block(k, PAIRS_PER_BLOCK, n);
+        // Where each block's pairs' contacts begin (a search each, reading keys only: no
+        // block holds any contact yet).
+        region.for_blocks(blocks, &|k| {
             // SAFETY: as above.
-            let (found, manifolds) =
-                unsafe { (found.range(run.clone()), manifolds.range(run.clone())) };
-            // This block's pairs' contacts: from its first key's to the next block's.
-            let (lo, hi) = unsafe {
-                let start = |key: u64| first_of(old, key);
+            let start = unsafe { first_of(old, keys[k * PAIRS_PER_BLOCK]) };
+            *unsafe { from.get(k) }.expect("a block's start") = start;
+        });
+        *unsafe { from.get(blocks) }.expect("the end") = old.len();
+        region.for_blocks(blocks, &|k| {
+            let run = block(k, PAIRS_PER_BLOCK, n);
+            // SAFETY: as above; the run of contacts from this block's start to the next's is
+            // this block's alone.
+            let (found, manifolds, old) = unsafe {
+                let (lo, hi) = (*from.item(k), *from.item(k + 1));
                 (
-                    start(keys[run.start]),
-                    keys.get(run.end).map_or(old.len(), |&k| start(k)),
+                    found.range(run.clone()),
+                    manifolds.range(run.clone()),
+                    old.range(lo..hi),
                 )
             };
-            let old = unsafe { old.range(lo..hi) };
             let mut at = 0;
             for ((&key, f), m) in keys[run].iter().zip(found).zip(manifolds) {
                 *f = if sorting && !(joints.may_collide(key) && filters_allow(key, bodies)) {

@@ -186,6 +186,8 @@ struct BroadPhase {
     /// and the wake bits), and the fresh manifolds, indexed like `pair_keys`.
     found: Vec<u8>,
     manifolds: Vec<crate::physics::collide::Manifold>,
+    /// Where each block of `pair_keys`' contacts begin among last step's (and the end).
+    found_from: Vec<usize>,
     /// The static bodies of several shapes, swept shape by shape (see [`Piece`]), by slot.
     pieced_slots: Vec<u32>,
     /// Their shapes' boxes for this step.

@@ -155,7 +155,13 @@ struct Packed<L: Wide> {
     bounces: Vec<BounceLanes<L>>,
     /// The rounding lanes of the bundles with a rounded side.
     rounds: Vec<RoundLanes<L>>,
+    /// When the workers pack: each list's own restitution and rounding lanes, joined to
+    /// `bounces` and `rounds` afterwards.
+    list_sides: Vec<SideScratch<L>>,
 }
+
+/// One list's restitution and rounding lanes while the workers pack.
+type SideScratch<L> = (Vec<BounceLanes<L>>, Vec<RoundLanes<L>>);
 
 impl<L: Wide> Default for Packed<L> {
     fn default() -> Self {
@@ -165,6 +171,7 @@ impl<L: Wide> Default for Packed<L> {
             slots: Vec::new(),
             bounces: Vec::new(),
             rounds: Vec::new(),
+            list_sides: Vec::new(),
         }
     }
 }
@@ -202,27 +209,35 @@ impl<L: Wide> Packed<L> {
         k: &ContactConstraint,
         bodies: &[SolverBody],
     ) {
-        let lane = *filled % L::WIDTH;
-        *filled += 1;
-        let list = &mut self.lists[slot];
-        if lane == 0 {
-            list.push(*inert);
-        }
-        let bundle = list.last_mut().expect("a bundle is open");
-        bundle.set_contact(lane, (i as u32, c), k, bodies);
-        if c.restitution != 0.0 {
-            if bundle.bounce_index == NO_BOUNCE {
-                bundle.bounce_index = self.bounces.len() as u32;
-                self.bounces.push(BounceLanes::NONE);
+        let sides = (&mut self.bounces, &mut self.rounds);
+        put(
+            &mut self.lists[slot],
+            sides,
+            (filled, inert),
+            (i, c),
+            k,
+            bodies,
+        );
+    }
+
+    /// After the workers packed: each list's side lanes appended to `bounces` and `rounds`, in
+    /// list order, and its bundles' indices moved to match.
+    fn join_sides(&mut self) {
+        for (list, (bounces, rounds)) in self.lists.iter_mut().zip(&self.list_sides) {
+            if bounces.is_empty() && rounds.is_empty() {
+                continue;
             }
-            self.bounces[bundle.bounce_index as usize].set(lane, c);
-        }
-        if c.rounding != [0.0; 2] {
-            if bundle.round_index == NO_ROUNDING {
-                bundle.round_index = self.rounds.len() as u32;
-                self.rounds.push(RoundLanes::NONE);
+            let (b0, r0) = (self.bounces.len() as u32, self.rounds.len() as u32);
+            for bundle in list.iter_mut() {
+                if bundle.bounce_index != NO_BOUNCE {
+                    bundle.bounce_index += b0;
+                }
+                if bundle.round_index != NO_ROUNDING {
+                    bundle.round_index += r0;
+                }
             }
-            self.rounds[bundle.round_index as usize].set(lane, c);
+            self.bounces.extend_from_slice(bounces);
+            self.rounds.extend_from_slice(rounds);
         }
     }
 
@@ -394,6 +409,8 @@ pub(crate) struct ContactBundles {
     /// Bundle width; `None` picks four below [`EIGHT_LANES_FROM`] contacts and
     /// [`Width::detect`] from there, at each build (tests set it to compare).
     pub width: Option<Width>,
+    /// Scratch for packing on the workers: the selected contacts by list.
+    order: Vec<u32>,
     /// Contacts from which a solve is spread over the workers; `None`: [`SHARED_FROM`]
     /// (tests lower it so that small worlds take the parallel path).
     pub share_from: Option<usize>,
@@ -434,6 +451,25 @@ impl ContactBundles {
             Width::One => pack(&mut self.single, &mut self.overflow, input),
             Width::Four => pack(&mut self.four, &mut self.overflow, input),
             Width::Eight => pack(&mut self.eight, &mut self.overflow, input),
+        };
+    }
+
+    /// [`ContactBundles::build`] of contacts the workers prepared, each colour's lists filled
+    /// by one of `region`'s workers (see [`pack_shared`]).
+    pub fn build_shared(&mut self, region: &Region, input: &SharedPackInput) {
+        let width = match self.width {
+            Some(Width::Eight) if !eight_lanes_available() => Width::Four,
+            Some(width) => width,
+            None if input.lists.len() < EIGHT_LANES_FROM => Width::Four,
+            None => Width::detect(),
+        };
+        self.built = Some(width);
+        self.overflow.reset(2);
+        let (order, overflow) = (&mut self.order, &mut self.overflow);
+        self.bouncy = match width {
+            Width::One => pack_shared((&mut self.single, overflow), input, region, order),
+            Width::Four => pack_shared((&mut self.four, overflow), input, region, order),
+            Width::Eight => pack_shared((&mut self.eight, overflow), input, region, order),
         };
     }
 
@@ -563,6 +599,162 @@ impl ContactBundles {
     pub fn overflow_count(&self) -> usize {
         self.overflow.packed.iter().map(Vec::len).sum()
     }
+}
+
+/// Write contact `c` (index `i`) with its constraint `k` into the next lane of `list`, of
+/// which `filled` lanes are taken, opening a bundle (a copy of `inert`) when the last is full;
+/// its restitution and rounding lanes, if it has them, into `bounces` and `rounds`.
+#[inline(always)]
+fn put<L: Wide>(
+    list: &mut Vec<Bundle<L>>,
+    (bounces, rounds): (&mut Vec<BounceLanes<L>>, &mut Vec<RoundLanes<L>>),
+    (filled, inert): (&mut usize, &Bundle<L>),
+    (i, c): (usize, &Contact),
+    k: &ContactConstraint,
+    bodies: &[SolverBody],
+) {
+    let lane = *filled % L::WIDTH;
+    *filled += 1;
+    if lane == 0 {
+        list.push(*inert);
+    }
+    let bundle = list.last_mut().expect("a bundle is open");
+    bundle.set_contact(lane, (i as u32, c), k, bodies);
+    if c.restitution != 0.0 {
+        if bundle.bounce_index == NO_BOUNCE {
+            bundle.bounce_index = bounces.len() as u32;
+            bounces.push(BounceLanes::NONE);
+        }
+        bounces[bundle.bounce_index as usize].set(lane, c);
+    }
+    if c.rounding != [0.0; 2] {
+        if bundle.round_index == NO_ROUNDING {
+            bundle.round_index = rounds.len() as u32;
+            rounds.push(RoundLanes::NONE);
+        }
+        rounds[bundle.round_index as usize].set(lane, c);
+    }
+}
+
+/// The list a prepared contact `c` (constraint `k`) is packed into: colour * 2 + kind, or for
+/// the overflow [`IN_OVERFLOW`] + kind.
+#[inline(always)]
+pub(crate) fn list_of(c: &Contact, k: &ContactConstraint) -> u8 {
+    let kind = if c.count == 2 && k.block.is_none() {
+        BundleKind::Points
+    } else {
+        BundleKind::Block
+    };
+    let s = kind_slot(kind) as u8;
+    if c.colour >= OVERFLOW {
+        IN_OVERFLOW + s
+    } else {
+        c.colour * 2 + s
+    }
+}
+
+/// [`list_of`]'s lists from here on are the overflow's.
+pub(crate) const IN_OVERFLOW: u8 = 128;
+
+/// What packing on the workers reads: the bodies, the contacts, which of them to pack, and
+/// each selected contact's prepared constraint and list ([`list_of`]), in selection order.
+pub(crate) struct SharedPackInput<'a, 'b> {
+    pub bodies: &'a [SolverBody],
+    pub contacts: &'a [Contact],
+    pub selected: Selected<'b>,
+    pub prepared: &'a [ContactConstraint],
+    pub lists: &'a [u8],
+}
+
+/// [`pack`] with the contacts already prepared and the colours' lists filled by `region`'s
+/// workers, a list each; the overflow by this thread. `order` is scratch. The bundles hold
+/// the contacts in the same order as [`pack`]'s; their side lanes are numbered otherwise.
+fn pack_shared<L: Wide>(
+    (coloured, overflow): (&mut Packed<L>, &mut Packed<Lanes1>),
+    input: &SharedPackInput,
+    region: &Region,
+    order: &mut Vec<u32>,
+) -> bool {
+    let SharedPackInput {
+        bodies,
+        contacts,
+        selected,
+        prepared,
+        lists,
+    } = *input;
+    let dummy = (bodies.len() - 1) as u32;
+    coloured.reset(COLOURS * 2);
+    // The selected contacts by list, each list in selection (key) order: a counting sort.
+    let mut starts = [0u32; COLOURS * 2 + 1];
+    for &l in lists {
+        if l < IN_OVERFLOW {
+            starts[l as usize + 1] += 1;
+        }
+    }
+    for l in 1..starts.len() {
+        starts[l] += starts[l - 1];
+    }
+    order.clear();
+    order.resize(starts[COLOURS * 2] as usize, 0);
+    let mut next = starts;
+    for (m, &l) in lists.iter().enumerate() {
+        if l < IN_OVERFLOW {
+            order[next[l as usize] as usize] = m as u32;
+            next[l as usize] += 1;
+        }
+    }
+    coloured
+        .list_sides
+        .resize_with(COLOURS * 2, Default::default);
+    let inert = [BundleKind::Block, BundleKind::Points].map(|kind| Bundle::<L>::inert(kind, dummy));
+    let order = &*order;
+    // SAFETY: each block fills its own list and its own side lanes.
+    let (out, sides) = unsafe {
+        (
+            SharedSlice::new(&mut coloured.lists),
+            SharedSlice::new(&mut coloured.list_sides),
+        )
+    };
+    region.for_blocks(COLOURS * 2, &|l| {
+        // SAFETY: as above.
+        let (list, sides) = unsafe { (out.get(l), sides.get(l)) };
+        let (list, (bounces, rounds)) = (list.expect("a list"), sides.expect("its side lanes"));
+        bounces.clear();
+        rounds.clear();
+        let mut filled = 0;
+        for &m in &order[starts[l] as usize..starts[l + 1] as usize] {
+            let i = selected.at(m as usize);
+            let (c, k) = (&contacts[i], &prepared[m as usize]);
+            let inert = &inert[l % 2];
+            put(
+                list,
+                (bounces, rounds),
+                (&mut filled, inert),
+                (i, c),
+                k,
+                bodies,
+            );
+        }
+    });
+    coloured.join_sides();
+    let inert_one = [BundleKind::Block, BundleKind::Points].map(|kind| Bundle::inert(kind, dummy));
+    let mut overflowed = [0usize; 2];
+    let mut bouncy = false;
+    for (m, &l) in lists.iter().enumerate() {
+        let i = selected.at(m);
+        if l >= IN_OVERFLOW {
+            let s = (l - IN_OVERFLOW) as usize;
+            let (c, k) = (&contacts[i], &prepared[m]);
+            overflow.put((s, &mut overflowed[s]), &inert_one[s], (i, c), k, bodies);
+        }
+    }
+    for l in 0..COLOURS * 2 {
+        bouncy |= !coloured.list_sides[l].0.is_empty();
+    }
+    bouncy |= !overflow.bounces.is_empty();
+    coloured.close();
+    overflow.close();
+    bouncy
 }
 
 /// Pack the selected contacts into `coloured` bundles and the `overflow`; whether any bounces.

@@ -24,7 +24,7 @@
 //! joints run just before its contacts.
 
 use super::block::BlockMass;
-use super::bundles::{ContactBundles, PackInput, Work};
+use super::bundles::{list_of, ContactBundles, PackInput, SharedPackInput, Work};
 use super::constraint::{Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
 use super::joint::{self, JointPass, JointSet, JointStep, JointWork};
@@ -71,8 +71,10 @@ pub(crate) struct StepContext<'a> {
     pub selected: Selected<'a>,
     /// Where the selected contacts are packed for the lanes.
     pub bundles: &'a mut ContactBundles,
-    /// The selected contacts' constraints, in order, when the workers prepare them.
+    /// The selected contacts' constraints, in order, when the workers prepare them...
     pub prepared: &'a mut Vec<ContactConstraint>,
+    /// ...and the list each is packed into (`bundles::list_of`).
+    pub lists: &'a mut Vec<u8>,
     /// The points overlapping deeper than the spring reaches (`recover.rs`).
     pub recovery: &'a mut Recovery,
     /// This step's joints; the solve works on the `joint_selected` ones.
@@ -194,35 +196,17 @@ fn substeps(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
 fn prepare_contacts(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     let stiffness = &plan.stiffness;
     if let Some(region) = region {
-        prepare_shared(ctx, stiffness, region);
+        return prepare_and_pack_shared(ctx, stiffness, region);
     }
     let recovery = &mut *ctx.recovery;
     recovery.begin_solve();
     let limits = (1.0 / ctx.dt, ctx.settings.max_push_out_speed);
-    if region.is_none() {
-        ctx.bundles.build(PackInput {
-            bodies: ctx.bodies,
-            contacts: ctx.contacts,
-            selected: ctx.selected,
-            prepare: |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
-                let k = prepare_contact(a, b, c, stiffness);
-                if k.reach > 0.0 {
-                    recovery.note(c, (a, b), k.reach, limits);
-                }
-                k
-            },
-        });
-        return;
-    }
-    let mut prepared = ctx.prepared.iter();
     ctx.bundles.build(PackInput {
         bodies: ctx.bodies,
         contacts: ctx.contacts,
         selected: ctx.selected,
         prepare: |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
-            let k = *prepared
-                .next()
-                .expect("one constraint per selected contact");
+            let k = prepare_contact(a, b, c, stiffness);
             if k.reach > 0.0 {
                 recovery.note(c, (a, b), k.reach, limits);
             }
@@ -231,30 +215,59 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>)
     });
 }
 
+/// [`prepare_contacts`] on `region`'s workers: each contact prepared (`prepare_shared`),
+/// then each colour's lists packed by one worker; the deep contacts noted for the recover
+/// stage by this thread, in key order.
+fn prepare_and_pack_shared(ctx: &mut StepContext, stiffness: &Stiffness, region: &Region) {
+    prepare_shared(ctx, stiffness, region);
+    let input = SharedPackInput {
+        bodies: ctx.bodies,
+        contacts: ctx.contacts,
+        selected: ctx.selected,
+        prepared: ctx.prepared,
+        lists: ctx.lists,
+    };
+    ctx.bundles.build_shared(region, &input);
+    let recovery = &mut *ctx.recovery;
+    recovery.begin_solve();
+    let limits = (1.0 / ctx.dt, ctx.settings.max_push_out_speed);
+    for (m, k) in ctx.prepared.iter().enumerate() {
+        if k.reach > 0.0 {
+            let c = &ctx.contacts[ctx.selected.at(m)];
+            let (a, b) = (&ctx.bodies[c.a as usize], &ctx.bodies[c.b as usize]);
+            recovery.note(c, (a, b), k.reach, limits);
+        }
+    }
+}
+
 /// How many contacts a worker prepares at a time.
 const PREPARED_PER_BLOCK: usize = 64;
 
-/// Prepare the selected contacts' constraints, in order, into `ctx.prepared`, spread over
-/// `region`'s workers (packing them stays with this thread: bundles fill in key order).
+/// Prepare the selected contacts' constraints, in order, into `ctx.prepared`, and the list
+/// each is packed into into `ctx.lists`, spread over `region`'s workers.
 fn prepare_shared(ctx: &mut StepContext, stiffness: &Stiffness, region: &Region) {
     let (selected, n) = (ctx.selected, ctx.selected.count(ctx.contacts.len()));
     ctx.prepared.clear();
     ctx.prepared.resize(n, ContactConstraint::default());
+    ctx.lists.clear();
+    ctx.lists.resize(n, 0);
     // SAFETY: the selected contacts are distinct (ascending indices), and each block
-    // reaches its own run of them and of the constraints.
-    let (out, contacts) = unsafe {
+    // reaches its own run of them, of the constraints and of the lists.
+    let (out, contacts, lists) = unsafe {
         (
             SharedSlice::new(ctx.prepared),
             SharedSlice::new(ctx.contacts),
+            SharedSlice::new(ctx.lists),
         )
     };
     let bodies = &*ctx.bodies;
     region.for_blocks(n.div_ceil(PREPARED_PER_BLOCK), &|k| {
         for m in block(k, PREPARED_PER_BLOCK, n) {
             // SAFETY: as above.
-            let (c, k) = unsafe { (contacts.get(selected.at(m)), out.get(m)) };
+            let (c, k, l) = unsafe { (contacts.get(selected.at(m)), out.get(m), lists.get(m)) };
             let (c, k) = (c.expect("a selected contact"), k.expect("its constraint"));
             *k = prepare_contact(&bodies[c.a as usize], &bodies[c.b as usize], c, stiffness);
+            *l.expect("its list") = list_of(c, k);
         }
     });
 }

@@ -232,6 +232,8 @@ struct SolverScratch {
     split_impulse: SplitImpulse,
     /// Soft step: the contacts packed for the lanes.
     bundles: ContactBundles,
+    /// Soft step, on workers: the list each selected contact is packed into.
+    lists: Vec<u8>,
     /// Soft step: the overlap beyond the springs' reach.
     recovery: Recovery,
     /// The bodies that moved far for their size this step, in slot order, and the fraction

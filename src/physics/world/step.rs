@@ -237,6 +237,7 @@ impl World {
             selected,
             bundles: &mut self.solver.bundles,
             prepared: &mut self.solver.constraints,
+            lists: &mut self.solver.lists,
             recovery: &mut self.solver.recovery,
             joints: &mut self.joints.constraints,
             joint_selected: joints,

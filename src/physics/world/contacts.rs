@@ -141,13 +141,7 @@ impl World {
             joints,
             ..
         } = self;
-        let pairs = PairInput {
-            slots: &bodies.slots,
-            flagged: bodies.flagged > 0,
-            settings,
-            gravity: *gravity,
-            dt,
-        };
+        let pairs = PairInput::new(bodies, settings, *gravity, dt);
         let n = broad_phase.pair_keys.len();
         broad_phase.found.resize(n, 0);
         broad_phase.manifolds.resize(n, Manifold::EMPTY);
@@ -262,13 +256,7 @@ impl World {
             joints,
             ..
         } = self;
-        let pairs = PairInput {
-            slots: &bodies.slots,
-            flagged: bodies.flagged > 0,
-            settings,
-            gravity: *gravity,
-            dt,
-        };
+        let pairs = PairInput::new(bodies, settings, *gravity, dt);
         tiers.inputs.clear();
         let mut merge = Merge::begin(contacts);
         // Pairs kept apart by a joint, by their filters or by a sensor keep no contact (any
@@ -571,6 +559,17 @@ struct PairInput<'a> {
 }
 
 impl<'a> PairInput<'a> {
+    /// What a step of `dt` s under `gravity` (m/s^2) reads of `bodies` and `settings`.
+    fn new(bodies: &'a Bodies, settings: &'a Settings, gravity: Vec2, dt: Real) -> Self {
+        PairInput {
+            slots: &bodies.slots,
+            flagged: bodies.flagged > 0,
+            settings,
+            gravity,
+            dt,
+        }
+    }
+
     /// The live bodies of pair `key`, unless neither can move (a kinematic body meets static
     /// and kinematic ones without a contact).
     #[inline(always)]

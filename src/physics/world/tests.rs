@@ -208,13 +208,36 @@ fn one_four_and_eight_lanes_step_bit_identically() {
     );
 }
 
+/// A chain of `links` links of 0.25 m x 0.05 m from (-10, 9) rightwards, hinged end to end,
+/// the first to the world at its left end. With `wrong_frames`, each link's anchor on the last
+/// link is given as a world point, as if in the world's frame (10 m out on a 0.25 m link).
+fn hang_chain(w: &mut World, links: usize, wrong_frames: bool) {
+    use crate::physics::joint::{JointDef, JointKind, Revolute};
+    let mut last = None;
+    for i in 0..links {
+        let at = vec2(-10.0 + 0.25 * i as Real, 9.0);
+        let link = w
+            .add_body(&BodyDef::dynamic(Shape::rect(0.25, 0.05), at))
+            .unwrap();
+        // The first link hangs from the world (its anchor in world coordinates), each other
+        // from the last link's right end (in that link's frame).
+        let anchor_a = match last {
+            Some(_) if !wrong_frames => vec2(0.125, 0.0),
+            _ => at - vec2(0.125, 0.0),
+        };
+        let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), last, link)
+            .with_anchors(anchor_a, vec2(-0.125, 0.0));
+        w.add_joint(&hinge).unwrap();
+        last = Some(link);
+    }
+}
+
 /// One, two and three workers give the same World bit for bit (`team.rs`): the mixed pile
 /// with a hinged chain (joints to each other and to the world, each colour's spread over the
 /// workers) and a kinematic paddle (a fixed body many bundles of a colour share), at four and
 /// eight lanes, every solve spread over the workers however few its contacts.
 #[test]
 fn one_two_and_three_workers_step_bit_identically() {
-    use crate::physics::joint::{JointDef, JointKind, Revolute};
     let world = |workers: u32, width: Width| {
         let mut w = mixed_pile();
         w.set_workers(workers).unwrap();
@@ -224,23 +247,7 @@ fn one_two_and_three_workers_step_bit_identically() {
             .with_angular_velocity(1.5);
         w.add_body(&paddle).unwrap();
         // 80 links: each of the chain's two colours holds 40 joints, enough to be spread.
-        let mut last = None;
-        for i in 0..80 {
-            let at = vec2(-10.0 + 0.25 * i as Real, 9.0);
-            let link = w
-                .add_body(&BodyDef::dynamic(Shape::rect(0.25, 0.05), at))
-                .unwrap();
-            // The first link hangs from the world (its anchor in world coordinates), each
-            // other from the last link's right end (in that link's frame).
-            let anchor_a = match last {
-                None => at - vec2(0.125, 0.0),
-                Some(_) => vec2(0.125, 0.0),
-            };
-            let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), last, link)
-                .with_anchors(anchor_a, vec2(-0.125, 0.0));
-            w.add_joint(&hinge).unwrap();
-            last = Some(link);
-        }
+        hang_chain(&mut w, 80, false);
         w
     };
     let widths: &[Width] = if Width::detect() == Width::Eight {
@@ -1059,19 +1066,8 @@ fn a_body_created_asleep_hangs_until_pushed() {
 /// within the speed cap: nothing sensible comes of such a chain, but nothing poisons the World.
 #[test]
 fn a_chain_whose_anchors_cannot_meet_stays_finite() {
-    use crate::physics::joint::{JointDef, JointKind, Revolute};
     let mut w = awake_world(vec2(0.0, -10.0));
-    let mut last = None;
-    for i in 0..80 {
-        let at = vec2(-10.0 + 0.25 * i as Real, 9.0);
-        let link = w
-            .add_body(&BodyDef::dynamic(Shape::rect(0.25, 0.05), at))
-            .unwrap();
-        let hinge = JointDef::new(JointKind::Revolute(Revolute::free()), last, link)
-            .with_anchors(at - vec2(0.125, 0.0), vec2(-0.125, 0.0));
-        w.add_joint(&hinge).unwrap();
-        last = Some(link);
-    }
+    hang_chain(&mut w, 80, true);
     let cap = w.settings().max_linear_speed;
     for step in 0..600 {
         w.step(1.0 / 60.0).unwrap();

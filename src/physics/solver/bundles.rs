@@ -656,8 +656,13 @@ pub(crate) fn list_of(c: &Contact, k: &ContactConstraint) -> u8 {
 /// [`list_of`]'s lists from here on are the overflow's.
 pub(crate) const IN_OVERFLOW: u8 = 128;
 
+/// A bit beside a [`list_of`] list, free in every one: the contact overlaps deeper than its
+/// spring reaches (the recover stage's).
+pub(crate) const DEEP: u8 = 64;
+
 /// What packing on the workers reads: the bodies, the contacts, which of them to pack, and
-/// each selected contact's prepared constraint and list ([`list_of`]), in selection order.
+/// each selected contact's prepared constraint and list ([`list_of`], maybe with [`DEEP`]),
+/// in selection order.
 pub(crate) struct SharedPackInput<'a, 'b> {
     pub bodies: &'a [SolverBody],
     pub contacts: &'a [Contact],
@@ -687,6 +692,7 @@ fn pack_shared<L: Wide>(
     // The selected contacts by list, each list in selection (key) order: a counting sort.
     let mut starts = [0u32; COLOURS * 2 + 1];
     for &l in lists {
+        let l = l & !DEEP;
         if l < IN_OVERFLOW {
             starts[l as usize + 1] += 1;
         }
@@ -698,6 +704,7 @@ fn pack_shared<L: Wide>(
     order.resize(starts[COLOURS * 2] as usize, 0);
     let mut next = starts;
     for (m, &l) in lists.iter().enumerate() {
+        let l = l & !DEEP;
         if l < IN_OVERFLOW {
             order[next[l as usize] as usize] = m as u32;
             next[l as usize] += 1;
@@ -741,7 +748,7 @@ fn pack_shared<L: Wide>(
     let mut overflowed = [0usize; 2];
     let mut bouncy = false;
     for (m, &l) in lists.iter().enumerate() {
-        let i = selected.at(m);
+        let (i, l) = (selected.at(m), l & !DEEP);
         if l >= IN_OVERFLOW {
             let s = (l - IN_OVERFLOW) as usize;
             let (c, k) = (&contacts[i], &prepared[m]);

@@ -24,7 +24,7 @@
 //! joints run just before its contacts.
 
 use super::block::BlockMass;
-use super::bundles::{list_of, ContactBundles, PackInput, SharedPackInput, Work};
+use super::bundles::{list_of, ContactBundles, PackInput, SharedPackInput, Work, DEEP};
 use super::constraint::{Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
 use super::joint::{self, JointPass, JointSet, JointStep, JointWork};
@@ -231,9 +231,11 @@ fn prepare_and_pack_shared(ctx: &mut StepContext, stiffness: &Stiffness, region:
     let recovery = &mut *ctx.recovery;
     recovery.begin_solve();
     let limits = (1.0 / ctx.dt, ctx.settings.max_push_out_speed);
-    for (m, k) in ctx.prepared.iter().enumerate() {
-        if k.reach > 0.0 {
-            let c = &ctx.contacts[ctx.selected.at(m)];
+    // (The deep ones are marked in their list byte: scanning the constraints themselves, 2 MB
+    // for a pyramid of 5,050 boxes, took 2.4 % of its step.)
+    for (m, &l) in ctx.lists.iter().enumerate() {
+        if l & DEEP != 0 {
+            let (c, k) = (&ctx.contacts[ctx.selected.at(m)], &ctx.prepared[m]);
             let (a, b) = (&ctx.bodies[c.a as usize], &ctx.bodies[c.b as usize]);
             recovery.note(c, (a, b), k.reach, limits);
         }
@@ -247,9 +249,9 @@ const PREPARED_PER_BLOCK: usize = 64;
 /// each is packed into into `ctx.lists`, spread over `region`'s workers.
 fn prepare_shared(ctx: &mut StepContext, stiffness: &Stiffness, region: &Region) {
     let (selected, n) = (ctx.selected, ctx.selected.count(ctx.contacts.len()));
-    ctx.prepared.clear();
+    // (Every one is written below: only new room is filled first. Clearing first rewrote
+    // 2 MB a step for a pyramid of 5,050 boxes.)
     ctx.prepared.resize(n, ContactConstraint::default());
-    ctx.lists.clear();
     ctx.lists.resize(n, 0);
     // SAFETY: the selected contacts are distinct (ascending indices), and each block
     // reaches its own run of them, of the constraints and of the lists.
@@ -267,7 +269,8 @@ fn prepare_shared(ctx: &mut StepContext, stiffness: &Stiffness, region: &Region)
             let (c, k, l) = unsafe { (contacts.get(selected.at(m)), out.get(m), lists.get(m)) };
             let (c, k) = (c.expect("a selected contact"), k.expect("its constraint"));
             *k = prepare_contact(&bodies[c.a as usize], &bodies[c.b as usize], c, stiffness);
-            *l.expect("its list") = list_of(c, k);
+            let deep = if k.reach > 0.0 { DEEP } else { 0 };
+            *l.expect("its list") = list_of(c, k) | deep;
         }
     });
 }

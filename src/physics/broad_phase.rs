@@ -217,6 +217,12 @@ impl SweepAndPrune {
         self.active.is_empty()
     }
 
+    /// How many bodies are awake and dynamic (or kinematic).
+    pub fn active_count(&mut self) -> usize {
+        self.compact();
+        self.active.len()
+    }
+
     /// Forget every body.
     pub fn clear(&mut self) {
         self.active.clear();

@@ -8,8 +8,9 @@ use crate::physics::solver::joint::{self, JointConstraint, JointStep};
 use crate::physics::solver::soft_step::{self, StepContext};
 use crate::physics::team::Region;
 
-/// Awake bodies from which a World with workers wakes them for a step: below, the step takes
-/// some tens of microseconds, about what waking them costs.
+/// Awake bodies (the broad phase's active list, kinematic bodies among them) from which a World
+/// with workers wakes them for a step: below, the step takes some tens of microseconds, about
+/// what waking them costs.
 const SHARED_STEP_FROM: usize = 256;
 
 /// The sequential solver's joint bias factor (box2d-lite's `k_biasFactor`): the fraction of a
@@ -40,7 +41,7 @@ impl World {
             .share_from
             .map_or(SHARED_STEP_FROM, |n| n.min(SHARED_STEP_FROM));
         match workers.0.as_mut() {
-            Some(team) if self.awake_count() >= from => {
+            Some(team) if self.broad_phase.sweep.active_count() >= from => {
                 team.region(|region| self.step_with(dt, Some(region)))
             }
             _ => self.step_with(dt, None),

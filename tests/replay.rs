@@ -456,3 +456,46 @@ async fn the_daemon_records_a_journal_that_replays() {
     session.close().await.unwrap();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Two worlds of one daemon share a pool of two workers (`workers = 2`), each stepping 400
+/// discs that never rest (enough awake bodies for a step to take the pool), while the other
+/// world's tick may hold it. Each world's journal replays alone, without workers, with the same
+/// state hash at every frame: sharing the pool, or finding it busy, changes no bit.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn worlds_sharing_a_pool_of_workers_replay_alone_bit_for_bit() {
+    let port = 17630;
+    let dir = temp_dir("pooled");
+    let scene = dir.join("gas.toml");
+    std::fs::write(&scene, tiltbox::service::gas_scene(400)).unwrap();
+    let path = dir.join("pooled.journal");
+    let mut config = daemon_config(port);
+    config.scene = Some(scene);
+    config.record = Some(path.clone());
+    config.worlds = vec!["second".into()];
+    config.workers = 2;
+    let pool = tiltbox::physics::WorkerPool::new(config.workers).unwrap();
+    let options = tiltbox::service::ServerOptions {
+        workers: Some(pool.clone()),
+        ..Default::default()
+    };
+    let servers = tiltbox::service::start_worlds(&config, options)
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    let summaries = tiltbox::service::shutdown_worlds(servers).await.unwrap();
+    assert!(
+        pool.steps_shared() >= 60,
+        "{} steps took the pool",
+        pool.steps_shared()
+    );
+    let second = dir.join("pooled.journal.second");
+    for (path, summary) in [(path, &summaries[0]), (second, &summaries[1])] {
+        let journal = Journal::read(&path).unwrap();
+        let report = replay(&journal, None, |_| {}).unwrap();
+        assert!(report.clean_end, "{}", path.display());
+        assert_eq!(report.mismatches, 0, "{}: {report:?}", path.display());
+        assert_eq!(report.last_frame, summary.frames);
+        assert!(summary.frames >= 60, "{} frames", summary.frames);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

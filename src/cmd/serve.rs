@@ -47,6 +47,10 @@ pub struct ServeArgs {
     /// Command channel capacity [config: command_queue; default 256].
     #[arg(long, value_name = "N")]
     pub command_queue: Option<u32>,
+    /// Threads sharing the steps of every world served, one pool, 1..=64 [config: workers;
+    /// default 1].
+    #[arg(long, value_name = "N")]
+    pub workers: Option<u32>,
     /// [config: limits.max_bodies; default 1000]
     #[arg(long, value_name = "N")]
     pub max_bodies: Option<u32>,
@@ -170,6 +174,7 @@ impl ServeArgs {
         set(&mut c.snapshot_grid_bits, &self.snapshot_grid_bits);
         set(&mut c.max_catch_up, &self.max_catch_up);
         set(&mut c.command_queue, &self.command_queue);
+        set(&mut c.workers, &self.workers);
         if self.record.is_some() {
             c.record = self.record.clone();
         }

@@ -10,6 +10,7 @@ use std::io::{self, BufWriter, Write};
 use std::path::Path;
 use std::process::ExitCode;
 use tiltbox::cli::Failure;
+use tiltbox::physics::WorkerPool;
 use tiltbox::protocol::EventKind;
 use tiltbox::scene::Scene;
 use tiltbox::service::journal::{replay_with, Journal};
@@ -59,9 +60,22 @@ pub fn timeline(
         .limits
         .max_bodies
         .max(u32::try_from(most).unwrap_or(u32::MAX));
+    // The scene's workers (or `--workers`) share the steps, as without a timeline.
+    let workers = scene.settings.workers;
+    let pool = match workers {
+        0 | 1 => None,
+        n => Some(
+            WorkerPool::new(n)
+                .map_err(|e| Failure::Failed(anyhow!("cannot start {n} workers: {e}")))?,
+        ),
+    };
     let source = SceneSource::Given(Box::new(scene));
-    let start =
-        || Simulation::new(&config, source.clone()).map_err(|e| Failure::Usage(e.to_string()));
+    let start = || {
+        let mut sim =
+            Simulation::new(&config, source.clone()).map_err(|e| Failure::Usage(e.to_string()))?;
+        sim.share_workers(pool.clone());
+        Ok::<_, Failure>(sim)
+    };
     // A dry run first: a command the simulation refuses when it comes to apply it (an id
     // that is not there, the spawn rate limit) refuses the timeline before anything is
     // printed.

@@ -48,5 +48,6 @@ pub use query::{QueryFilter, RayHit};
 pub use segment::Segment;
 pub use settings::{Mixing, Settings, SolverKind};
 pub use shape::{Aabb, Shape};
+pub use team::WorkerPool;
 pub use world::snapshot::{StateError, WorldState};
 pub use world::{Query, World};

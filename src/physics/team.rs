@@ -8,12 +8,15 @@
 //! from run to run; what a block computes does not, and no number is summed across blocks, so
 //! the World's results are the same to the bit for any number of workers.
 //!
-//! Blocks are taken from one counter that only grows (a ticket per block, each stage's
-//! tickets following the last's), so a worker that comes late to a stage finds nothing left
-//! and nothing is reset between stages. A stage ends when all its blocks are done, not when
-//! every worker has arrived: a worker held up by the operating system delays only the blocks
-//! it has taken. Between stages the workers spin briefly, then yield; between steps they
-//! sleep.
+//! Each worker starts a stage at its own share of the blocks and takes from the others' ends
+//! only once its own are gone, so that a worker meets, stage after stage, much the same
+//! bodies. A stage ends when all its blocks are done, not when every worker has arrived: a
+//! worker held up by the operating system delays only the blocks it has taken. Between stages
+//! the workers spin briefly, then yield; between steps they sleep.
+//!
+//! Several Worlds (a daemon's) can share one team through a [`WorkerPool`]: a step takes the
+//! team if no other World's step holds it, and otherwise runs on its own thread alone. The
+//! results are the same either way, so no step ever waits for another World's.
 
 use std::cell::UnsafeCell;
 use std::marker::PhantomData;
@@ -148,6 +151,63 @@ impl Team {
             shared,
             _not_send: PhantomData,
         })
+    }
+}
+
+/// One [`Team`] that several Worlds share (`World::share_workers`): each step takes it if it is
+/// free and otherwise steps alone on its own thread, never waiting for another World's step.
+/// Cloning shares the same team.
+#[derive(Clone, Debug)]
+pub struct WorkerPool {
+    team: Arc<Mutex<Team>>,
+    workers: u32,
+    /// Steps that took the team.
+    taken: Arc<AtomicU64>,
+}
+
+impl WorkerPool {
+    /// A pool of `workers` (the stepping thread and `workers - 1` threads), clamped to
+    /// 2..=[`MAX_WORKERS`]; the error is the system's, when it cannot start a thread.
+    pub fn new(workers: u32) -> std::io::Result<WorkerPool> {
+        let team = Team::new(workers)?;
+        Ok(WorkerPool {
+            workers: team.workers(),
+            team: Arc::new(Mutex::new(team)),
+            taken: Arc::new(AtomicU64::new(0)),
+        })
+    }
+
+    /// How many workers, the stepping thread included.
+    pub fn workers(&self) -> u32 {
+        self.workers
+    }
+
+    /// Steps (of any World sharing the pool) that have taken its workers so far.
+    pub fn steps_shared(&self) -> u64 {
+        self.taken.load(Ordering::Relaxed)
+    }
+
+    /// The team for a step, if no other step holds it (counted in
+    /// [`WorkerPool::steps_shared`]).
+    pub(crate) fn take(&self) -> Option<std::sync::MutexGuard<'_, Team>> {
+        let team = self.lock()?;
+        self.taken.fetch_add(1, Ordering::Relaxed);
+        Some(team)
+    }
+
+    /// The team, if no other step holds it. A step that panicked left it whole (its region
+    /// waited for the workers to leave), so a poisoned lock is taken as it is.
+    pub(crate) fn lock(&self) -> Option<std::sync::MutexGuard<'_, Team>> {
+        match self.team.try_lock() {
+            Ok(team) => Some(team),
+            Err(std::sync::TryLockError::Poisoned(e)) => Some(e.into_inner()),
+            Err(std::sync::TryLockError::WouldBlock) => None,
+        }
+    }
+
+    /// Whether `self` and `other` are the same pool.
+    pub fn same(&self, other: &WorkerPool) -> bool {
+        Arc::ptr_eq(&self.team, &other.team)
     }
 }
 

@@ -33,6 +33,11 @@ pub struct ServerConfig {
     /// Capacity of the command channel between Zenoh callbacks and the tick thread; a
     /// command arriving when it is full is rejected. Default 256.
     pub command_queue: u32,
+    /// Threads that share the steps of every world this daemon serves: one pool, the tick
+    /// threads among them (1..=64). A world whose tick finds the pool in use by another
+    /// world's step steps alone; the results are the same to the bit either way. Replaces a
+    /// scene's `[settings] workers`. Default 1: each tick thread steps its world alone.
+    pub workers: u32,
     /// Command journal: every command taken from the channel, stamped with its frame, plus a
     /// hash of the World after every step, for `tiltbox replay`. Absent: no journal.
     pub record: Option<PathBuf>,
@@ -119,6 +124,7 @@ impl Default for ServerConfig {
             snapshot_grid_bits: crate::protocol::snapshot::DEFAULT_GRID_BITS as u32,
             max_catch_up: 4,
             command_queue: 256,
+            workers: 1,
             record: None,
             checkpoint: None,
             checkpoint_every: 10.0,
@@ -338,6 +344,12 @@ impl ServerConfig {
         )?;
         count("max_catch_up", self.max_catch_up, 0, 1000)?;
         count("command_queue", self.command_queue, 1, 1_000_000)?;
+        count(
+            "workers",
+            self.workers,
+            1,
+            crate::physics::settings::MAX_WORKERS,
+        )?;
         if !(self.checkpoint_every.is_finite()
             && (0.01..=86_400.0).contains(&self.checkpoint_every))
         {
@@ -507,5 +519,18 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("max_bodes"), "{e}");
+        for workers in [0, 65] {
+            let e = ServerConfig {
+                workers,
+                ..Default::default()
+            }
+            .validate()
+            .unwrap_err()
+            .to_string();
+            assert!(
+                e.contains(&format!("workers = {workers}")) && e.contains("1..=64"),
+                "{e}"
+            );
+        }
     }
 }

@@ -11,6 +11,7 @@ use super::sim::{SceneSource, StartError};
 use super::tick::{self, Outputs, Recording, RunSummary, Shared, TickConfig};
 use super::wire::check_query;
 use super::world_query::{WorldQueries, MAX_PENDING};
+use crate::physics::WorkerPool;
 use crate::protocol::RateLimit;
 use crate::protocol::{decode, encode, CommandKey, Keys, QueryAnswer, WorldQuery};
 use std::sync::atomic::AtomicBool;
@@ -112,6 +113,10 @@ pub struct ServerOptions {
     pub record: bool,
     /// Called just before each snapshot is put.
     pub on_publish: Option<PublishHook>,
+    /// The workers this world's steps share with other worlds; `None`: a pool of the
+    /// config's `workers` is started for it (none for 1). [`start_worlds`] starts one for
+    /// all its worlds.
+    pub workers: Option<WorkerPool>,
 }
 
 struct ZenohOutputs {
@@ -196,7 +201,11 @@ impl Server {
             .source
             .clone()
             .unwrap_or_else(|| SceneSource::from_config(config));
-        let (sim, resumed) = checkpoint::start(config, source.clone())?;
+        let (mut sim, resumed) = checkpoint::start(config, source.clone())?;
+        sim.share_workers(match options.workers.clone() {
+            Some(pool) => Some(pool),
+            None => worker_pool(config)?,
+        });
         let journal = match &config.record {
             Some(path) => Some(
                 JournalWriter::create(path, config, &source, &sim, resumed)
@@ -517,6 +526,17 @@ async fn declare_world_queries(
     Ok((queryable, task))
 }
 
+/// The pool of `config.workers` threads (the tick thread among them) that a daemon's worlds
+/// share; none for one.
+fn worker_pool(config: &ServerConfig) -> Result<Option<WorkerPool>, ServiceError> {
+    if config.workers <= 1 {
+        return Ok(None);
+    }
+    WorkerPool::new(config.workers)
+        .map(Some)
+        .map_err(|e| ServiceError::Thread(format!("{} workers: {e}", config.workers)))
+}
+
 /// The config of each world a daemon serves: `config.world` first, then every name in
 /// `config.worlds`, each with its own key prefix `tiltbox/<name>` (the first keeps
 /// `config.prefix` if set) and, when recording or checkpointing, its own files
@@ -555,6 +575,10 @@ pub async fn start_worlds(
     config.validate()?;
     if config.worlds.is_empty() {
         return Ok(vec![Server::start(config, options).await?]);
+    }
+    let mut options = options;
+    if options.workers.is_none() {
+        options.workers = worker_pool(config)?;
     }
     let session = zenoh::open(config.zenoh_config()?)
         .await

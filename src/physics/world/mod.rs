@@ -22,7 +22,7 @@ use super::solver::graph::ConstraintGraph;
 use super::solver::recover::Recovery;
 use super::solver::sequential::SplitImpulse;
 use super::solver::{clamp_speed, Kinematic, SolverBody};
-use super::team::Team;
+use super::team::{Team, WorkerPool};
 
 /// Export and import of the full state (checkpoints); a child module so it reads private fields.
 pub mod snapshot;
@@ -76,31 +76,49 @@ pub struct World {
     workers: Workers,
 }
 
-/// A World's own worker threads: none for `Settings::workers = 1`.
+/// The threads that share a World's step: none for `Settings::workers = 1`, a team of its
+/// own, or a pool it shares with other Worlds.
 #[derive(Debug, Default)]
-struct Workers(Option<Team>);
+enum Workers {
+    #[default]
+    Alone,
+    Own(Team),
+    Pool(WorkerPool),
+}
 
 impl Workers {
     /// Workers for `settings`: this thread alone for one, a [`Team`] for more.
     fn start(workers: u32) -> Result<Workers, PhysicsError> {
         if workers <= 1 {
-            return Ok(Workers(None));
+            return Ok(Workers::Alone);
         }
         Team::new(workers)
-            .map(|team| Workers(Some(team)))
+            .map(Workers::Own)
             .map_err(|e| PhysicsError::NoWorkers {
                 workers,
                 reason: e.to_string(),
             })
     }
+
+    /// How many, the stepping thread included.
+    fn count(&self) -> u32 {
+        match self {
+            Workers::Alone => 1,
+            Workers::Own(team) => team.workers(),
+            Workers::Pool(pool) => pool.workers(),
+        }
+    }
 }
 
 impl Clone for Workers {
     /// A team of the same size (or this thread alone, if the system starts no thread: the
-    /// results are the same either way).
+    /// results are the same either way); a pool is shared with the clone.
     fn clone(&self) -> Self {
-        let team = self.0.as_ref().and_then(|t| Team::new(t.workers()).ok());
-        Workers(team)
+        match self {
+            Workers::Alone => Workers::Alone,
+            Workers::Own(team) => Team::new(team.workers()).map_or(Workers::Alone, Workers::Own),
+            Workers::Pool(pool) => Workers::Pool(pool.clone()),
+        }
     }
 }
 
@@ -290,8 +308,7 @@ impl World {
     /// Replace the settings (validated first; on error nothing changes).
     pub fn set_settings(&mut self, settings: Settings) -> Result<(), PhysicsError> {
         settings.validate()?;
-        let have = self.workers.0.as_ref().map_or(1, Team::workers);
-        if settings.workers != have {
+        if settings.workers != self.workers.count() {
             self.workers = Workers::start(settings.workers)?;
         }
         self.settings = settings;
@@ -307,12 +324,20 @@ impl World {
             ..self.settings.clone()
         }
         .validate()?;
-        let have = self.workers.0.as_ref().map_or(1, Team::workers);
-        if workers != have {
+        if workers != self.workers.count() {
             self.workers = Workers::start(workers)?;
         }
         self.settings.workers = workers;
         Ok(())
+    }
+
+    /// Share the step with `pool`'s workers, which other Worlds may share too: a step takes
+    /// them when no other World's step holds them and otherwise runs on this thread alone.
+    /// The results are the same to the bit either way, so nothing else changes and nothing
+    /// wakes. `Settings::workers` becomes the pool's size.
+    pub fn share_workers(&mut self, pool: &WorkerPool) {
+        self.workers = Workers::Pool(pool.clone());
+        self.settings.workers = pool.workers();
     }
 
     /// Gravity (m/s^2).

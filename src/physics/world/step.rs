@@ -40,10 +40,14 @@ impl World {
             .bundles
             .share_from
             .map_or(SHARED_STEP_FROM, |n| n.min(SHARED_STEP_FROM));
-        match workers.0.as_mut() {
-            Some(team) if self.broad_phase.sweep.active_count() >= from => {
-                team.region(|region| self.step_with(dt, Some(region)))
-            }
+        let share = self.broad_phase.sweep.active_count() >= from;
+        match &mut workers {
+            Workers::Own(team) if share => team.region(|region| self.step_with(dt, Some(region))),
+            Workers::Pool(pool) if share => match pool.take() {
+                Some(mut team) => team.region(|region| self.step_with(dt, Some(region))),
+                // Another World's step holds the pool: this one runs alone, to the same result.
+                None => self.step_with(dt, None),
+            },
             _ => self.step_with(dt, None),
         }
         self.workers = workers;

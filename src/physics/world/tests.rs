@@ -269,7 +269,9 @@ fn one_two_and_three_workers_step_bit_identically() {
             }
         }
         for (w, n) in worlds.iter().zip(1..).skip(1) {
-            let team = w.workers.0.as_ref().expect("a team");
+            let Workers::Own(team) = &w.workers else {
+                panic!("{n} workers: no team of its own")
+            };
             assert_eq!(team.workers(), n);
             assert!(
                 team.regions() >= 180,
@@ -284,6 +286,54 @@ fn one_two_and_three_workers_step_bit_identically() {
             .fold(0.0, Real::max);
         assert!(fastest < 20.0, "fastest body {fastest} m/s");
     }
+}
+
+/// Worlds that share one pool step as they would alone, bit for bit: two stepped at once on
+/// two threads (each takes the pool when the other does not hold it), and one stepped while
+/// the pool is held elsewhere, which runs alone instead of waiting.
+#[test]
+fn worlds_sharing_a_pool_step_as_they_would_alone() {
+    let world = || {
+        let mut w = mixed_pile();
+        w.solver.bundles.share_from = Some(0);
+        hang_chain(&mut w, 80, false);
+        w
+    };
+    let mut alone = world();
+    for _ in 0..120 {
+        alone.step(1.0 / 60.0).unwrap();
+    }
+    let pool = WorkerPool::new(2).expect("threads start");
+    let mut pair = [world(), world()];
+    for w in &mut pair {
+        w.share_workers(&pool);
+        assert_eq!(w.settings().workers, 2);
+    }
+    std::thread::scope(|s| {
+        for w in &mut pair {
+            s.spawn(|| (0..120).for_each(|_| w.step(1.0 / 60.0).unwrap()));
+        }
+    });
+    let regions = pool.lock().expect("free after the steps").regions();
+    assert!(regions > 0, "no step took the pool");
+    assert_eq!(pool.steps_shared(), regions);
+    for (k, w) in pair.iter().enumerate() {
+        assert!(alone.state_bits().eq(w.state_bits()), "world {k} differs");
+    }
+    // Held elsewhere: the step runs alone (no region), to the same result.
+    let mut held = world();
+    held.share_workers(&pool);
+    let mut alone = world();
+    let guard = pool.lock().expect("free");
+    for _ in 0..10 {
+        held.step(1.0 / 60.0).unwrap();
+        alone.step(1.0 / 60.0).unwrap();
+    }
+    assert_eq!(guard.regions(), regions, "a step waited for the held pool");
+    drop(guard);
+    assert!(alone.state_bits().eq(held.state_bits()));
+    held.step(1.0 / 60.0).unwrap();
+    assert_eq!(pool.lock().expect("free").regions(), regions + 1);
 }
 
 /// How far a box `width` m wide and 1 m tall resting on the floor has sunk (m), after 2 s

@@ -30,7 +30,7 @@ pub use state::{SimState, StartError};
 
 use super::config::{Limits, ServerConfig};
 use super::wire::{body_info, vector};
-use crate::physics::{PhysicsError, Real, World};
+use crate::physics::{PhysicsError, Real, WorkerPool, World};
 use crate::protocol::{
     BodyInfo, Event, Grid, JointInfo, Keys, SceneState, SceneWithJoints, SnapshotFrame,
 };
@@ -64,6 +64,9 @@ pub struct Simulation {
     hands: hands::Hands,
     /// A reset loaded a scene with joints: the next step's events list them (`Built`).
     announce_joints: bool,
+    /// The workers that share the steps (the daemon's pool, see [`Simulation::share_workers`]);
+    /// none: the World steps alone, whatever its scene's `workers` says.
+    pool: Option<WorkerPool>,
 }
 
 impl Simulation {
@@ -100,6 +103,7 @@ impl Simulation {
             rejected: 0,
             hands: hands::Hands::default(),
             announce_joints: false,
+            pool: None,
         }
     }
 
@@ -139,6 +143,7 @@ impl Simulation {
         }
         let mut sim = Simulation::new_empty(config, source);
         sim.world = world;
+        sim.apply_workers();
         sim.scene_name = state.scene_name;
         sim.scene_gravity = state.scene_gravity;
         sim.frame = state.frame;
@@ -178,15 +183,26 @@ impl Simulation {
 
     /// (Re)load the scene from its source and replace the World; nothing changes on error.
     fn load_scene(&mut self) -> Result<(), StartError> {
-        let scene = self.source.load()?;
+        let mut scene = self.source.load()?;
         if scene.bodies.len() > self.limits.max_bodies as usize {
             return Err(StartError::TooManyBodies {
                 bodies: scene.bodies.len(),
                 max: self.limits.max_bodies,
             });
         }
+        // The daemon's workers replace the scene's (no team is started only to be dropped).
+        let workers = self.pool.as_ref().map_or(1, WorkerPool::workers);
+        if scene.settings.workers > 1 && scene.settings.workers != workers {
+            tracing::info!(
+                scene = scene.settings.workers,
+                daemon = workers,
+                "the scene's workers are replaced by the daemon's"
+            );
+        }
+        scene.settings.workers = 1;
         let (world, ids) = scene.build_world()?;
         self.world = world;
+        self.apply_workers();
         self.hands.clear();
         self.bodies.clear();
         self.poses.restart();
@@ -197,6 +213,26 @@ impl Simulation {
         let g = scene.gravity.length() as f32;
         self.scene_gravity = if g > 0.0 { g } else { 9.81 };
         Ok(())
+    }
+
+    /// Share the steps with `pool`'s workers (the daemon's, shared by all its worlds), or
+    /// step alone with `None`; this World and every one a reset loads. The results are the
+    /// same to the bit either way.
+    pub fn share_workers(&mut self, pool: Option<WorkerPool>) {
+        self.pool = pool;
+        self.apply_workers();
+    }
+
+    fn apply_workers(&mut self) {
+        match &self.pool {
+            Some(pool) => self.world.share_workers(pool),
+            None => {
+                // One worker starts no thread and the settings are the World's own, valid.
+                if let Err(e) = self.world.set_workers(1) {
+                    tracing::error!("cannot step alone: {e}");
+                }
+            }
+        }
     }
 
     /// Record what the body `id`, just added, is called and looks like.

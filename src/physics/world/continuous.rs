@@ -23,10 +23,16 @@ use crate::physics::collide::toi::{lies_along_a_face, time_of_impact, Sweep};
 use crate::physics::math::{Real, Rot, Transform, Vec2};
 use crate::physics::segment::Segment;
 use crate::physics::shape::{Aabb, Shape};
+use crate::physics::team::{block, Region, SharedSlice};
 
 /// A body is fast when it moved more than this fraction of its shortest extent in a step
 /// (Box2D's default safety factor).
 pub(super) const FAST_FRACTION: Real = 0.5;
+
+/// How many candidate pairs a worker sweeps for impacts at a time...
+const IMPACT_PAIRS_PER_BLOCK: usize = 256;
+/// ...and the fewest fast bodies for which the workers sweep them.
+const SHARED_IMPACTS_FROM: usize = 64;
 
 /// A slot's place in the fast list when it is not on it.
 pub(super) const NOT_FAST: u32 = u32::MAX;
@@ -39,7 +45,7 @@ impl World {
     /// Continuous collision: each fast body (`solver.fast`, listed by finalize in slot order)
     /// against the static bodies it was paired with this step, and moved back to its first
     /// moment of impact.
-    pub(super) fn solve_continuous(&mut self) {
+    pub(super) fn solve_continuous(&mut self, region: Option<&Region>) {
         if self.solver.fast.is_empty() {
             return;
         }
@@ -53,15 +59,22 @@ impl World {
         for (i, &slot) in fast.iter().enumerate() {
             place[slot as usize] = i as u32;
         }
-        for &key in &self.broad_phase.pair_keys {
-            let (a, b) = pair_of(key);
-            for (moving, other) in [(a, b), (b, a)] {
-                let i = place[moving as usize];
-                // Only a static body can be `other`: it has no inverse mass (read from the
-                // solver's compact bodies before the body itself).
-                if i != NOT_FAST && self.solver.bodies[other as usize].inv_mass == 0.0 {
-                    let t = self.impact(moving, other, &mut found);
-                    hits[i as usize] = hits[i as usize].min(t);
+        // (Tests that lower the solve's threshold lower this one with it.)
+        let from = self
+            .solver
+            .bundles
+            .share_from
+            .map_or(SHARED_IMPACTS_FROM, |n| n.min(SHARED_IMPACTS_FROM));
+        match region {
+            Some(region) if fast.len() >= from => {
+                self.pair_impacts_shared(region, &place, &mut hits)
+            }
+            _ => {
+                for &key in &self.broad_phase.pair_keys {
+                    if let Some((i, moving, other)) = self.fast_against_static(key, &place) {
+                        let t = self.impact(moving, other, &mut found);
+                        hits[i] = hits[i].min(t);
+                    }
                 }
             }
         }
@@ -77,6 +90,56 @@ impl World {
         self.solver.fast.clear();
         self.solver.fast_hits = hits;
         self.solver.fast_place = place;
+    }
+
+    /// The fast body of pair `key` (its place in the fast list, its slot) and the static body
+    /// it meets, if the pair is such. Only a static body can be the other: it has no inverse
+    /// mass (read from the solver's compact bodies before the body itself).
+    #[inline]
+    fn fast_against_static(&self, key: u64, place: &[u32]) -> Option<(usize, u32, u32)> {
+        let (a, b) = pair_of(key);
+        [(a, b), (b, a)].into_iter().find_map(|(moving, other)| {
+            let i = place[moving as usize];
+            (i != NOT_FAST && self.solver.bodies[other as usize].inv_mass == 0.0)
+                .then_some((i as usize, moving, other))
+        })
+    }
+
+    /// The pairs' impacts, spread over `region`'s workers: each pair's fraction (1 for none)
+    /// into `solver.pair_hits`, then each fast body's first in pair order on this thread.
+    /// The smallest of the same numbers is the same in any order: the results are the same
+    /// to the bit for any number of workers.
+    fn pair_impacts_shared(&mut self, region: &Region, place: &[u32], hits: &mut [Real]) {
+        let mut pair_hits = std::mem::take(&mut self.solver.pair_hits);
+        let n = self.broad_phase.pair_keys.len();
+        pair_hits.clear();
+        pair_hits.resize(n, 1.0);
+        {
+            let world = &*self;
+            let keys = &world.broad_phase.pair_keys;
+            // SAFETY: each block writes its own run of the pairs' fractions.
+            let out = unsafe { SharedSlice::new(&mut pair_hits) };
+            region.for_blocks(n.div_ceil(IMPACT_PAIRS_PER_BLOCK), &|k| {
+                let run = block(k, IMPACT_PAIRS_PER_BLOCK, n);
+                // SAFETY: as above.
+                let out = unsafe { out.range(run.clone()) };
+                // (Allocates only for a static body of several shapes in a tree.)
+                let mut found = Vec::new();
+                for (t, &key) in out.iter_mut().zip(&keys[run]) {
+                    if let Some((_, moving, other)) = world.fast_against_static(key, place) {
+                        *t = world.impact(moving, other, &mut found);
+                    }
+                }
+            });
+        }
+        for (&key, &t) in self.broad_phase.pair_keys.iter().zip(&pair_hits) {
+            if t < 1.0 {
+                if let Some((i, _, _)) = self.fast_against_static(key, place) {
+                    hits[i] = hits[i].min(t);
+                }
+            }
+        }
+        self.solver.pair_hits = pair_hits;
     }
 
     /// A fast body whose box at the end of the step is not inside the box the broad phase

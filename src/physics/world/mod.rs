@@ -262,6 +262,8 @@ struct SolverScratch {
     fast_place: Vec<u32>,
     /// The static bodies' slots, listed when a fast body left its broad-phase box.
     statics: Vec<u32>,
+    /// On workers: each candidate pair's fraction of the step to its impact (1 for none).
+    pair_hits: Vec<Real>,
 }
 
 impl Default for World {

@@ -91,7 +91,7 @@ impl World {
             if !self.joints.constraints.is_empty() {
                 self.finish_joints();
             }
-            self.solve_continuous();
+            self.solve_continuous(region);
             if self.settings.enable_sleep {
                 self.update_sleep(dt);
             }

@@ -232,10 +232,29 @@ fn hang_chain(w: &mut World, links: usize, wrong_frames: bool) {
     }
 }
 
+/// Bodies for continuous collision beside a pile: discs fired at 120 m/s into a thin static
+/// wall, and thin planks spinning at 40 rad/s just above a floor of their own.
+fn fast_bodies(w: &mut World) {
+    w.add_body(&BodyDef::fixed(Shape::rect(24.0, 0.2), vec2(20.0, -0.1)))
+        .unwrap();
+    w.add_body(&BodyDef::fixed(Shape::rect(0.05, 4.0), vec2(30.0, 2.0)))
+        .unwrap();
+    for k in 0..4 {
+        let y = 0.5 + 0.8 * k as Real;
+        let disc =
+            BodyDef::dynamic(Shape::circle(0.1), vec2(10.0, y)).with_velocity(vec2(120.0, 0.0));
+        w.add_body(&disc).unwrap();
+        let plank = BodyDef::dynamic(Shape::rect(2.0, 0.05), vec2(14.0 + 3.0 * k as Real, 1.2))
+            .with_angular_velocity(40.0);
+        w.add_body(&plank).unwrap();
+    }
+}
+
 /// One, two and three workers give the same World bit for bit (`team.rs`): the mixed pile
 /// with a hinged chain (joints to each other and to the world, each colour's spread over the
-/// workers) and a kinematic paddle (a fixed body many bundles of a colour share), at four and
-/// eight lanes, every solve spread over the workers however few its contacts.
+/// workers), a kinematic paddle (a fixed body many bundles of a colour share) and fast bodies
+/// striking statics (continuous collision), at four and eight lanes, every stage spread over
+/// the workers however little its work.
 #[test]
 fn one_two_and_three_workers_step_bit_identically() {
     let world = |workers: u32, width: Width| {
@@ -248,6 +267,7 @@ fn one_two_and_three_workers_step_bit_identically() {
         w.add_body(&paddle).unwrap();
         // 80 links: each of the chain's two colours holds 40 joints, enough to be spread.
         hang_chain(&mut w, 80, false);
+        fast_bodies(&mut w);
         w
     };
     let widths: &[Width] = if Width::detect() == Width::Eight {
@@ -257,10 +277,15 @@ fn one_two_and_three_workers_step_bit_identically() {
     };
     for &width in widths {
         let mut worlds: Vec<World> = [1, 2, 3].map(|n| world(n, width)).into();
+        let mut impacts = 0;
         for step in 0..180 {
             for w in &mut worlds {
                 w.step(1.0 / 60.0).unwrap();
             }
+            // Continuous collision on the workers: pairs struck within this step.
+            let hits = &worlds[1].solver.pair_hits;
+            impacts += hits.iter().filter(|&&t| t < 1.0).count();
+            worlds[1].solver.pair_hits.clear();
             for (w, n) in worlds.iter().zip(1..).skip(1) {
                 assert!(
                     worlds[0].state_bits().eq(w.state_bits()),
@@ -268,6 +293,7 @@ fn one_two_and_three_workers_step_bit_identically() {
                 );
             }
         }
+        assert!(impacts > 0, "no fast body struck a static on the workers");
         for (w, n) in worlds.iter().zip(1..).skip(1) {
             let Workers::Own(team) = &w.workers else {
                 panic!("{n} workers: no team of its own")

@@ -125,6 +125,8 @@ pub(crate) struct EventState {
     /// Hits found before the solve: the contact's index among the awake ones, its point's,
     /// and the event if that point then pushes.
     pub hit_candidates: Vec<(u32, u8, HitEvent)>,
+    /// On workers: a mark per awake contact for the event stage that looks at them.
+    pub marks: Vec<u8>,
 }
 
 impl EventState {

@@ -11,6 +11,12 @@ use crate::physics::events::{
 use crate::physics::id::ShapeRef;
 use crate::physics::math::{cross_sv, Real};
 use crate::physics::query::{every_shape, overlaps_body, rounded};
+use crate::physics::team::{block, Region, SharedSlice};
+
+/// How many contacts a worker looks at for events at a time...
+const MARKS_PER_BLOCK: usize = 512;
+/// ...and the fewest awake contacts for which the workers look at them.
+const SHARED_EVENTS_FROM: usize = 1024;
 
 /// The flags of `body`'s shape `i`.
 fn flags_of(body: &Body, i: u32) -> ShapeFlags {
@@ -43,22 +49,29 @@ impl World {
     }
 
     /// Contact begin and end: the pairs touching now (a point within the linear slop, either
-    /// shape asking) against those of the last step.
-    pub(super) fn find_contact_events(&mut self) {
-        let slop = self.settings.linear_slop;
+    /// shape asking) against those of the last step. The awake contacts are looked at by
+    /// `region`'s workers if given (see [`World::mark_awake`]).
+    pub(super) fn find_contact_events(&mut self, region: Option<&Region>) {
         let mut now = std::mem::take(&mut self.events.touching_now);
         now.clear();
-        for c in self.contacts.awake.iter().chain(&self.contacts.sleeping) {
-            let Some((a, b)) = self.pair_of_contact(c) else {
-                continue;
-            };
-            let (sa, sb) = shapes(c, a, b);
-            let asked =
-                flags_of(a, sa.shape).contact_events || flags_of(b, sb.shape).contact_events;
-            if asked && c.live().iter().any(|p| p.separation <= slop) {
-                now.push(ContactEvent { a: sa, b: sb });
+        match region.filter(|_| self.contacts.awake.len() >= self.shared_events_from()) {
+            Some(region) => {
+                let mut marks = std::mem::take(&mut self.events.marks);
+                self.mark_awake(region, &mut marks, &|c| {
+                    u8::from(self.touching(c).is_some())
+                });
+                let marked = self.contacts.awake.iter().zip(&marks).filter(|m| *m.1 != 0);
+                now.extend(marked.filter_map(|(c, _)| self.touching(c)));
+                self.events.marks = marks;
             }
+            None => now.extend(self.contacts.awake.iter().filter_map(|c| self.touching(c))),
         }
+        now.extend(
+            self.contacts
+                .sleeping
+                .iter()
+                .filter_map(|c| self.touching(c)),
+        );
         now.sort_unstable();
         let step = &mut self.events.step;
         changes(
@@ -70,44 +83,110 @@ impl World {
         self.events.touching_now = std::mem::replace(&mut self.events.touching, now);
     }
 
+    /// The pair of contact `c` if it touches (a point within the linear slop) and either
+    /// shape asks for contact events.
+    fn touching(&self, c: &Contact) -> Option<ContactEvent> {
+        let (a, b) = self.pair_of_contact(c)?;
+        let (sa, sb) = shapes(c, a, b);
+        let asked = flags_of(a, sa.shape).contact_events || flags_of(b, sb.shape).contact_events;
+        let slop = self.settings.linear_slop;
+        (asked && c.live().iter().any(|p| p.separation <= slop))
+            .then_some(ContactEvent { a: sa, b: sb })
+    }
+
     /// Hits, before the solve: this step's contacts whose shapes ask, with the point that
-    /// approaches fastest above the threshold (velocities at the step's start).
-    pub(super) fn find_hit_candidates(&mut self) {
-        let threshold = self.settings.hit_event_threshold;
+    /// approaches fastest above the threshold (velocities at the step's start). The contacts
+    /// are looked at by `region`'s workers if given (see [`World::mark_awake`]).
+    pub(super) fn find_hit_candidates(&mut self, region: Option<&Region>) {
         let mut found = std::mem::take(&mut self.events.hit_candidates);
-        for (k, c) in self.contacts.awake.iter().enumerate() {
-            let Some((a, b)) = self.pair_of_contact(c) else {
-                continue;
-            };
-            let (sa, sb) = shapes(c, a, b);
-            if !(flags_of(a, sa.shape).hit_events || flags_of(b, sb.shape).hit_events) {
-                continue;
-            }
-            let approach = |i: usize| {
-                let p = &c.points[i];
-                let va = a.linear_velocity + cross_sv(a.angular_velocity, p.anchor_a);
-                let vb = b.linear_velocity + cross_sv(b.angular_velocity, p.anchor_b);
-                -(vb - va).dot(c.normal)
-            };
-            let fastest = (0..c.count as usize).map(|i| (i, approach(i))).fold(
-                None,
-                |m: Option<(usize, Real)>, x| match m {
-                    Some(y) if y.1 >= x.1 => Some(y),
-                    _ => Some(x),
-                },
-            );
-            if let Some((i, speed)) = fastest.filter(|f| f.1 > threshold) {
-                let event = HitEvent {
-                    a: sa,
-                    b: sb,
-                    point: c.points[i].point,
-                    normal: c.normal,
-                    approach_speed: speed,
-                };
-                found.push((k as u32, i as u8, event));
-            }
+        let mut marks = std::mem::take(&mut self.events.marks);
+        let shared = region.filter(|_| self.contacts.awake.len() >= self.shared_events_from());
+        if let Some(region) = shared {
+            let is_hit = |c: &Contact| u8::from(self.hit_candidate(c).is_some());
+            self.mark_awake(region, &mut marks, &is_hit);
         }
+        let candidate = |(k, c): (usize, &Contact)| {
+            self.hit_candidate(c).map(|(i, event)| (k as u32, i, event))
+        };
+        let contacts = self.contacts.awake.iter().enumerate();
+        match shared {
+            Some(_) => found.extend(
+                contacts
+                    .zip(&marks)
+                    .filter(|m| *m.1 != 0)
+                    .filter_map(|(kc, _)| candidate(kc)),
+            ),
+            None => found.extend(contacts.filter_map(candidate)),
+        }
+        self.events.marks = marks;
         self.events.hit_candidates = found;
+    }
+
+    /// Contact `c`'s point that approaches fastest, above the hit threshold, and its event, if
+    /// either shape asks for hit events.
+    fn hit_candidate(&self, c: &Contact) -> Option<(u8, HitEvent)> {
+        let (a, b) = self.pair_of_contact(c)?;
+        let (sa, sb) = shapes(c, a, b);
+        if !(flags_of(a, sa.shape).hit_events || flags_of(b, sb.shape).hit_events) {
+            return None;
+        }
+        let approach = |i: usize| {
+            let p = &c.points[i];
+            let va = a.linear_velocity + cross_sv(a.angular_velocity, p.anchor_a);
+            let vb = b.linear_velocity + cross_sv(b.angular_velocity, p.anchor_b);
+            -(vb - va).dot(c.normal)
+        };
+        let fastest = (0..c.count as usize).map(|i| (i, approach(i))).fold(
+            None,
+            |m: Option<(usize, Real)>, x| match m {
+                Some(y) if y.1 >= x.1 => Some(y),
+                _ => Some(x),
+            },
+        );
+        let (i, speed) = fastest.filter(|f| f.1 > self.settings.hit_event_threshold)?;
+        let event = HitEvent {
+            a: sa,
+            b: sb,
+            point: c.points[i].point,
+            normal: c.normal,
+            approach_speed: speed,
+        };
+        Some((i as u8, event))
+    }
+
+    /// The fewest awake contacts for which the workers look at them for events.
+    fn shared_events_from(&self) -> usize {
+        // (Tests that lower the solve's threshold lower this one with it.)
+        self.solver
+            .bundles
+            .share_from
+            .map_or(SHARED_EVENTS_FROM, |n| n.min(SHARED_EVENTS_FROM))
+    }
+
+    /// `mark(c)` for every awake contact, by index, spread over `region`'s workers: what a
+    /// stage then collects in contact order on this thread, taking again only the marked
+    /// contacts' events, so that the events are the same, in the same order, for any number
+    /// of workers.
+    fn mark_awake(
+        &self,
+        region: &Region,
+        marks: &mut Vec<u8>,
+        mark: &(dyn Fn(&Contact) -> u8 + Sync),
+    ) {
+        let contacts = &self.contacts.awake;
+        let n = contacts.len();
+        marks.clear();
+        marks.resize(n, 0);
+        // SAFETY: each block writes its own run of the marks.
+        let out = unsafe { SharedSlice::new(marks) };
+        region.for_blocks(n.div_ceil(MARKS_PER_BLOCK), &|k| {
+            let run = block(k, MARKS_PER_BLOCK, n);
+            // SAFETY: as above.
+            let out = unsafe { out.range(run.clone()) };
+            for (m, c) in out.iter_mut().zip(&contacts[run]) {
+                *m = mark(c);
+            }
+        });
     }
 
     /// Hits, after the solve: the candidates whose point pushed (a speculative point that

@@ -70,7 +70,7 @@ impl World {
                 self.find_contacts(dt, region);
             }
             if self.bodies.flagged > 0 {
-                self.find_hit_candidates();
+                self.find_hit_candidates(region);
             }
             self.load_solver_bodies();
             self.joints.constraints.clear();
@@ -99,7 +99,7 @@ impl World {
         self.time += dt as f64;
         self.steps += 1;
         if self.bodies.asking.touches > 0 || !self.events.touching.is_empty() {
-            self.find_contact_events();
+            self.find_contact_events(region);
         }
         if self.bodies.asking.sensors > 0 || !self.events.overlapping.is_empty() {
             self.find_sensor_events();

@@ -232,17 +232,28 @@ fn hang_chain(w: &mut World, links: usize, wrong_frames: bool) {
     }
 }
 
-/// Bodies for continuous collision beside a pile: discs fired at 120 m/s into a thin static
-/// wall, and thin planks spinning at 40 rad/s just above a floor of their own.
+/// Bodies for continuous collision and events beside a pile: discs fired at 120 m/s into a
+/// thin static wall, thin planks spinning at 40 rad/s just above a floor of their own, and
+/// boxes dropped onto the pile; the discs and the boxes report touches and hits.
 fn fast_bodies(w: &mut World) {
     w.add_body(&BodyDef::fixed(Shape::rect(24.0, 0.2), vec2(20.0, -0.1)))
         .unwrap();
     w.add_body(&BodyDef::fixed(Shape::rect(0.05, 4.0), vec2(30.0, 2.0)))
         .unwrap();
+    let reports = crate::physics::ShapeFlags {
+        contact_events: true,
+        hit_events: true,
+        ..crate::physics::ShapeFlags::NONE
+    };
     for k in 0..4 {
+        // Boxes that report their touches and hits, dropped onto the pile.
+        let drop = BodyDef::dynamic(Shape::rect(0.4, 0.4), vec2(-3.0 + 2.0 * k as Real, 9.0))
+            .with_flags(reports);
+        w.add_body(&drop).unwrap();
         let y = 0.5 + 0.8 * k as Real;
-        let disc =
-            BodyDef::dynamic(Shape::circle(0.1), vec2(10.0, y)).with_velocity(vec2(120.0, 0.0));
+        let disc = BodyDef::dynamic(Shape::circle(0.1), vec2(10.0, y))
+            .with_velocity(vec2(120.0, 0.0))
+            .with_flags(reports);
         w.add_body(&disc).unwrap();
         let plank = BodyDef::dynamic(Shape::rect(2.0, 0.05), vec2(14.0 + 3.0 * k as Real, 1.2))
             .with_angular_velocity(40.0);
@@ -252,9 +263,10 @@ fn fast_bodies(w: &mut World) {
 
 /// One, two and three workers give the same World bit for bit (`team.rs`): the mixed pile
 /// with a hinged chain (joints to each other and to the world, each colour's spread over the
-/// workers), a kinematic paddle (a fixed body many bundles of a colour share) and fast bodies
-/// striking statics (continuous collision), at four and eight lanes, every stage spread over
-/// the workers however little its work.
+/// workers), a kinematic paddle (a fixed body many bundles of a colour share), fast bodies
+/// striking statics (continuous collision) and bodies that report touches and hits (the same
+/// events in the same order), at four and eight lanes, every stage spread over the workers
+/// however little its work.
 #[test]
 fn one_two_and_three_workers_step_bit_identically() {
     let world = |workers: u32, width: Width| {
@@ -277,7 +289,7 @@ fn one_two_and_three_workers_step_bit_identically() {
     };
     for &width in widths {
         let mut worlds: Vec<World> = [1, 2, 3].map(|n| world(n, width)).into();
-        let mut impacts = 0;
+        let (mut impacts, mut reported) = (0, 0);
         for step in 0..180 {
             for w in &mut worlds {
                 w.step(1.0 / 60.0).unwrap();
@@ -286,14 +298,18 @@ fn one_two_and_three_workers_step_bit_identically() {
             let hits = &worlds[1].solver.pair_hits;
             impacts += hits.iter().filter(|&&t| t < 1.0).count();
             worlds[1].solver.pair_hits.clear();
+            let events = format!("{:?}", worlds[0].events());
+            reported += worlds[0].events().hits.len() + worlds[0].events().contact_begin.len();
             for (w, n) in worlds.iter().zip(1..).skip(1) {
                 assert!(
                     worlds[0].state_bits().eq(w.state_bits()),
                     "{n} workers differ from one after step {step} at {width:?}"
                 );
+                assert_eq!(format!("{:?}", w.events()), events, "{n} workers' events");
             }
         }
         assert!(impacts > 0, "no fast body struck a static on the workers");
+        assert!(reported > 0, "no hit or touch was reported");
         for (w, n) in worlds.iter().zip(1..).skip(1) {
             let Workers::Own(team) = &w.workers else {
                 panic!("{n} workers: no team of its own")

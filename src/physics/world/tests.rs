@@ -240,10 +240,10 @@ fn fast_bodies(w: &mut World) {
         .unwrap();
     w.add_body(&BodyDef::fixed(Shape::rect(0.05, 4.0), vec2(30.0, 2.0)))
         .unwrap();
-    let reports = crate::physics::ShapeFlags {
+    let reports = crate::physics::events::ShapeFlags {
         contact_events: true,
         hit_events: true,
-        ..crate::physics::ShapeFlags::NONE
+        ..crate::physics::events::ShapeFlags::NONE
     };
     for k in 0..4 {
         // Boxes that report their touches and hits, dropped onto the pile.

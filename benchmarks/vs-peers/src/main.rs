@@ -38,6 +38,7 @@
 
 mod accuracy;
 mod box2d;
+mod paddle;
 mod remote;
 
 use rapier2d::prelude::{
@@ -1283,6 +1284,7 @@ fn guess_base(ms_at_100: Option<f64>) -> usize {
 
 fn main() {
     let mut quick = false;
+    let mut paddle = false;
     let mut extras = true;
     let mut chunks = false;
     let mut settle_seconds: Option<f32> = None;
@@ -1308,6 +1310,7 @@ fn main() {
                     std::process::exit(2);
                 }
             },
+            "--paddle" => paddle = true,
             "--quick" => quick = true,
             "--no-extras" => extras = false,
             "--chunks" => chunks = true,
@@ -1336,7 +1339,7 @@ fn main() {
             },
             "-h" | "--help" => {
                 println!(
-                    "usage: vs-peers [--quick] [--no-extras] [--chunks] [--settle[=SECONDS]] [--avx2 PATH | --no-avx2]\n\
+                    "usage: vs-peers [--paddle] [--quick] [--no-extras] [--chunks] [--settle[=SECONDS]] [--avx2 PATH | --no-avx2]\n\
                      \x20               [--workers N]\n\
                      --workers N: tiltbox and Box2D each step with N threads (Box2D through a task pool of\n\
                      this tool's; rapier2d stays single threaded: its parallel feature is not built).\n\
@@ -1347,6 +1350,8 @@ fn main() {
                      --no-avx2: leave the AVX2 build out.\n\
                      --chunks prints per 25-step chunk and engine: median ms, allocation calls and\n\
                      contact pairs at the chunk's end (stderr).\n\
+                     --paddle times nothing: the stiff suite's spinner case (the paddle's mean and slowest\n\
+                     speed, the farthest body from the ring's centre) in tiltbox, Box2D and rapier2d.\n\
                      --settle[=SECONDS] times nothing: steps the selected scenes for SECONDS (10) of\n\
                      simulated time with sleep on and off and reports awake / moving bodies, top\n\
                      speeds and positions every 2 s, and per kind of shape at the end.\n\
@@ -1369,6 +1374,11 @@ fn main() {
         eprintln!("warning: debug build; run with `cargo run --release` for meaningful figures");
     }
     box2d::install_allocator();
+
+    if paddle {
+        paddle::run();
+        return;
+    }
 
     if let Some(out) = accuracy_out {
         if let Err(e) = accuracy::write_csv(&out, quick) {

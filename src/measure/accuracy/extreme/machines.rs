@@ -92,9 +92,10 @@ pub fn tumbler(settings: &Settings) -> Verdict {
 /// unlimited torque (Box2D's `FLT_MAX`), and 6,076 capsules, discs and squares dropped on a
 /// 0.5 m grid, 8.3 s, sleep off. Bounds: from 1 s on the paddle turns
 /// through 5 rad/s x t within 1 % (nothing can stall a motor of unlimited torque; Box2D's
-/// benchmark reports this angle), never slower than 95 % of its speed (each pass solves the
-/// motor before the contacts, as Box2D does, so a step ends with the bodies' push on it), and
-/// no body's centre leaves the ring.
+/// benchmark reports this angle), never slower than 95 % of its speed at a step's end (each
+/// pass solves the motor before the contacts, so a step ends with the bodies' push on it;
+/// Box2D's ends on the motor's row, at 5 rad/s, while turning at 4.42 on average:
+/// `vs-peers --paddle`, docs/benchmarks.md), and no body's centre leaves the ring.
 pub fn spinner(settings: &Settings) -> Verdict {
     let setup = cases::spinner();
     let mut w = build(&setup, settings);

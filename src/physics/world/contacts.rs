@@ -183,7 +183,7 @@ impl World {
             };
             let mut at = 0;
             for ((&key, f), m) in keys[run].iter().zip(found).zip(manifolds) {
-                *f = if sorting && !(joints.may_collide(key) && filters_allow(key, bodies)) {
+                *f = if sorting && !(filters_allow(key, bodies) && joints.may_collide(key)) {
                     Found::Skip as u8
                 } else {
                     pairs.collide_first(key, (old, &mut at), m)
@@ -280,7 +280,7 @@ impl World {
                 }
                 continue;
             }
-            if sorting && !(joints.may_collide(key) && filters_allow(key, bodies)) {
+            if sorting && !(filters_allow(key, bodies) && joints.may_collide(key)) {
                 continue;
             }
             let Some((a, b)) = pairs.bodies(key) else {

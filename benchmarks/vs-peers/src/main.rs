@@ -20,6 +20,7 @@
 //!   collapsed pyramid is never compared with a standing one;
 //! - `memory`: live heap bytes per body after building `large_pyramid` and 10 steps (counting
 //!   global allocator; Box2D's allocations are routed through it with `b2SetAllocator`);
+//! - `pile_N`: the growth scene (`cases::pile`) at N boxes, only when named;
 //! - `largest_pyramid`: the largest pyramid base each engine steps in under 16.7 ms (median,
 //!   sleep off), by bisection;
 //! - `--settle[=SECONDS]`: no timing; whether each selected scene comes to rest (awake and moving
@@ -1178,6 +1179,17 @@ fn memory(setups: &[Setup]) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The growth scene.
+
+/// `pile_N`: tiltbox's growth scene (`cases::pile`: N boxes of 1 m side by side in a pile 20
+/// deep, sleep off), named for its size so that the rows of several sizes tell apart.
+pub(crate) fn pile_setup(boxes: usize) -> Setup {
+    Setup {
+        name: Box::leak(format!("pile_{boxes}").into_boxed_str()),
+        ..tiltbox::measure::cases::pile(boxes)
+    }
+}
+
 // Largest pyramid at 60 Hz.
 
 /// `large_pyramid` with another base: ground 2 m thick, at least 200 m wide, pyramid of 1 m boxes
@@ -1388,7 +1400,14 @@ fn main() {
         return;
     }
 
-    let setups = benchmark_setups();
+    let mut setups = benchmark_setups();
+    // `pile_N` runs the growth scene at N boxes; it is never part of the default selection.
+    setups.extend(
+        filters
+            .iter()
+            .filter_map(|f| f.strip_prefix("pile_")?.parse().ok())
+            .map(pile_setup),
+    );
     let wanted =
         |name: &str| filters.is_empty() || filters.iter().any(|f| name.contains(f.as_str()));
     let extra_wanted =

@@ -43,10 +43,14 @@ pub fn other_label() -> &'static str {
     }
 }
 
-/// The set-up called `name`: a benchmark scene, or `pyramid-BASE` (the largest-pyramid probe).
+/// The set-up called `name`: a benchmark scene, `pyramid-BASE` (the largest-pyramid probe) or
+/// `pile_N` (the growth scene).
 fn setup_named(name: &str) -> Option<tiltbox::measure::cases::Setup> {
     if let Some(base) = name.strip_prefix("pyramid-") {
         return base.parse().ok().map(crate::pyramid_setup);
+    }
+    if let Some(boxes) = name.strip_prefix("pile_") {
+        return boxes.parse().ok().map(crate::pile_setup);
     }
     tiltbox::measure::cases::benchmark_setups()
         .into_iter()

@@ -1,6 +1,7 @@
 //! Steps one benchmark scene and prints ms/step: a target for `perf record` while optimising.
 //! Usage: cargo run --release --no-default-features --features measure --example profile_step [SCENE] [STEPS] [WARM_UP] [WORKERS]
-//! (SCENE: a benchmark set-up's name, or `pile_N` for N boxes in a pile 20 deep.)
+//! (SCENE: a benchmark set-up's name, `pile_N` for N boxes in a pile 20 deep, or `sensors_N`
+//! for N sensors over a resting pile.)
 //! (WARM_UP: untimed steps first; the scene's own warm-up when left out).
 use std::time::Instant;
 
@@ -15,7 +16,12 @@ fn main() {
         .strip_prefix("pile_")
         .and_then(|n| n.parse().ok())
         .map(tiltbox::measure::cases::pile);
-    let Some(setup) = pile.or_else(|| {
+    // `sensors_N`: N static sensors over a resting pile of 4,000 discs.
+    let sensors = name
+        .strip_prefix("sensors_")
+        .and_then(|n| n.parse().ok())
+        .map(tiltbox::measure::cases::sensor_field);
+    let Some(setup) = pile.or(sensors).or_else(|| {
         tiltbox::measure::cases::benchmark_setups()
             .into_iter()
             .find(|s| s.name == name)

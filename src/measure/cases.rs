@@ -796,6 +796,35 @@ pub fn pile(n: usize) -> Setup {
     }
 }
 
+/// A field of sensors over a resting pile, for measuring what sensors cost: 4,000 discs of
+/// 0.45 m radius on a grid 1 m apart in 41 rows, in a box 102 m wide, and `n` static sensor
+/// boxes of 2 m spread evenly across it at seven heights from 5 m to 29 m. Sleep on: the pile
+/// falls asleep while the sensors go on querying. 60 steps of warm-up, gravity 10 m/s^2.
+pub fn sensor_field(n: usize) -> Setup {
+    let mut bodies = vec![
+        BodyDef::fixed(Shape::rect(104.0, 2.0), Vec2::new(0.0, -1.0)),
+        BodyDef::fixed(Shape::rect(2.0, 80.0), Vec2::new(-51.0, 40.0)),
+        BodyDef::fixed(Shape::rect(2.0, 80.0), Vec2::new(51.0, 40.0)),
+    ];
+    bodies.extend((0..4000).map(|i| {
+        let at = Vec2::new(-49.0 + (i % 98) as Real, 0.5 + 1.05 * (i / 98) as Real);
+        BodyDef::dynamic(Shape::circle(0.45), at)
+    }));
+    let sensor = crate::physics::events::ShapeFlags {
+        sensor: true,
+        ..crate::physics::events::ShapeFlags::NONE
+    };
+    bodies.extend((0..n).map(|i| {
+        let x = -49.0 + 98.0 * (i as Real + 0.5) / n as Real;
+        let at = Vec2::new(x, 5.0 + 4.0 * (i % 7) as Real);
+        BodyDef::fixed(Shape::rect(2.0, 2.0), at).with_flags(sensor)
+    }));
+    Setup {
+        warm_up: 60,
+        ..box2d_scene("sensor_field", bodies, 200)
+    }
+}
+
 /// Box2D v3's `junkyard` benchmark (`shared/benchmarks.c`): a static ground of one body and
 /// 261 boxes (a floor of 161 boxes 1.1 m x 1 m from x = -80 m to 80 m at y = 0, two walls of
 /// 50 boxes 1 m x 1.1 m at x = +-80 m from y = 1 m), 200 x 40 pentagons of radius 0.25 m

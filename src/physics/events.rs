@@ -127,6 +127,10 @@ pub(crate) struct EventState {
     pub hit_candidates: Vec<(u32, u8, HitEvent)>,
     /// On workers: a mark per awake contact for the event stage that looks at them.
     pub marks: Vec<u8>,
+    /// The slots of the bodies with a sensor, this step.
+    pub sensing: Vec<u32>,
+    /// On workers: what each block of sensing bodies found.
+    pub sensed: Vec<Vec<SensorEvent>>,
 }
 
 impl EventState {

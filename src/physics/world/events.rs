@@ -17,6 +17,10 @@ use crate::physics::team::{block, Region, SharedSlice};
 const MARKS_PER_BLOCK: usize = 512;
 /// ...and the fewest awake contacts for which the workers look at them.
 const SHARED_EVENTS_FROM: usize = 1024;
+/// How many sensing bodies a worker looks at at a time (each a query of the tree)...
+const SENSING_PER_BLOCK: usize = 8;
+/// ...and the fewest for which the workers look at them.
+const SHARED_SENSORS_FROM: usize = 32;
 
 /// The flags of `body`'s shape `i`.
 fn flags_of(body: &Body, i: u32) -> ShapeFlags {
@@ -206,36 +210,33 @@ impl World {
     }
 
     /// Sensor begin and end: every shape (not a sensor, its filter allowing) overlapping each
-    /// sensor at the end of the step, against those of the last step.
-    pub(super) fn find_sensor_events(&mut self) {
+    /// sensor at the end of the step, against those of the last step. The sensing bodies are
+    /// looked at by `region`'s workers if given, each block of them into its own list; the
+    /// lists are then joined and sorted, so the events are the same for any number of workers.
+    pub(super) fn find_sensor_events(&mut self, region: Option<&Region>) {
         if self.queries.synced_at != Some(self.steps) {
             self.sync_queries();
         }
         let mut now = std::mem::take(&mut self.events.overlapping_now);
         now.clear();
-        for body in self.bodies() {
-            for (i, shape, xf, filter, _) in every_shape(body).filter(|s| s.4.sensor) {
-                let sensor = ShapeRef {
-                    body: body.id,
-                    shape: i,
-                };
-                let probe = rounded(shape, xf);
-                self.query_tree().query(&shape.aabb(xf), |slot| {
-                    let Some(other) = self.body_in_slot(slot).filter(|o| o.id != body.id) else {
-                        return true;
-                    };
-                    let sees = |f: &_| filter.should_collide(f);
-                    now.extend(overlaps_body(other, &probe, sees).map(|shape| SensorEvent {
-                        sensor,
-                        visitor: ShapeRef {
-                            body: other.id,
-                            shape,
-                        },
-                    }));
-                    true
-                });
+        let mut sensing = std::mem::take(&mut self.events.sensing);
+        sensing.clear();
+        let senses = |b: &&Body| every_shape(b).any(|s| s.4.sensor);
+        sensing.extend(self.bodies().filter(senses).map(|b| b.id.index));
+        match region.filter(|_| sensing.len() >= self.shared_sensors_from()) {
+            Some(region) => {
+                let mut lists = std::mem::take(&mut self.events.sensed);
+                self.sense_shared(region, &sensing, &mut lists);
+                lists.iter().for_each(|l| now.extend_from_slice(l));
+                self.events.sensed = lists;
+            }
+            None => {
+                for &slot in &sensing {
+                    self.sensed_by(slot, &mut now);
+                }
             }
         }
+        self.events.sensing = sensing;
         now.sort_unstable();
         let step = &mut self.events.step;
         changes(
@@ -245,5 +246,61 @@ impl World {
             &mut step.sensor_end,
         );
         self.events.overlapping_now = std::mem::replace(&mut self.events.overlapping, now);
+    }
+
+    /// What each sensor of the body in `slot` overlaps, onto `now`.
+    fn sensed_by(&self, slot: u32, now: &mut Vec<SensorEvent>) {
+        let Some(body) = self.body_in_slot(slot) else {
+            return;
+        };
+        for (i, shape, xf, filter, _) in every_shape(body).filter(|s| s.4.sensor) {
+            let sensor = ShapeRef {
+                body: body.id,
+                shape: i,
+            };
+            let probe = rounded(shape, xf);
+            self.query_tree().query(&shape.aabb(xf), |slot| {
+                let Some(other) = self.body_in_slot(slot).filter(|o| o.id != body.id) else {
+                    return true;
+                };
+                let sees = |f: &_| filter.should_collide(f);
+                now.extend(overlaps_body(other, &probe, sees).map(|shape| SensorEvent {
+                    sensor,
+                    visitor: ShapeRef {
+                        body: other.id,
+                        shape,
+                    },
+                }));
+                true
+            });
+        }
+    }
+
+    /// [`World::sensed_by`] for the bodies in `sensing`, in blocks spread over `region`'s
+    /// workers, block `k`'s into `lists[k]` (`lists` keeps exactly one list per block).
+    fn sense_shared(&self, region: &Region, sensing: &[u32], lists: &mut Vec<Vec<SensorEvent>>) {
+        let n = sensing.len();
+        let blocks = n.div_ceil(SENSING_PER_BLOCK);
+        lists.truncate(blocks);
+        lists.resize_with(blocks, Vec::new);
+        // SAFETY: each block writes its own list.
+        let out = unsafe { SharedSlice::new(lists) };
+        region.for_blocks(blocks, &|k| {
+            // SAFETY: as above.
+            let list = unsafe { out.get(k) }.expect("a list per block");
+            list.clear();
+            for &slot in &sensing[block(k, SENSING_PER_BLOCK, n)] {
+                self.sensed_by(slot, list);
+            }
+        });
+    }
+
+    /// The fewest sensing bodies for which the workers look at them.
+    pub(super) fn shared_sensors_from(&self) -> usize {
+        // (Tests that lower the solve's threshold lower this one with it.)
+        self.solver
+            .bundles
+            .share_from
+            .map_or(SHARED_SENSORS_FROM, |n| n.min(SHARED_SENSORS_FROM))
     }
 }

@@ -40,7 +40,9 @@ impl World {
             .bundles
             .share_from
             .map_or(SHARED_STEP_FROM, |n| n.min(SHARED_STEP_FROM));
-        let share = self.broad_phase.sweep.active_count() >= from;
+        // (Sensors query the tree even while everything else sleeps.)
+        let share = self.broad_phase.sweep.active_count() >= from
+            || self.bodies.asking.sensors >= self.shared_sensors_from();
         match &mut workers {
             Workers::Own(team) if share => team.region(|region| self.step_with(dt, Some(region))),
             Workers::Pool(pool) if share => match pool.take() {
@@ -102,7 +104,7 @@ impl World {
             self.find_contact_events(region);
         }
         if self.bodies.asking.sensors > 0 || !self.events.overlapping.is_empty() {
-            self.find_sensor_events();
+            self.find_sensor_events(region);
         }
     }
 

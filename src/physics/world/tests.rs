@@ -261,12 +261,26 @@ fn fast_bodies(w: &mut World) {
     }
 }
 
+/// A strip of twelve static sensor boxes across the lower pile, which its bodies settle
+/// through (sensors do not collide).
+fn sensor_strip(w: &mut World) {
+    let sensor = crate::physics::events::ShapeFlags {
+        sensor: true,
+        ..crate::physics::events::ShapeFlags::NONE
+    };
+    for k in 0..12 {
+        let at = vec2(-5.5 + k as Real, 1.0);
+        w.add_body(&BodyDef::fixed(Shape::rect(0.9, 0.6), at).with_flags(sensor))
+            .unwrap();
+    }
+}
+
 /// One, two and three workers give the same World bit for bit (`team.rs`): the mixed pile
 /// with a hinged chain (joints to each other and to the world, each colour's spread over the
 /// workers), a kinematic paddle (a fixed body many bundles of a colour share), fast bodies
-/// striking statics (continuous collision) and bodies that report touches and hits (the same
-/// events in the same order), at four and eight lanes, every stage spread over the workers
-/// however little its work.
+/// striking statics (continuous collision), bodies that report touches and hits and sensors
+/// across the pile (the same events in the same order), at four and eight lanes, every stage
+/// spread over the workers however little its work.
 #[test]
 fn one_two_and_three_workers_step_bit_identically() {
     let world = |workers: u32, width: Width| {
@@ -280,6 +294,7 @@ fn one_two_and_three_workers_step_bit_identically() {
         // 80 links: each of the chain's two colours holds 40 joints, enough to be spread.
         hang_chain(&mut w, 80, false);
         fast_bodies(&mut w);
+        sensor_strip(&mut w);
         w
     };
     let widths: &[Width] = if Width::detect() == Width::Eight {
@@ -289,7 +304,7 @@ fn one_two_and_three_workers_step_bit_identically() {
     };
     for &width in widths {
         let mut worlds: Vec<World> = [1, 2, 3].map(|n| world(n, width)).into();
-        let (mut impacts, mut reported) = (0, 0);
+        let (mut impacts, mut reported, mut sensed) = (0, 0, 0);
         for step in 0..180 {
             for w in &mut worlds {
                 w.step(1.0 / 60.0).unwrap();
@@ -300,6 +315,7 @@ fn one_two_and_three_workers_step_bit_identically() {
             worlds[1].solver.pair_hits.clear();
             let events = format!("{:?}", worlds[0].events());
             reported += worlds[0].events().hits.len() + worlds[0].events().contact_begin.len();
+            sensed += worlds[0].events().sensor_begin.len();
             for (w, n) in worlds.iter().zip(1..).skip(1) {
                 assert!(
                     worlds[0].state_bits().eq(w.state_bits()),
@@ -310,6 +326,7 @@ fn one_two_and_three_workers_step_bit_identically() {
         }
         assert!(impacts > 0, "no fast body struck a static on the workers");
         assert!(reported > 0, "no hit or touch was reported");
+        assert!(sensed > 0, "no shape entered a sensor");
         for (w, n) in worlds.iter().zip(1..).skip(1) {
             let Workers::Own(team) = &w.workers else {
                 panic!("{n} workers: no team of its own")

@@ -304,6 +304,10 @@ pub struct Body {
     /// that a plain body stays small: the step reads every body's fields, and a filter is 24
     /// bytes. None for a body of one shape with the default filter.
     pub(crate) extras: Option<Box<Extras>>,
+    /// Whether `extras` holds parts: asked of every jointed and paired body each step, and a
+    /// body with a filter but one shape (a ragdoll's bone) need not go to the heap to learn
+    /// its centre of mass is its origin.
+    pub(crate) has_parts: bool,
     /// `shape.bounding_radius()` (m), kept: the narrow phase and the sleep test read it for
     /// every pair and body each step (a square root for a box, a load from the heap for a
     /// polygon).
@@ -369,6 +373,7 @@ impl Body {
                 None => def.position,
                 Some(p) => def.position + rot.rotate(p.local_center),
             },
+            has_parts: parts.is_some(),
             extras: Extras::boxed(def.filter, def.flags, parts),
             angle: def.angle,
             rot,
@@ -486,6 +491,9 @@ impl Body {
     /// one shape, whose centre of mass is its origin.
     #[inline]
     pub(crate) fn compound(&self) -> Option<&Parts> {
+        if !self.has_parts {
+            return None;
+        }
         self.extras.as_ref().and_then(|e| e.parts.as_ref())
     }
     /// Set the collision filter (of its own shape, for a body of several).

@@ -495,6 +495,7 @@ impl BodyState {
             min_extent: parts
                 .as_ref()
                 .map_or_else(|| shape.min_extent(), |p| p.min_extent()),
+            has_parts: parts.is_some(),
             extras: Extras::boxed(b.filter, b.flags, parts),
             shape,
             position: vec(b.position),

@@ -2,11 +2,12 @@
 //! cannot read in the code, checked on real runs: the soft step's contact stiffness ceiling
 //! (a quarter of the substep rate, not lifted by `max_contact_hertz_ratio`), `linear_slop`
 //! being a sequential-solver knob only, the solver names a scene file takes, the sequential
-//! slop of scenes against the report's, and `--seconds` rounding to the nearest step.
+//! slop of scenes against the report's, `--seconds` rounding to the nearest step, and when a
+//! step takes its workers.
 #![cfg(all(feature = "scene", feature = "cli", feature = "measure"))]
 
 use std::process::{Command, Stdio};
-use tiltbox::physics::Settings;
+use tiltbox::physics::{vec2, BodyDef, Real, Settings, Shape, ShapeFlags, Vec2, WorkerPool, World};
 use tiltbox::scene::Scene;
 
 /// A box dropped onto a box resting on the ground: contacts that are made, loaded and
@@ -125,4 +126,39 @@ fn seconds_round_to_the_nearest_whole_step() {
     assert_eq!(last_frame("0.26"), 3);
     assert_eq!(last_frame("0.24"), 2);
     assert_eq!(last_frame("0.3"), 3);
+}
+
+/// The `workers` row: "a step with fewer than 256 awake bodies (and fewer than 32 with a
+/// sensor) runs on one" thread; from either count it takes the workers (counted by the pool).
+#[test]
+fn a_step_takes_the_workers_from_256_awake_bodies_or_32_with_a_sensor() {
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/scenes.md"))
+        .expect("docs/scenes.md");
+    assert!(doc.contains(
+        "a step with fewer than 256 awake bodies (and fewer than 32 with a sensor) runs on one"
+    ));
+    let steps_shared = |awake: usize, sensing: usize| {
+        let pool = WorkerPool::new(2).expect("two workers");
+        let mut w = World::new(Settings::default(), Vec2::ZERO).expect("a world");
+        w.share_workers(&pool);
+        for i in 0..awake {
+            let disc = BodyDef::dynamic(Shape::circle(0.5), vec2(3.0 * i as Real, 0.0));
+            w.add_body(&disc).expect("a disc");
+        }
+        let sensor = ShapeFlags {
+            sensor: true,
+            ..ShapeFlags::NONE
+        };
+        for i in 0..sensing {
+            let at = vec2(3.0 * i as Real, 10.0);
+            let def = BodyDef::fixed(Shape::rect(1.0, 1.0), at).with_flags(sensor);
+            w.add_body(&def).expect("a sensor");
+        }
+        w.step(1.0 / 60.0).expect("a step");
+        pool.steps_shared()
+    };
+    assert_eq!(steps_shared(255, 0), 0, "255 awake bodies");
+    assert_eq!(steps_shared(256, 0), 1, "256 awake bodies");
+    assert_eq!(steps_shared(0, 31), 0, "31 sensing bodies");
+    assert_eq!(steps_shared(0, 32), 1, "32 sensing bodies");
 }

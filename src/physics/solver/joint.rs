@@ -456,26 +456,17 @@ fn warm_start_one(set: &JointSet, k: usize, bodies: &mut [SolverBody]) {
     warm_start_joint(j, &set.rows[j.row_range()], (a, b));
 }
 
-/// Warm start joint `j`, with its `rows`, on its bodies `a` and `b`. The angle rows' Jacobian
-/// is [0, -1, 0, 1] at every pose, so their impulses are summed and applied once (a hinge's
-/// spring, motor and two limits are four of them).
+/// Warm start joint `j`, with its `rows`, on its bodies `a` and `b`.
 #[inline(always)]
 fn warm_start_joint(j: &JointConstraint, rows: &[Row], (a, b): (&mut SolverBody, &mut SolverBody)) {
     let pose = j.pose(a, b);
     if let Some(p) = &j.point {
         j.apply_point(a, b, &pose, p.impulse);
     }
-    let mut turn = 0.0;
     for row in rows {
-        if row.measure == Measure::Angle {
-            turn += row.sign() * row.impulse;
-        } else {
-            let jac = jacobian(row.measure, &pose);
-            j.apply_row(a, b, &jac, row.sign() * row.impulse);
-        }
+        let jac = jacobian(row.measure, &pose);
+        j.apply_row(a, b, &jac, row.sign() * row.impulse);
     }
-    a.w -= a.inv_inertia * turn;
-    b.w += b.inv_inertia * turn;
 }
 
 /// One pass over the joints: `biased` (the soft bias) or a relax pass (rigid); `inv_h` is

@@ -225,7 +225,8 @@ fn a_motor_turns_a_heavy_drum_at_its_speed_and_keeps_every_box_inside() {
 }
 
 /// Box2D's spinner: the paddle, driven with unlimited torque at 5 rad/s, turns at 5 rad/s on
-/// average from 1 s on (within 1 %), never below 95 %, with every body inside the ring. (Its
+/// average from 1 s on (within 1 %), in no step by less than 95 % of that, with every body
+/// inside the ring. (Its
 /// tips pass 0.2 m beyond the ring at the bottom, as in Box2D: continuous collision leaves a
 /// segment that a body's centre does not approach to its contacts, as Box2D does.)
 #[test]

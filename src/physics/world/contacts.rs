@@ -73,9 +73,9 @@ const WAKE_A: u8 = 1 << 4;
 const WAKE_B: u8 = 1 << 5;
 
 /// The box of the body in `slot` for the broad phase: grown by `margin` (m) and by how far
-/// it can travel in `dt` under `g` (see [`travel`]).
+/// it can travel in `dt` under `g` (see [`travel`]), which is returned beside it (m).
 #[inline(always)]
-fn proxy_of(slot: &Slot, (g, dt): (Vec2, Real), margin: Real) -> Proxy {
+fn proxy_of(slot: &Slot, (g, dt): (Vec2, Real), margin: Real) -> (Proxy, Real) {
     match &slot.body {
         Some(b) => {
             let reach = if b.is_active() || b.kinematic {
@@ -83,11 +83,12 @@ fn proxy_of(slot: &Slot, (g, dt): (Vec2, Real), margin: Real) -> Proxy {
             } else {
                 0.0
             };
-            Proxy {
+            let proxy = Proxy {
                 aabb: b.aabb().inflated(margin + reach),
-            }
+            };
+            (proxy, reach)
         }
-        None => NO_PROXY,
+        None => (NO_PROXY, 0.0),
     }
 }
 
@@ -193,31 +194,34 @@ impl World {
     }
 
     /// Each body's box grown by half the speculative distance plus how far it can travel
-    /// this step (spread over `region`'s workers if given).
+    /// this step, and that travel (spread over `region`'s workers if given).
     fn update_proxies(&mut self, dt: Real, region: Option<&Region>) {
         let g = self.gravity;
         let margin = 0.5 * self.settings.speculative_distance;
         let proxy = |slot: &Slot| proxy_of(slot, (g, dt), margin);
-        let (slots, proxies) = (&self.bodies.slots, &mut self.broad_phase.proxies);
+        let slots = &self.bodies.slots;
+        let (proxies, reach) = (&mut self.broad_phase.proxies, &mut self.broad_phase.reach);
+        let n = slots.len();
+        proxies.resize(n, NO_PROXY);
+        reach.resize(n, 0.0);
+        let fill = |proxies: &mut [Proxy], reach: &mut [Real], slots: &[Slot]| {
+            for ((p, r), slot) in proxies.iter_mut().zip(reach).zip(slots) {
+                (*p, *r) = proxy(slot);
+            }
+        };
         match region {
             Some(region) => {
-                let n = slots.len();
-                proxies.resize(n, NO_PROXY);
-                // SAFETY: each block writes its own run of the proxies.
-                let out = unsafe { SharedSlice::new(proxies) };
+                // SAFETY: each block writes its own run of the proxies and of the reaches.
+                let (proxies, reach) =
+                    unsafe { (SharedSlice::new(proxies), SharedSlice::new(reach)) };
                 region.for_blocks(n.div_ceil(PROXIES_PER_BLOCK), &|k| {
                     let run = block(k, PROXIES_PER_BLOCK, n);
                     // SAFETY: as above.
-                    let out = unsafe { out.range(run.clone()) };
-                    for (p, slot) in out.iter_mut().zip(&slots[run]) {
-                        *p = proxy(slot);
-                    }
+                    let (p, r) = unsafe { (proxies.range(run.clone()), reach.range(run.clone())) };
+                    fill(p, r, &slots[run]);
                 });
             }
-            None => {
-                proxies.clear();
-                proxies.extend(slots.iter().map(proxy));
-            }
+            None => fill(proxies, reach, slots),
         }
         self.update_pieces(margin);
     }

@@ -134,6 +134,9 @@ struct Bodies {
     filtered: usize,
     /// Live bodies with a shape that reports events or is a sensor (none: no step looks).
     flagged: usize,
+    /// Live static bodies with a chain's piece or a one-sided segment (none: no step looks
+    /// for centres that crossed one; `continuous::guards`).
+    guarded: usize,
     /// Of those, the bodies with a shape that reports touches, and those with a sensor: each
     /// event stage runs only while some body asks for it (8,100 boxes that report hits kept the
     /// sensor stage's query tree in step with them, 6 % of Box2D's washer, with no sensor).
@@ -152,19 +155,23 @@ struct Asking {
 impl Bodies {
     /// Count `body`'s filter and flags in (`add`) or out.
     fn note(&mut self, body: &Body, add: bool) {
-        let [filtered, flagged, touches, sensors] = [
+        let guarded = |(s, _): (&super::shape::Shape, _)| matches!(s, super::shape::Shape::Segment(s) if continuous::guards(s));
+        let [filtered, flagged, touches, sensors, guarded] = [
             body.filter() != Filter::DEFAULT,
             body.any_flags(),
             body.asks(|f| f.contact_events),
             body.asks(|f| f.sensor),
+            body.is_static() && body.shapes().any(guarded),
         ]
         .map(usize::from);
         if add {
+            self.guarded += guarded;
             self.filtered += filtered;
             self.flagged += flagged;
             self.asking.touches += touches;
             self.asking.sensors += sensors;
         } else {
+            self.guarded -= guarded;
             self.filtered -= filtered;
             self.flagged -= flagged;
             self.asking.touches -= touches;
@@ -196,6 +203,8 @@ struct BroadPhase {
     sweep: SweepAndPrune,
     /// Each slot's box for this step.
     proxies: Vec<Proxy>,
+    /// Each slot's travel this step (m): how far its box is grown beyond the margin.
+    reach: Vec<Real>,
     /// This step's candidate pairs, by key.
     pair_keys: Vec<u64>,
     /// Scratch for a pair of bodies of several shapes: its pairs of shapes whose boxes meet.
@@ -264,6 +273,9 @@ struct SolverScratch {
     statics: Vec<u32>,
     /// On workers: each candidate pair's fraction of the step to its impact (1 for none).
     pair_hits: Vec<Real>,
+    /// The bodies whose centres crossed a one-sided piece this step, and the fraction of the
+    /// step's motion each keeps.
+    crossed: Vec<(u32, Real)>,
 }
 
 impl Default for World {
@@ -522,6 +534,7 @@ impl World {
         self.bodies.count = 0;
         self.bodies.filtered = 0;
         self.bodies.flagged = 0;
+        self.bodies.guarded = 0;
         self.bodies.asking = Asking::default();
         self.events = Default::default();
         self.broad_phase.clear();

@@ -1196,3 +1196,33 @@ fn a_chain_whose_anchors_cannot_meet_stays_finite() {
         }
     }
 }
+
+/// A disc that a kinematic slab presses down into a chain floor (two-sided, then one-sided)
+/// keeps its centre in front of the floor: a body's centre does not cross a chain's piece it
+/// touched at the start of the step. The slab, which nothing stops, passes through the disc
+/// instead. Without that guard the disc was pressed until its centre crossed the line, the
+/// two-sided floor pushed it on out below, and it fell to y = -24 m in the 3 s.
+#[test]
+fn a_disc_crushed_into_a_chain_floor_keeps_its_centre_in_front() {
+    for one_sided in [false, true] {
+        let mut w = awake_world(vec2(0.0, -10.0));
+        let floor = [vec2(-5.0, 0.0), vec2(0.0, 0.0), vec2(5.0, 0.0)];
+        for piece in BodyDef::chain(&floor, false, one_sided).unwrap() {
+            w.add_body(&piece).unwrap();
+        }
+        let disc = w
+            .add_body(&BodyDef::dynamic(Shape::circle(0.5), vec2(0.2, 0.5)))
+            .unwrap();
+        let slab = BodyDef::kinematic(Shape::rect(4.0, 0.5), vec2(0.0, 1.26), vec2(0.0, -1.0));
+        w.add_body(&slab).unwrap();
+        let mut lowest = Real::INFINITY;
+        for _ in 0..180 {
+            w.step(1.0 / 60.0).unwrap();
+            lowest = lowest.min(w.body(disc).unwrap().position().y);
+        }
+        assert!(
+            lowest > 0.0,
+            "one-sided {one_sided}: the disc's centre went to y = {lowest} m"
+        );
+    }
+}

@@ -466,10 +466,11 @@ impl World {
         tiers.island_extent.resize(n, Extent::EMPTY);
         tiers.island_bodies.clear();
         tiers.island_bodies.resize(n, 0);
-        for (i, proxy) in self.broad_phase.proxies.iter().enumerate() {
+        let boxes = self.broad_phase.proxies.iter().zip(&self.broad_phase.reach);
+        for (i, (proxy, &reach)) in boxes.enumerate() {
             if self.solver.bodies[i].inv_mass > 0.0 {
                 let root = find(&mut self.islands.parent, i as u32) as usize;
-                tiers.island_extent[root].add(&proxy.aabb, down, across);
+                tiers.island_extent[root].add(&proxy.aabb, reach, down, across);
                 tiers.island_bodies[root] += 1;
             }
         }
@@ -563,9 +564,13 @@ impl Extent {
         widths: 0.0,
     };
 
-    /// Take in box `aabb`, with `down` the unit vector along gravity and `across` normal to it.
+    /// Take in box `aabb`, grown by `travel` (m) for the body's travel this step, with `down`
+    /// the unit vector along gravity and `across` normal to it. The travel counts in the
+    /// island's extent but not in the body's width: bodies flung about (Box2D's `spinner`,
+    /// whose paddle's tips move at 100 m/s) have boxes grown by metres, and their pile read
+    /// twice or three times as deep as it is.
     #[inline]
-    fn add(&mut self, aabb: &Aabb, down: Vec2, across: Vec2) {
+    fn add(&mut self, aabb: &Aabb, travel: Real, down: Vec2, across: Vec2) {
         let centre = 0.5 * (aabb.min + aabb.max);
         let half = 0.5 * (aabb.max - aabb.min);
         let reach = |d: Vec2| half.x * d.x.abs() + half.y * d.y.abs();
@@ -576,15 +581,15 @@ impl Extent {
             self.side[0].min(side - r_side),
             self.side[1].max(side + r_side),
         ];
-        self.widths += 2.0 * r_side;
+        self.widths += 2.0 * (r_side - travel).max(0.0);
     }
 
     /// How many bodies deep the island is on average: its bodies' widths across gravity over
     /// its own. Laid side by side on the ground they would stand this many high, and that is
     /// about how many of their weights its lowest contacts carry: (n + 1) / 2 for a pyramid
     /// of base n, whose ground contacts carry up to 1.4 times that. The widths are the
-    /// broad phase's boxes (grown by the contact margin and the step's travel, and a turned
-    /// body's box is wider than the body), so a pile of small or jumbled bodies reads
+    /// broad phase's boxes less the step's travel (still grown by the contact margin, and a
+    /// turned body's box is wider than the body), so a pile of small or jumbled bodies reads
     /// somewhat deeper than it is.
     fn depth(&self) -> Real {
         self.widths / (self.side[1] - self.side[0])

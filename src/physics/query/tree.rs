@@ -53,17 +53,27 @@ impl Tree {
     /// A tree over `items` (slot, box), built top down: each node splits its boxes at the
     /// median of their centres along its longer side. Returns each item's leaf, in order.
     pub fn build(items: &[(u32, Aabb)]) -> (Tree, Vec<u32>) {
-        let mut tree = Tree {
-            nodes: Vec::with_capacity(2 * items.len()),
-            ..Tree::default()
-        };
-        let mut leaves = vec![NONE; items.len()];
-        let mut order: Vec<u32> = (0..items.len() as u32).collect();
-        if !items.is_empty() {
-            let root = tree.build_node(items, &mut order, &mut leaves, NONE);
-            tree.root = Some(root);
-        }
+        let mut tree = Tree::default();
+        let mut leaves = Vec::new();
+        tree.rebuild(items, &mut Vec::new(), &mut leaves);
         (tree, leaves)
+    }
+
+    /// Build the tree afresh over `items` as [`Tree::build`] does, in its own storage (and
+    /// `order`'s, scratch), so that a tree rebuilt every step allocates only as it grows;
+    /// each item's leaf into `leaves`.
+    pub fn rebuild(&mut self, items: &[(u32, Aabb)], order: &mut Vec<u32>, leaves: &mut Vec<u32>) {
+        self.nodes.clear();
+        self.nodes.reserve(2 * items.len());
+        self.free.clear();
+        self.root = None;
+        leaves.clear();
+        leaves.resize(items.len(), NONE);
+        order.clear();
+        order.extend(0..items.len() as u32);
+        if !items.is_empty() {
+            self.root = Some(self.build_node(items, order, leaves, NONE));
+        }
     }
 
     fn build_node(

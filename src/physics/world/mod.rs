@@ -135,7 +135,7 @@ struct Bodies {
     /// Live bodies with a shape that reports events or is a sensor (none: no step looks).
     flagged: usize,
     /// Live static bodies with a chain's piece or a one-sided segment (none: no step looks
-    /// for centres that crossed one; `continuous::guards`).
+    /// for centres that crossed one; `continuous::guards_shape`).
     guarded: usize,
     /// Of those, the bodies with a shape that reports touches, and those with a sensor: each
     /// event stage runs only while some body asks for it (8,100 boxes that report hits kept the
@@ -155,13 +155,12 @@ struct Asking {
 impl Bodies {
     /// Count `body`'s filter and flags in (`add`) or out.
     fn note(&mut self, body: &Body, add: bool) {
-        let guarded = |(s, _): (&super::shape::Shape, _)| matches!(s, super::shape::Shape::Segment(s) if continuous::guards(s));
         let [filtered, flagged, touches, sensors, guarded] = [
             body.filter() != Filter::DEFAULT,
             body.any_flags(),
             body.asks(|f| f.contact_events),
             body.asks(|f| f.sensor),
-            body.is_static() && body.shapes().any(guarded),
+            body.is_static() && body.shapes().any(|(s, _)| continuous::guards_shape(s)),
         ]
         .map(usize::from);
         if add {
@@ -269,8 +268,9 @@ struct SolverScratch {
     fast_hits: Vec<Real>,
     /// Each slot's place in `fast`, or [`continuous::NOT_FAST`] (kept so between steps).
     fast_place: Vec<u32>,
-    /// The static bodies' slots, listed when a fast body left its broad-phase box.
-    statics: Vec<u32>,
+    /// The static bodies' broad-phase boxes in a tree, built when a fast body left its own
+    /// box, with the build's scratch.
+    statics: continuous::StaticTree,
     /// On workers: each candidate pair's fraction of the step to its impact (1 for none).
     pair_hits: Vec<Real>,
     /// The bodies whose centres crossed a one-sided piece this step, and the fraction of the

@@ -42,6 +42,9 @@ struct DeepPoint {
     arms: [Vec2; 2],
     /// Effective mass along the normal (kg).
     mass: Real,
+    /// A's and B's inverse masses (1/kg) and inverse inertias (1/(kg m^2)), kept beside the
+    /// point so that each of the sweeps reads the bodies' pseudo velocities only.
+    inv: [Real; 4],
     /// The pseudo normal velocity (m/s) that pushes the point out in one step to half its
     /// spring's reach (the overlap beyond the reach and half the reach besides, so the spring
     /// takes over well inside its range), capped at the push-out speed.
@@ -119,6 +122,7 @@ impl Recovery {
             normal: n,
             arms,
             mass: 1.0 / k,
+            inv: [a.inv_mass, a.inv_inertia, b.inv_mass, b.inv_inertia],
             target: (beyond / count * inv_dt).min(speed),
             impulse: 0.0,
         });
@@ -139,11 +143,11 @@ impl Recovery {
         for sweep in 0..SWEEPS {
             if sweep % 2 == 0 {
                 for p in points.iter_mut() {
-                    sweep_point(p, bodies, &mut self.velocity);
+                    sweep_point(p, &mut self.velocity);
                 }
             } else {
                 for p in points.iter_mut().rev() {
-                    sweep_point(p, bodies, &mut self.velocity);
+                    sweep_point(p, &mut self.velocity);
                 }
             }
         }
@@ -162,7 +166,7 @@ impl Recovery {
 
 /// One Gauss-Seidel update of point `p`'s pseudo impulse toward its target, clamped >= 0.
 #[inline]
-fn sweep_point(p: &mut DeepPoint, bodies: &[SolverBody], velocity: &mut [(Vec2, Real)]) {
+fn sweep_point(p: &mut DeepPoint, velocity: &mut [(Vec2, Real)]) {
     let [ia, ib] = p.bodies.map(|i| i as usize);
     let ([ra, rb], n) = (p.arms, p.normal);
     let (va, wa) = velocity[ia];
@@ -171,9 +175,9 @@ fn sweep_point(p: &mut DeepPoint, bodies: &[SolverBody], velocity: &mut [(Vec2, 
     let old = p.impulse;
     p.impulse = (old + p.mass * (p.target - vn)).max(0.0);
     let pn = (p.impulse - old) * n;
-    let (a, b) = (&bodies[ia], &bodies[ib]);
-    velocity[ia].0 -= a.inv_mass * pn;
-    velocity[ia].1 -= a.inv_inertia * cross(ra, pn);
-    velocity[ib].0 += b.inv_mass * pn;
-    velocity[ib].1 += b.inv_inertia * cross(rb, pn);
+    let [ma, ia_inv, mb, ib_inv] = p.inv;
+    velocity[ia].0 -= ma * pn;
+    velocity[ia].1 -= ia_inv * cross(ra, pn);
+    velocity[ib].0 += mb * pn;
+    velocity[ib].1 += ib_inv * cross(rb, pn);
 }

@@ -129,7 +129,9 @@ impl Recovery {
     }
 
     /// Solve the pseudo velocities over the deep points and move their bodies by them for
-    /// `dt` seconds (s).
+    /// `dt` seconds (s). (Kept out of line: inlined, it changed how the stages around it were
+    /// compiled, and a pyramid with no deep point paid 0.9 % more instructions.)
+    #[inline(never)]
     pub fn push_out(&mut self, bodies: &mut [SolverBody], dt: Real) {
         let points = &mut self.points[self.solve_from..];
         if points.is_empty() {

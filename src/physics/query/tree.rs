@@ -362,6 +362,41 @@ mod tests {
         assert_eq!(found, vec![22, 23, 32, 33]);
     }
 
+    /// A tree rebuilt in place over other boxes (after inserts and removals left it a free
+    /// list) finds exactly those boxes, as a fresh one does.
+    #[test]
+    fn a_rebuilt_tree_forgets_its_old_boxes() {
+        let old: Vec<(u32, Aabb)> = (0..50u32).map(|i| (i, boxed(i as Real, 0.0))).collect();
+        let (mut tree, _) = Tree::build(&old);
+        let extra = tree.insert(99, boxed(3.0, 3.0));
+        tree.remove(extra);
+        let new: Vec<(u32, Aabb)> = (0..20u32)
+            .map(|i| (100 + i, boxed(0.0, 2.0 * i as Real)))
+            .collect();
+        let (mut order, mut leaves) = (Vec::new(), Vec::new());
+        tree.rebuild(&new, &mut order, &mut leaves);
+        assert_eq!(leaves.len(), 20);
+        let q = Aabb {
+            min: vec2(-1.0, -1.0),
+            max: vec2(60.0, 6.5),
+        };
+        let mut found = Vec::new();
+        tree.query(&q, |s| {
+            found.push(s);
+            true
+        });
+        found.sort_unstable();
+        // The new boxes at y = 0, 2, 4 and 6 meet y <= 6.5; none of the old ones is left.
+        assert_eq!(found, vec![100, 101, 102, 103]);
+        tree.rebuild(&[], &mut order, &mut leaves);
+        let mut any = false;
+        tree.query(&q, |_| {
+            any = true;
+            true
+        });
+        assert!(!any, "an empty rebuild leaves no box");
+    }
+
     /// Every slot the tree reports for a box, against a test of every box.
     #[test]
     fn queries_find_what_testing_every_box_finds_through_inserts_and_removals() {

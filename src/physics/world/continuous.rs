@@ -123,9 +123,9 @@ impl World {
         self.solver.crossed = crossed;
     }
 
-    /// If contact `c` holds a dynamic body against a one-sided piece of a static body and the
-    /// body's centre crossed the piece within the step, the body's slot and the fraction of its
-    /// step's motion it keeps.
+    /// If contact `c` holds a dynamic body against a chain's piece or a one-sided segment of a
+    /// static body ([`guards`]) and the body's centre crossed the piece within the step, the
+    /// body's slot and the fraction of its step's motion it keeps.
     fn crossing(&self, c: &Contact) -> Option<(u32, Real)> {
         let inv_mass = |i: u32| self.solver.bodies[i as usize].inv_mass;
         let (fixed, moving, shape) = if inv_mass(c.a) == 0.0 {

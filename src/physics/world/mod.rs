@@ -273,7 +273,7 @@ struct SolverScratch {
     statics: continuous::StaticTree,
     /// On workers: each candidate pair's fraction of the step to its impact (1 for none).
     pair_hits: Vec<Real>,
-    /// The bodies whose centres crossed a one-sided piece this step, and the fraction of the
+    /// The bodies whose centres crossed a chain piece or a one-sided segment this step, and the fraction of the
     /// step's motion each keeps.
     crossed: Vec<(u32, Real)>,
 }

@@ -543,6 +543,28 @@ fn a_deep_pyramid_is_heavily_loaded() {
     assert_eq!(tier_after_a_step(150), Tier::Braced, "base 150");
 }
 
+/// An island's depth leaves out how far its bodies travel in the step: their broad-phase
+/// boxes grow by it, and a pile flung about (Box2D's spinner) read two or three times as deep
+/// as it is. A pyramid of base 150 (75.5 deep) carried sideways at 30 m/s, each box grown by
+/// 0.5 m a side, is as deep as at rest: below [`tiers::HEAVY_DEPTH`] (with the travel counted
+/// it reached the heavy tier).
+#[test]
+fn a_moving_pile_is_as_deep_as_a_resting_one() {
+    let mut w = awake_world_on_floor(400.0);
+    let mut top = None;
+    let base = 150;
+    for row in 0..base {
+        for i in 0..base - row {
+            let x = (i as Real - (base - 1 - row) as Real / 2.0) * 1.05;
+            let def = BodyDef::dynamic(Shape::rect(1.0, 1.0), vec2(x, 0.5 + row as Real))
+                .with_velocity(vec2(30.0, 0.0));
+            top = Some(w.add_body(&def).unwrap());
+        }
+    }
+    w.step(1.0 / 60.0).unwrap();
+    assert_eq!(w.tiers.body_tier[top.unwrap().index as usize], Tier::Braced);
+}
+
 /// Contacts found in place over last step's (`World::find_contacts`, when the pairs keep their
 /// order) step exactly like contacts found into a fresh array every step, as bodies come and
 /// go at the front, in the middle and at the end of the key order: a row of resting boxes on

@@ -552,27 +552,30 @@ const OUTLIER: Real = 4.0;
 
 /// Sort pair keys ascending, as `sort_unstable` does, for keys of slots below `slots`. A full
 /// sweep yields its pairs in no order, thousands of them when everything moves (2,025 boxes
-/// tumbling in Box2D's `tumbler`): a least-significant-digit radix sort, 11 bits a pass over
-/// each half's significant bits (two or four passes for up to 2^11 or 2^22 slots), is linear
-/// where the comparison sort is n log n. Short lists, and worlds of more slots, take the
-/// comparison sort.
+/// tumbling in Box2D's `tumbler`): a least-significant-digit radix sort over each half's
+/// significant bits is linear where the comparison sort is n log n. Each half takes as few
+/// passes of at most [`RADIX_BITS`] bits as cover it: one for up to 8,192 slots (Box2D's
+/// spinner, 6,437 bodies, took four passes of 11 bits), two for up to 2^26. Short lists, and
+/// worlds of more slots, take the comparison sort.
 fn sort_keys(keys: &mut Vec<u64>, scratch: &mut Vec<u64>, slots: usize) {
-    const BITS: u32 = 11;
     let wide = usize::BITS - slots.max(1).leading_zeros();
-    if keys.len() < RADIX_FROM || wide > 2 * BITS {
+    let passes_per_half = wide.div_ceil(RADIX_BITS).max(1);
+    let bits = wide.div_ceil(passes_per_half).max(1);
+    // A pass clears and sums 2^bits counts: worth it only for as many keys as half that.
+    if keys.len() < RADIX_FROM.max(1 << bits >> 1) || passes_per_half > 2 {
         keys.sort_unstable();
         return;
     }
-    let passes_per_half = wide.div_ceil(BITS);
     scratch.clear();
     scratch.resize(keys.len(), 0);
-    let mut counts = [0u32; 1 << BITS];
+    let mut counts = [0u32; 1 << RADIX_BITS];
+    let counts = &mut counts[..1 << bits];
     // The higher slot (low half) first, then the lower (high half): least significant first.
     for shift in (0..passes_per_half)
-        .map(|p| p * BITS)
-        .chain((0..passes_per_half).map(|p| 32 + p * BITS))
+        .map(|p| p * bits)
+        .chain((0..passes_per_half).map(|p| 32 + p * bits))
     {
-        let digit = |k: u64| ((k >> shift) as usize) & ((1 << BITS) - 1);
+        let digit = |k: u64| ((k >> shift) as usize) & ((1 << bits) - 1);
         counts.fill(0);
         for &k in keys.iter() {
             counts[digit(k)] += 1;
@@ -589,6 +592,10 @@ fn sort_keys(keys: &mut Vec<u64>, scratch: &mut Vec<u64>, slots: usize) {
         std::mem::swap(keys, scratch);
     }
 }
+
+/// The most bits [`sort_keys`] sorts by in one pass: 2^13 counts, 32 KB, stay in the first
+/// level cache.
+const RADIX_BITS: u32 = 13;
 
 /// Pair lists shorter than this are sorted by comparison ([`sort_keys`]).
 const RADIX_FROM: usize = 512;
@@ -879,15 +886,20 @@ mod tests {
     #[test]
     fn pair_keys_sort_as_the_comparison_sort_sorts_them() {
         // Lengths on both sides of the radix threshold, slot counts needing two and four
-        // passes and the comparison sort's fallback, duplicates included.
+        // passes (of 13 bits and fewer) and the comparison sort's fallback, duplicates
+        // included.
         let mut rand = xorshift(0x9e37_79b9);
         let mut scratch = Vec::new();
         for (n, slots) in [
             (100, 50),
             (600, 2_000),
             (5_000, 2_048),
+            (5_000, 6_437),
+            (5_000, 8_193),
+            (20_000, 10_455),
             (5_000, 300_000),
             (3_000, 1 << 23),
+            (3_000, 1 << 27),
         ] {
             let mut keys: Vec<u64> = (0..n)
                 .map(|_| {

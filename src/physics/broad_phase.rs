@@ -462,10 +462,12 @@ fn band_pairs(
     out: &mut Vec<u64>,
 ) {
     let (mut y0, mut y1, mut sum) = (Real::INFINITY, Real::NEG_INFINITY, 0.0 as Real);
+    let mut slots = 0;
     for b in active {
         y0 = y0.min(b.min_y);
         y1 = y1.max(b.max_y);
         sum += b.max_y - b.min_y;
+        slots |= b.slot;
     }
     // The tallest box but the outliers: one body many times the others' size (Box2D's
     // tumbler's drum, 28 m around 0.35 m boxes) would make one band of them all. An outlier
@@ -495,12 +497,17 @@ fn band_pairs(
     let most = (active.len() / 2).max(1) as Real;
     let height = height.max((y1 - y0) / most);
     let bands = ((y1 - y0) / height).floor() + 1.0;
-    if active.len() < BANDS_FROM || !(height > 0.0 && bands.is_finite()) || bands < 2.0 {
-        sweep_band(active, |_| true, out);
+    let flaggable = slots & LOWEST == 0;
+    if active.len() < BANDS_FROM
+        || !(height > 0.0 && bands.is_finite())
+        || bands < 2.0
+        || !flaggable
+    {
+        sweep_band(active, false, out);
         return;
     }
     // Every y here is at or above y0, so truncating is flooring (and no call to floorf).
-    // Multiplying by the reciprocal is as monotonic as dividing, and a pair's test pays it.
+    // Multiplying by the reciprocal is as monotonic as dividing, and cheaper.
     let per_height = 1.0 / height;
     let band = |y: Real| (((y - y0) * per_height) as usize).min(bands as usize - 1);
     // Counting sort of the boxes into their bands, keeping the sweep order in each.
@@ -516,32 +523,46 @@ fn band_pairs(
     }
     boxes.clear();
     boxes.resize(starts[starts.len() - 1] as usize, active[0]);
-    // Filling moves each band's start to its end, which is the next band's start.
+    // Filling moves each band's start to its end, which is the next band's start. The copy
+    // in a box's lowest band carries the flag [`LOWEST`].
     for b in active {
-        for k in band(b.min_y)..=band(b.max_y) {
-            boxes[starts[k] as usize] = *b;
+        let lowest = band(b.min_y);
+        for k in lowest..=band(b.max_y) {
+            let flag = if k == lowest { LOWEST } else { 0 };
+            boxes[starts[k] as usize] = SortedBox {
+                slot: b.slot | flag,
+                ..*b
+            };
             starts[k] += 1;
         }
     }
+    // The band of the higher lower edge is the higher of the two lower edges' bands (the band
+    // is non-decreasing in the height), and both boxes reach into band k, so neither lower
+    // edge's band is above k: the pair is band k's when either box is lowest in it.
     let mut start = 0;
-    for (k, &end) in starts[..bands as usize].iter().enumerate() {
+    for &end in &starts[..bands as usize] {
         let end = end as usize;
-        sweep_band(&boxes[start..end], |y| band(y) == k, out);
+        sweep_band(&boxes[start..end], true, out);
         start = end;
     }
 }
 
+/// The flag, in the high bit of a slot copied into a band, of the band its box's lower edge
+/// lies in (a slot is below 2^31 there: `band_pairs` checks).
+const LOWEST: u32 = 1 << 31;
+
 /// The plain sweep over `boxes` (sorted by left edge): every pair overlapping in x is tested
-/// in y, and pushed if it overlaps and `here` holds for the higher of its lower edges.
+/// in y and pushed if it overlaps; if `banded`, only if either box carries [`LOWEST`].
 #[inline]
-fn sweep_band(boxes: &[SortedBox], here: impl Fn(Real) -> bool, out: &mut Vec<u64>) {
+fn sweep_band(boxes: &[SortedBox], banded: bool, out: &mut Vec<u64>) {
+    let slot = if banded { !LOWEST } else { u32::MAX };
     for (i, a) in boxes.iter().enumerate() {
         for b in &boxes[i + 1..] {
             if b.min_x > a.max_x {
                 break;
             }
-            if a.overlaps_y(b) && here(a.min_y.max(b.min_y)) {
-                out.push(pair_key(a.slot, b.slot));
+            if a.overlaps_y(b) && (!banded || (a.slot | b.slot) & LOWEST != 0) {
+                out.push(pair_key(a.slot & slot, b.slot & slot));
             }
         }
     }

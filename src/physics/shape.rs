@@ -300,6 +300,15 @@ impl Aabb {
         }
     }
 
+    /// The box covering this one and this one moved by `shift` (m).
+    #[inline]
+    pub(crate) fn swept(self, shift: Vec2) -> Aabb {
+        Aabb {
+            min: self.min.min(self.min + shift),
+            max: self.max.max(self.max + shift),
+        }
+    }
+
     /// True when `other` lies wholly inside this box.
     #[inline]
     pub fn contains(&self, other: &Aabb) -> bool {

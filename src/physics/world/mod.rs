@@ -202,8 +202,8 @@ struct BroadPhase {
     sweep: SweepAndPrune,
     /// Each slot's box for this step.
     proxies: Vec<Proxy>,
-    /// Each slot's travel this step (m): how far its box is grown beyond the margin.
-    reach: Vec<Real>,
+    /// Each slot's travel this step: how far its box is grown and swept beyond the margin.
+    reach: Vec<contacts::Travel>,
     /// This step's candidate pairs, by key.
     pair_keys: Vec<u64>,
     /// Scratch for a pair of bodies of several shapes: its pairs of shapes whose boxes meet.

@@ -3,6 +3,7 @@
 //! work its islands need ([`TIERS`]). Islands of different tiers share no dynamic body, so
 //! each tier solves its own contacts, taking their colours from the one constraint graph.
 
+use super::contacts::Travel;
 use super::islands::{find, unite_islands};
 use super::*;
 use crate::physics::shape::Aabb;
@@ -467,7 +468,7 @@ impl World {
         tiers.island_bodies.clear();
         tiers.island_bodies.resize(n, 0);
         let boxes = self.broad_phase.proxies.iter().zip(&self.broad_phase.reach);
-        for (i, (proxy, &reach)) in boxes.enumerate() {
+        for (i, (proxy, reach)) in boxes.enumerate() {
             if self.solver.bodies[i].inv_mass > 0.0 {
                 let root = find(&mut self.islands.parent, i as u32) as usize;
                 tiers.island_extent[root].add(&proxy.aabb, reach, down, across);
@@ -564,13 +565,13 @@ impl Extent {
         widths: 0.0,
     };
 
-    /// Take in box `aabb`, grown by `travel` (m) for the body's travel this step, with `down`
-    /// the unit vector along gravity and `across` normal to it. The travel counts in the
-    /// island's extent but not in the body's width: bodies flung about (Box2D's `spinner`,
+    /// Take in box `aabb`, grown and swept by `travel` for the body's travel this step, with
+    /// `down` the unit vector along gravity and `across` normal to it. The travel counts in
+    /// the island's extent but not in the body's width: bodies flung about (Box2D's `spinner`,
     /// whose paddle's tips move at 100 m/s) have boxes grown by metres, and their pile read
     /// twice or three times as deep as it is.
     #[inline]
-    fn add(&mut self, aabb: &Aabb, travel: Real, down: Vec2, across: Vec2) {
+    fn add(&mut self, aabb: &Aabb, travel: &Travel, down: Vec2, across: Vec2) {
         let centre = 0.5 * (aabb.min + aabb.max);
         let half = 0.5 * (aabb.max - aabb.min);
         let reach = |d: Vec2| half.x * d.x.abs() + half.y * d.y.abs();
@@ -581,7 +582,8 @@ impl Extent {
             self.side[0].min(side - r_side),
             self.side[1].max(side + r_side),
         ];
-        self.widths += 2.0 * (r_side - travel).max(0.0);
+        let swept = travel.shift.x.abs() * across.x.abs() + travel.shift.y.abs() * across.y.abs();
+        self.widths += (2.0 * (r_side - travel.grow) - swept).max(0.0);
     }
 
     /// How many bodies deep the island is on average: its bodies' widths across gravity over

@@ -220,8 +220,8 @@ impl World {
     }
 
     /// A fast body whose box at the end of the step is not inside the box the broad phase
-    /// paired it by (grown by the travel its velocity at the start of the step foretold) gained
-    /// speed within the step, struck by another body: the statics it reached were never
+    /// paired it by (swept along the motion its velocity at the start of the step foretold)
+    /// changed its motion within the step, struck by another body: the statics it reached were never
     /// paired with it, so it is swept against every static whose box its path's box meets,
     /// found through a tree of the statics' boxes (Box2D queries its static tree alike). The
     /// tree is built only in a step where some body escaped: in Box2D's `spinner`, where the

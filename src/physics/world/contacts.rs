@@ -731,6 +731,12 @@ impl<'a> PairInput<'a> {
         let (g, dt) = (self.gravity, self.dt);
         let reach = closing_reach(a, b, g, dt);
         let margin = self.settings.speculative_distance + reach;
+        // Bodies whose bounding circles are farther apart than the margin have no point within
+        // it: their boxes met only because one is swept or turned past the other.
+        let apart = a.bounding_radius + b.bounding_radius + margin;
+        if (b.position - a.position).length_squared() > apart * apart {
+            return (None, 0);
+        }
         let manifold = collide(sa.shape, sa.pose, sb.shape, sb.pose, margin);
         if manifold.count == 0 {
             return (None, 0);

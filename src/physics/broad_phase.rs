@@ -510,9 +510,30 @@ fn band_pairs(
     // Multiplying by the reciprocal is as monotonic as dividing, and cheaper.
     let per_height = 1.0 / height;
     let band = |y: Real| (((y - y0) * per_height) as usize).min(bands as usize - 1);
-    // Counting sort of the boxes into their bands, keeping the sweep order in each.
+    sort_into_bands(active, (band, bands as usize), boxes, starts);
+    // The band of the higher lower edge is the higher of the two lower edges' bands (the band
+    // is non-decreasing in the height), and both boxes reach into band k, so neither lower
+    // edge's band is above k: the pair is band k's when either box is lowest in it.
+    let mut start = 0;
+    for &end in &starts[..bands as usize] {
+        let end = end as usize;
+        sweep_band(&boxes[start..end], true, out);
+        start = end;
+    }
+}
+
+/// Counting sort of the `active` boxes into `bands` horizontal bands (`band`: the band of a
+/// height), each box into every band from its lower edge's to its upper edge's, keeping the
+/// sweep order in each: band k is `boxes[starts[k - 1]..starts[k]]` (from 0 for the first).
+/// The copy in a box's lowest band carries the flag [`LOWEST`].
+fn sort_into_bands(
+    active: &[SortedBox],
+    (band, bands): (impl Fn(Real) -> usize, usize),
+    boxes: &mut Vec<SortedBox>,
+    starts: &mut Vec<u32>,
+) {
     starts.clear();
-    starts.resize(bands as usize + 1, 0);
+    starts.resize(bands + 1, 0);
     for b in active {
         for k in band(b.min_y)..=band(b.max_y) {
             starts[k + 1] += 1;
@@ -523,8 +544,7 @@ fn band_pairs(
     }
     boxes.clear();
     boxes.resize(starts[starts.len() - 1] as usize, active[0]);
-    // Filling moves each band's start to its end, which is the next band's start. The copy
-    // in a box's lowest band carries the flag [`LOWEST`].
+    // Filling moves each band's start to its end, which is the next band's start.
     for b in active {
         let lowest = band(b.min_y);
         for k in lowest..=band(b.max_y) {
@@ -535,15 +555,6 @@ fn band_pairs(
             };
             starts[k] += 1;
         }
-    }
-    // The band of the higher lower edge is the higher of the two lower edges' bands (the band
-    // is non-decreasing in the height), and both boxes reach into band k, so neither lower
-    // edge's band is above k: the pair is band k's when either box is lowest in it.
-    let mut start = 0;
-    for &end in &starts[..bands as usize] {
-        let end = end as usize;
-        sweep_band(&boxes[start..end], true, out);
-        start = end;
     }
 }
 

@@ -99,7 +99,9 @@ fn proxy_of(slot: &Slot, (g, dt): (Vec2, Real), margin: Real) -> (Proxy, Travel)
 /// met 33 others, where swept it meets those it can reach.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Travel {
+    /// How far the box is grown on every side for the turn and the acceleration (m).
     pub grow: Real,
+    /// How far the box is swept: the step times the velocity (m).
     pub shift: Vec2,
 }
 

@@ -340,6 +340,17 @@ mod tests {
         }
     }
 
+    /// The slots `tree` reports for box `q`, sorted.
+    fn found_in(tree: &Tree, q: &Aabb) -> Vec<u32> {
+        let mut found = Vec::new();
+        tree.query(q, |s| {
+            found.push(s);
+            true
+        });
+        found.sort_unstable();
+        found
+    }
+
     /// A tree built top down answers as one built leaf by leaf.
     #[test]
     fn a_tree_built_at_once_finds_every_box() {
@@ -352,12 +363,7 @@ mod tests {
             min: vec2(4.5, 4.5),
             max: vec2(6.5, 6.5),
         };
-        let mut found = Vec::new();
-        tree.query(&q, |s| {
-            found.push(s);
-            true
-        });
-        found.sort_unstable();
+        let found = found_in(&tree, &q);
         // Boxes at x, y in {4, 6} (each 1 m square) meet [4.5, 6.5]^2.
         assert_eq!(found, vec![22, 23, 32, 33]);
     }
@@ -380,12 +386,7 @@ mod tests {
             min: vec2(-1.0, -1.0),
             max: vec2(60.0, 6.5),
         };
-        let mut found = Vec::new();
-        tree.query(&q, |s| {
-            found.push(s);
-            true
-        });
-        found.sort_unstable();
+        let found = found_in(&tree, &q);
         // The new boxes at y = 0, 2, 4 and 6 meet y <= 6.5; none of the old ones is left.
         assert_eq!(found, vec![100, 101, 102, 103]);
         tree.rebuild(&[], &mut order, &mut leaves);
@@ -420,12 +421,7 @@ mod tests {
                 min: vec2(next(), next()),
                 max: vec2(next(), next()) + vec2(40.0, 40.0),
             };
-            let mut found = Vec::new();
-            tree.query(&q, |s| {
-                found.push(s);
-                true
-            });
-            found.sort_unstable();
+            let found = found_in(&tree, &q);
             let expected: Vec<u32> = (0..300u32)
                 .filter(|&s| leaves[s as usize].is_some_and(|(_, b)| b.overlaps(&q)))
                 .collect();

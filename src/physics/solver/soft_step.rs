@@ -205,13 +205,19 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>)
         bodies: ctx.bodies,
         contacts: ctx.contacts,
         selected: ctx.selected,
-        prepare: |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
-            let k = prepare_contact(a, b, c, stiffness);
-            if k.reach > 0.0 {
-                recovery.note(c, (a, b), k.reach, limits);
-            }
-            k
-        },
+        // Inlined into the packing loop (an attribute goes on a closure only as an argument,
+        // hence `identity`): called, its constraint went back through memory, 2.5 % of a
+        // pyramid's step.
+        prepare: std::convert::identity(
+            #[inline(always)]
+            |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
+                let k = prepare_contact(a, b, c, stiffness);
+                if k.reach > 0.0 {
+                    recovery.note(c, (a, b), k.reach, limits);
+                }
+                k
+            },
+        ),
     });
 }
 

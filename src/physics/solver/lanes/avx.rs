@@ -4,6 +4,7 @@
 
 use super::Wide;
 use crate::physics::math::Real;
+use crate::physics::solver::BodyRows;
 use std::arch::x86_64::*;
 use std::ops::{
     Add, AddAssign, BitAnd, BitOr, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign,
@@ -158,30 +159,53 @@ impl Wide for Lanes8 {
     }
     #[inline(always)]
     fn scatter_rows<R: AsMut<[Real; 8]>>(columns: [Self; 4], rows: &mut [R], idx: &[u32; 8]) {
-        let [c0, c1, c2, c3] = columns.map(|c| c.0);
-        // SAFETY: as above; each store writes the first four of a row's eight f32s,
-        // through an exclusive reference.
-        unsafe {
-            // The 8x4 transpose: lanes interleaved in pairs, then in fours; the low half
-            // of v_k is lane k's four words and the high half lane k + 4's.
-            let (u0, u1) = (_mm256_unpacklo_ps(c0, c1), _mm256_unpackhi_ps(c0, c1));
-            let (u2, u3) = (_mm256_unpacklo_ps(c2, c3), _mm256_unpackhi_ps(c2, c3));
-            let v0 = _mm256_shuffle_ps::<0x44>(u0, u2);
-            let v1 = _mm256_shuffle_ps::<0xEE>(u0, u2);
-            let v2 = _mm256_shuffle_ps::<0x44>(u1, u3);
-            let v3 = _mm256_shuffle_ps::<0xEE>(u1, u3);
-            let mut store = |lane: usize, words: __m128| {
-                _mm_storeu_ps(rows[idx[lane] as usize].as_mut().as_mut_ptr(), words)
-            };
-            store(0, _mm256_castps256_ps128(v0));
-            store(1, _mm256_castps256_ps128(v1));
-            store(2, _mm256_castps256_ps128(v2));
-            store(3, _mm256_castps256_ps128(v3));
-            store(4, _mm256_extractf128_ps::<1>(v0));
-            store(5, _mm256_extractf128_ps::<1>(v1));
-            store(6, _mm256_extractf128_ps::<1>(v2));
-            store(7, _mm256_extractf128_ps::<1>(v3));
+        let words = rows_of_columns(columns);
+        for (lane, words) in words.into_iter().enumerate() {
+            // SAFETY: AVX2 is available (as above); the store writes the first four of a row's
+            // eight f32s, through an exclusive reference.
+            unsafe { _mm_storeu_ps(rows[idx[lane] as usize].as_mut().as_mut_ptr(), words) }
         }
+    }
+    /// As [`Wide::scatter_rows`], a row a store, but for the skipped lanes. (The lane-by-lane
+    /// default wrote each row in four pieces, which the next gather of the row read in one,
+    /// past the store buffer's forwarding.)
+    #[inline(always)]
+    fn scatter_rows_shared(columns: [Self; 4], rows: BodyRows, idx: &[u32; 8], skip: u8) {
+        let words = rows_of_columns(columns);
+        for (lane, words) in words.into_iter().enumerate() {
+            if skip >> lane & 1 == 0 {
+                // SAFETY: AVX2 is available (as above); `words` gives the row's first four of
+                // eight f32s, in bounds.
+                unsafe { _mm_storeu_ps(rows.words(idx[lane]), words) }
+            }
+        }
+    }
+}
+
+/// The inverse of [`Wide::columns`] for four columns: each lane's four words, lane by lane.
+#[inline(always)]
+fn rows_of_columns(columns: [Lanes8; 4]) -> [__m128; 8] {
+    let [c0, c1, c2, c3] = columns.map(|c| c.0);
+    // SAFETY: `Lanes8` is only worked on where AVX2 is available.
+    unsafe {
+        // The 8x4 transpose: lanes interleaved in pairs, then in fours; the low half of v_k is
+        // lane k's four words and the high half lane k + 4's.
+        let (u0, u1) = (_mm256_unpacklo_ps(c0, c1), _mm256_unpackhi_ps(c0, c1));
+        let (u2, u3) = (_mm256_unpacklo_ps(c2, c3), _mm256_unpackhi_ps(c2, c3));
+        let v0 = _mm256_shuffle_ps::<0x44>(u0, u2);
+        let v1 = _mm256_shuffle_ps::<0xEE>(u0, u2);
+        let v2 = _mm256_shuffle_ps::<0x44>(u1, u3);
+        let v3 = _mm256_shuffle_ps::<0xEE>(u1, u3);
+        [
+            _mm256_castps256_ps128(v0),
+            _mm256_castps256_ps128(v1),
+            _mm256_castps256_ps128(v2),
+            _mm256_castps256_ps128(v3),
+            _mm256_extractf128_ps::<1>(v0),
+            _mm256_extractf128_ps::<1>(v1),
+            _mm256_extractf128_ps::<1>(v2),
+            _mm256_extractf128_ps::<1>(v3),
+        ]
     }
 }
 

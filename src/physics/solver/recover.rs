@@ -31,8 +31,9 @@ pub(crate) const LOAD_REACH: Real = 2.0;
 /// chain of deep points (a column placed overlapped) in one sweep each way, so the rest buy
 /// convergence in a pile, where none is bought cheaply: in Box2D's `spinner` (about 7,000 deep
 /// points a solve) the pseudo velocities end 42 % short of their targets after 8 sweeps, 34 %
-/// after 16 and 19 % after 64, and what a step leaves the next recovers. 16 sweeps cost the
-/// spinner 11 % more of its step than 8, and bought no stiff case anything (docs/benchmarks.md).
+/// after 16 and 19 % after 64, and what a step leaves the next recovers. 8 sweeps instead of
+/// 16 take 11-13 % off the spinner's step, and every stiff case passes with either
+/// (docs/benchmarks.md).
 const SWEEPS: usize = 8;
 
 /// A contact overlapping deeper than the spring's reach, as prepared for this step: one

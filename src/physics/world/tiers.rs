@@ -207,8 +207,9 @@ impl World {
     /// weight or more, or a touching contact is too new for its load to be known. A loaded
     /// island braced sideways (less than [`SLENDER`] times as tall as it is wide, along
     /// gravity, with at least `stiff_load_ratio` moving bodies, and, if a moving kinematic
-    /// body drives it, [`DRIVEN_DEPTH`] bodies deep) is [`Tier::Braced`], or [`Tier::HeavyBraced`] from [`HEAVY_DEPTH`]
-    /// bodies deep or where a joint carries `stiff_load_ratio` times its lighter body's
+    /// body drives it, [`DRIVEN_DEPTH`] bodies deep) is [`Tier::Braced`], or
+    /// [`Tier::HeavyBraced`] from [`HEAVY_DEPTH`] bodies deep or where a joint carries
+    /// `stiff_load_ratio` times its lighter body's
     /// weight; any other a stack tier. Masses `stiff_load_ratio` apart ask for [`Tier::TallStack`] (braced if the
     /// island is), `extreme_mass_ratio` apart for [`Tier::Extreme`], where the light body
     /// carries the heavy one's weight and no joint holds the heavy one to a fixed body. Fills `contact_tier` and

@@ -209,10 +209,10 @@ impl World {
     /// gravity, with at least `stiff_load_ratio` moving bodies, and, if a moving kinematic
     /// body drives it, [`DRIVEN_DEPTH`] bodies deep) is [`Tier::Braced`], or
     /// [`Tier::HeavyBraced`] from [`HEAVY_DEPTH`] bodies deep or where a joint carries
-    /// `stiff_load_ratio` times its lighter body's
-    /// weight; any other a stack tier. Masses `stiff_load_ratio` apart ask for [`Tier::TallStack`] (braced if the
-    /// island is), `extreme_mass_ratio` apart for [`Tier::Extreme`], where the light body
-    /// carries the heavy one's weight and no joint holds the heavy one to a fixed body. Fills `contact_tier` and
+    /// `stiff_load_ratio` times its lighter body's weight; any other a stack tier. Masses
+    /// `stiff_load_ratio` apart ask for [`Tier::TallStack`] (braced if the island is),
+    /// `extreme_mass_ratio` apart for [`Tier::Extreme`], where the light body carries the heavy
+    /// one's weight and no joint holds the heavy one to a fixed body. Fills `contact_tier` and
     /// `body_tier`; returns the highest tier.
     pub(super) fn assign_tiers(&mut self) -> Tier {
         self.mark_anchored();

@@ -43,7 +43,13 @@ impl BlockMass {
         let kij = |i: usize, j: usize| {
             m + a.inv_inertia * rna[i] * rna[j] + b.inv_inertia * rnb[i] * rnb[j]
         };
-        let k = [[kij(0, 0), kij(0, 1)], [kij(1, 0), kij(1, 1)]];
+        BlockMass::of_matrix([[kij(0, 0), kij(0, 1)], [kij(1, 0), kij(1, 1)]])
+    }
+
+    /// The block of matrix `k` (1/kg), or None when it is too ill-conditioned to invert
+    /// safely (nearly coincident points): k11^2 < 1000 det, Box2D's bound.
+    #[inline(always)]
+    pub fn of_matrix(k: [[Real; 2]; 2]) -> Option<BlockMass> {
         let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
         let well_conditioned = k[0][0] * k[0][0] < 1000.0 * det;
         if !well_conditioned {

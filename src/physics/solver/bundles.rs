@@ -419,7 +419,8 @@ pub(crate) struct ContactBundles {
 }
 
 /// What packing reads: the bodies, the contacts, which of them to pack, and how to prepare
-/// one (its constraint from the contact and its bodies A and B; it may update the contact).
+/// one (its constraint, written into the last argument, from the contact and its bodies A and
+/// B; it may update the contact).
 pub(crate) struct PackInput<'a, 'b, P> {
     pub bodies: &'a [SolverBody],
     pub contacts: &'a mut [Contact],
@@ -433,7 +434,7 @@ impl ContactBundles {
     /// body, for empty lanes.
     pub fn build<P>(&mut self, input: PackInput<'_, '_, P>)
     where
-        P: FnMut(&mut Contact, &SolverBody, &SolverBody) -> ContactConstraint,
+        P: FnMut(&mut Contact, &SolverBody, &SolverBody, &mut ContactConstraint),
     {
         debug_assert!(
             input.bodies.last().is_some_and(|d| d.inv_mass == 0.0),
@@ -771,7 +772,7 @@ fn pack<L: Wide, P>(
     input: PackInput<'_, '_, P>,
 ) -> bool
 where
-    P: FnMut(&mut Contact, &SolverBody, &SolverBody) -> ContactConstraint,
+    P: FnMut(&mut Contact, &SolverBody, &SolverBody, &mut ContactConstraint),
 {
     let PackInput {
         bodies,
@@ -786,10 +787,13 @@ where
     let mut filled = [0usize; COLOURS * 2];
     let mut overflowed = [0usize; 2];
     let mut bouncy = false;
+    // (Written in place, field by field, and read the same way: returned, the constraint was
+    // copied in 16-byte pieces over its 4- and 8-byte stores, which stalls store forwarding.)
+    let mut k = ContactConstraint::default();
     selected.for_each_index(contacts.len(), |i| {
         let c = &mut contacts[i];
         let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
-        let k = prepare(c, a, b);
+        prepare(c, a, b, &mut k);
         let kind = if c.count == 2 && k.block.is_none() {
             BundleKind::Points
         } else {

@@ -10,7 +10,7 @@
 use super::block::BlockMass;
 use super::softness::Softness;
 use super::SolverBody;
-use crate::physics::contact::ContactPoint;
+use crate::physics::contact::{Contact, ContactPoint};
 use crate::physics::math::{cross, Real, Vec2};
 
 /// A point's lever arms along the normal n: rA x n, rB x n, rA . n, rB . n (m). With them a
@@ -76,14 +76,61 @@ impl PointConstraint {
 /// (appendix eqs. 56-57, with r.r - (r.d)^2 = (r x d)^2 for unit d); 0 between fixed bodies.
 #[inline]
 pub(crate) fn effective_mass(a: &SolverBody, b: &SolverBody, ra: Vec2, rb: Vec2, d: Vec2) -> Real {
+    mass_of(inverse_mass_along(a, b, ra, rb, d))
+}
+
+/// The inverse effective mass along `d` (1/kg): effective_mass's denominator.
+#[inline(always)]
+fn inverse_mass_along(a: &SolverBody, b: &SolverBody, ra: Vec2, rb: Vec2, d: Vec2) -> Real {
     let rna = cross(ra, d);
     let rnb = cross(rb, d);
-    let k = a.inv_mass + b.inv_mass + a.inv_inertia * rna * rna + b.inv_inertia * rnb * rnb;
+    a.inv_mass + b.inv_mass + a.inv_inertia * rna * rna + b.inv_inertia * rnb * rnb
+}
+
+/// 1 / k, or 0 where nothing moves along the direction (k = 0).
+#[inline(always)]
+fn mass_of(k: Real) -> Real {
     if k > 0.0 {
         1.0 / k
     } else {
         0.0
     }
+}
+
+/// [`PointConstraint::set_masses`] for each live point of contact `c` between `a` and `b`,
+/// and of a two-point contact its normal block ([`BlockMass::new`]), whose diagonal is the
+/// points' inverse normal masses. The four reciprocals are taken side by side: one vector
+/// division, where one at a time they were a chain of four.
+#[inline(always)]
+pub(crate) fn set_contact_masses(
+    points: &mut [PointConstraint; 2],
+    a: &SolverBody,
+    b: &SolverBody,
+    c: &Contact,
+) -> Option<BlockMass> {
+    let (n, t) = (c.normal, c.tangent());
+    let along = |p: &ContactPoint, d: Vec2| inverse_mass_along(a, b, p.anchor_a, p.anchor_b, d);
+    let [p0, p1] = &c.points;
+    let normal = [along(p0, n), along(p1, n)];
+    let masses = [normal[0], along(p0, t), normal[1], along(p1, t)].map(mass_of);
+    for (kp, m) in points[..c.count as usize]
+        .iter_mut()
+        .zip(masses.chunks_exact(2))
+    {
+        kp.normal_mass = m[0];
+        kp.tangent_mass = m[1];
+    }
+    if c.count != 2 {
+        return None;
+    }
+    let (rna, rnb) = (
+        [p0, p1].map(|p| cross(p.anchor_a, n)),
+        [p0, p1].map(|p| cross(p.anchor_b, n)),
+    );
+    let m = a.inv_mass + b.inv_mass;
+    let kij =
+        |i: usize, j: usize| m + a.inv_inertia * rna[i] * rna[j] + b.inv_inertia * rnb[i] * rnb[j];
+    BlockMass::of_matrix([[normal[0], kij(0, 1)], [kij(1, 0), normal[1]]])
 }
 
 /// One contact's constraint for the current step.

@@ -23,9 +23,8 @@
 //! the same constraint graph (`graph.rs`): in the warm start and each pass, each colour's
 //! joints run just before its contacts.
 
-use super::block::BlockMass;
 use super::bundles::{list_of, ContactBundles, PackInput, SharedPackInput, Work, DEEP};
-use super::constraint::{Arms, ContactConstraint, PointConstraint};
+use super::constraint::{set_contact_masses, Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
 use super::joint::{self, JointPass, JointSet, JointStep, JointWork};
 use super::recover::{Recovery, LOAD_REACH, SPRING_REACH};
@@ -210,12 +209,11 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>)
         // pyramid's step.
         prepare: std::convert::identity(
             #[inline(always)]
-            |c: &mut Contact, a: &SolverBody, b: &SolverBody| {
-                let k = prepare_contact(a, b, c, stiffness);
+            |c: &mut Contact, a: &SolverBody, b: &SolverBody, k: &mut ContactConstraint| {
+                prepare_contact(a, b, c, stiffness, k);
                 if k.reach > 0.0 {
                     recovery.note(c, (a, b), k.reach, limits);
                 }
-                k
             },
         ),
     });
@@ -274,7 +272,13 @@ fn prepare_shared(ctx: &mut StepContext, stiffness: &Stiffness, region: &Region)
             // SAFETY: as above.
             let (c, k, l) = unsafe { (contacts.get(selected.at(m)), out.get(m), lists.get(m)) };
             let (c, k) = (c.expect("a selected contact"), k.expect("its constraint"));
-            *k = prepare_contact(&bodies[c.a as usize], &bodies[c.b as usize], c, stiffness);
+            prepare_contact(
+                &bodies[c.a as usize],
+                &bodies[c.b as usize],
+                c,
+                stiffness,
+                k,
+            );
             let deep = if k.reach > 0.0 { DEEP } else { 0 };
             *l.expect("its list") = list_of(c, k) | deep;
         }
@@ -393,7 +397,7 @@ fn store_impulses(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     }
 }
 
-/// Contact `c`'s constraint for this step between bodies `a` and `b`. The impulses it carries
+/// Contact `c`'s constraint for this step between bodies `a` and `b`, into `k`. The impulses it carries
 /// from the last step become per substep: between steps a contact keeps its impulses per step,
 /// so that an island whose substep count changes (adaptive stiffness) warm starts with the
 /// same force (exact for substep counts that are powers of two, 4 and 16, and within rounding
@@ -404,10 +408,10 @@ fn prepare_contact(
     b: &SolverBody,
     c: &mut Contact,
     stiffness: &Stiffness,
-) -> ContactConstraint {
-    let mut k = ContactConstraint::default();
+    k: &mut ContactConstraint,
+) {
+    *k = ContactConstraint::default();
     let n = c.normal;
-    let t = c.tangent();
     let mut deepest = Real::INFINITY;
     for (p, kp) in c.live_mut().iter_mut().zip(&mut k.points) {
         deepest = deepest.min(p.separation);
@@ -415,7 +419,6 @@ fn prepare_contact(
         p.tangent_impulse *= stiffness.per_substep;
         let arms = Arms::new(p.anchor_a, p.anchor_b, n);
         kp.arms = arms;
-        kp.set_masses(a, b, p, n, t);
         kp.adjusted_separation = p.separation - (arms.b_dot_n - arms.a_dot_n);
         p.total_normal_impulse = 0.0;
         if !stiffness.warm_starting {
@@ -423,17 +426,17 @@ fn prepare_contact(
             p.tangent_impulse = 0.0;
         }
     }
+    let block = set_contact_masses(&mut k.points, a, b, c);
     k.softness = stiffness.softness(c, &k.points);
     k.creep = if stiffness.creep > 0.0 {
         stiffness.creep * creep(c, k.softness, a.inv_mass + b.inv_mass)
     } else {
         0.0
     };
-    k.block = BlockMass::of_contact(a, b, c);
+    k.block = block;
     if deepest < -stiffness.min_reach {
-        hold_if_deep(c, &mut k, deepest, stiffness.min_reach);
+        hold_if_deep(c, k, deepest, stiffness.min_reach);
     }
-    k
 }
 
 /// A contact whose deepest point (`deepest`, m) overlaps deeper than its spring reaches

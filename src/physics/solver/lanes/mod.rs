@@ -277,6 +277,10 @@ pub(crate) fn eight_lanes_available() -> bool {
     }
 }
 
+/// The cache line's size on the processors we tune for (bytes).
+#[cfg(target_arch = "x86_64")]
+const CACHE_LINE: usize = 64;
+
 /// Ask the processor to start loading every cache line of `x` into the cache (a hint:
 /// nothing is read, and results do not change). For passes that visit scattered values in an
 /// order known ahead: the load of the next values overlaps the work on these.
@@ -285,11 +289,15 @@ pub(crate) fn prefetch<T>(x: &T) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        // From the start of the line `x` begins in: `x` need not start a line, and its last
+        // bytes may lie in one more line than its size suggests.
         let start = (x as *const T).cast::<i8>();
-        for offset in (0..std::mem::size_of::<T>()).step_by(64) {
-            // SAFETY: SSE is part of x86-64, and a prefetch neither reads memory nor faults;
-            // the address stays within `x`.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(start.add(offset)) }
+        let skew = start as usize % CACHE_LINE;
+        let first = start.wrapping_sub(skew);
+        for offset in (0..skew + std::mem::size_of::<T>()).step_by(CACHE_LINE) {
+            // SAFETY: SSE is part of x86-64, and a prefetch neither reads memory nor faults
+            // (its address is a hint, here within the lines `x` spans).
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(offset)) }
         }
     }
     #[cfg(not(target_arch = "x86_64"))]

@@ -17,10 +17,14 @@ use crate::physics::math::Transform;
 use crate::physics::part_tree::PartTree;
 use crate::physics::shape::{Aabb, Shape};
 use crate::physics::solver::graph::UNCOLOURED;
+use crate::physics::solver::lanes::prefetch;
 use crate::physics::team::{block, Region, SharedSlice};
 
 /// How many bodies' boxes a worker updates at a time.
 const PROXIES_PER_BLOCK: usize = 512;
+
+/// How many pairs ahead the merge fetches the bodies it will read.
+const FETCH_AHEAD: usize = 4;
 
 /// How many pairs a worker collides at a time...
 const PAIRS_PER_BLOCK: usize = 128;
@@ -287,7 +291,11 @@ impl World {
         // Pairs kept apart by a joint, by their filters or by a sensor keep no contact (any
         // they had ends here); a World with none pays one test per step for it.
         let sorting = joints.keeps_pairs_apart() || bodies.filtered > 0 || bodies.flagged > 0;
-        for (p, &key) in broad_phase.pair_keys.iter().enumerate() {
+        let keys = &broad_phase.pair_keys;
+        for (p, &key) in keys.iter().enumerate() {
+            if let Some(&next) = keys.get(p + FETCH_AHEAD) {
+                pairs.fetch(next);
+            }
             if collided {
                 let (found, manifold) = (broad_phase.found[p], &broad_phase.manifolds[p]);
                 let wake = &mut islands.wake_queue;
@@ -592,6 +600,18 @@ impl<'a> PairInput<'a> {
             settings,
             gravity,
             dt,
+        }
+    }
+
+    /// Start loading the bodies of pair `key` into the cache (a hint; nothing is read): the
+    /// pairs come in key order, body A's ascending and B's from all over the array.
+    #[inline(always)]
+    fn fetch(&self, key: u64) {
+        let (ia, ib) = pair_of(key);
+        for i in [ia, ib] {
+            if let Some(slot) = self.slots.get(i as usize) {
+                prefetch(slot);
+            }
         }
     }
 

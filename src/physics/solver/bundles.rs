@@ -61,11 +61,11 @@ pub(crate) type Joints<'a> = Option<&'a mut dyn FnMut(&mut [SolverBody], u8)>;
 /// The overflow's solve rank.
 const OVERFLOW_RANK: u8 = 0;
 
-/// Run `joints` up to the solve rank of the colour of list `slot` (colour * 2 + kind).
+/// Run `joints` up to the solve rank of the colour of list `slot` (colour * KINDS + kind).
 #[inline(always)]
 fn before_colour(joints: &mut Joints, bodies: &mut [SolverBody], slot: u16) {
     if let Some(run) = joints.as_mut() {
-        run(bodies, (slot / 2) as u8 + 1);
+        run(bodies, (slot as usize / KINDS) as u8 + 1);
     }
 }
 
@@ -141,7 +141,7 @@ fn run_block<L: Wide>(bundles: &mut [Bundle<L>], rows: BodyRows, work: Work, sid
     }
 }
 
-/// Bundles of one width, in lists per (colour, kind) flattened as colour * 2 + kind, solved in
+/// Bundles of one width, in lists per (colour, kind) flattened as colour * KINDS + kind, solved in
 /// that order, with the restitution lanes of the bundles that bounce.
 #[derive(Clone, Debug)]
 struct Packed<L: Wide> {
@@ -176,12 +176,44 @@ impl<L: Wide> Default for Packed<L> {
     }
 }
 
+/// How many kinds of bundle ([`BundleKind`]) a colour has lists for.
+const KINDS: usize = 3;
+
+/// The kinds, in their lists' order within a colour.
+const ALL_KINDS: [BundleKind; KINDS] = [BundleKind::Block, BundleKind::Points, BundleKind::Single];
+
+/// How many coloured lists there are: one per (colour, kind).
+const LISTS: usize = COLOURS * KINDS;
+
 /// Which list of its colour a bundle of `kind` goes in.
 #[inline(always)]
 fn kind_slot(kind: BundleKind) -> usize {
     match kind {
         BundleKind::Block => 0,
         BundleKind::Points => 1,
+        BundleKind::Single => 2,
+    }
+}
+
+/// Contacts from which a solve packs its one-point contacts apart ([`BundleKind::Single`]):
+/// below, the extra lists' half-empty bundles cost more than the second point's lanes saved.
+const SINGLES_FROM: usize = 1024;
+
+/// Whether a solve of `contacts` contacts packs its one-point contacts apart.
+#[inline]
+pub(crate) fn singles_apart(contacts: usize) -> bool {
+    contacts >= SINGLES_FROM
+}
+
+/// The kind of bundle contact `c`, prepared as `k`, goes in: two points without a usable
+/// block one after the other; one point alone if `singles` ([`singles_apart`]); else as a
+/// block.
+#[inline(always)]
+fn kind_of(c: &Contact, k: &ContactConstraint, singles: bool) -> BundleKind {
+    match (c.count, &k.block) {
+        (1, _) if singles => BundleKind::Single,
+        (2, None) => BundleKind::Points,
+        _ => BundleKind::Block,
     }
 }
 
@@ -336,7 +368,10 @@ impl<L: Wide> Packed<L> {
         for (list, &slot) in self.packed.iter_mut().zip(&self.slots) {
             if let Some(run_joints) = joints.as_mut() {
                 // SAFETY: between colours no block runs: the other workers wait.
-                run_joints(unsafe { rows.exclusive() }, (slot / 2) as u8 + 1);
+                run_joints(
+                    unsafe { rows.exclusive() },
+                    (slot as usize / KINDS) as u8 + 1,
+                );
             }
             let len = list.len();
             // SAFETY: each block is its own run of the colour's bundles.
@@ -447,7 +482,7 @@ impl ContactBundles {
             None => Width::detect(),
         };
         self.built = Some(width);
-        self.overflow.reset(2);
+        self.overflow.reset(KINDS);
         self.bouncy = match width {
             Width::One => pack(&mut self.single, &mut self.overflow, input),
             Width::Four => pack(&mut self.four, &mut self.overflow, input),
@@ -465,7 +500,7 @@ impl ContactBundles {
             None => Width::detect(),
         };
         self.built = Some(width);
-        self.overflow.reset(2);
+        self.overflow.reset(KINDS);
         let (order, overflow) = (&mut self.order, &mut self.overflow);
         self.bouncy = match width {
             Width::One => pack_shared((&mut self.single, overflow), input, region, order),
@@ -637,29 +672,29 @@ fn put<L: Wide>(
     }
 }
 
-/// The list a prepared contact `c` (constraint `k`) is packed into: colour * 2 + kind, or for
-/// the overflow [`IN_OVERFLOW`] + kind.
+/// The list a prepared contact `c` (constraint `k`) is packed into: colour * KINDS + kind,
+/// or for the overflow [`IN_OVERFLOW`] + kind (`singles`: [`singles_apart`]).
 #[inline(always)]
-pub(crate) fn list_of(c: &Contact, k: &ContactConstraint) -> u8 {
-    let kind = if c.count == 2 && k.block.is_none() {
-        BundleKind::Points
-    } else {
-        BundleKind::Block
-    };
-    let s = kind_slot(kind) as u8;
+pub(crate) fn list_of(c: &Contact, k: &ContactConstraint, singles: bool) -> u8 {
+    let s = kind_slot(kind_of(c, k, singles)) as u8;
     if c.colour >= OVERFLOW {
         IN_OVERFLOW + s
     } else {
-        c.colour * 2 + s
+        c.colour * KINDS as u8 + s
     }
 }
 
 /// [`list_of`]'s lists from here on are the overflow's.
-pub(crate) const IN_OVERFLOW: u8 = 128;
+pub(crate) const IN_OVERFLOW: u8 = LISTS as u8;
 
 /// A bit beside a [`list_of`] list, free in every one: the contact overlaps deeper than its
 /// spring reaches (the recover stage's).
-pub(crate) const DEEP: u8 = 64;
+pub(crate) const DEEP: u8 = 128;
+
+const _: () = assert!(
+    IN_OVERFLOW as usize + KINDS <= DEEP as usize,
+    "DEEP is free in a list"
+);
 
 /// What packing on the workers reads: the bodies, the contacts, which of them to pack, and
 /// each selected contact's prepared constraint and list ([`list_of`], maybe with [`DEEP`]),
@@ -689,9 +724,9 @@ fn pack_shared<L: Wide>(
         lists,
     } = *input;
     let dummy = (bodies.len() - 1) as u32;
-    coloured.reset(COLOURS * 2);
+    coloured.reset(LISTS);
     // The selected contacts by list, each list in selection (key) order: a counting sort.
-    let mut starts = [0u32; COLOURS * 2 + 1];
+    let mut starts = [0u32; LISTS + 1];
     for &l in lists {
         let l = l & !DEEP;
         if l < IN_OVERFLOW {
@@ -702,7 +737,7 @@ fn pack_shared<L: Wide>(
         starts[l] += starts[l - 1];
     }
     order.clear();
-    order.resize(starts[COLOURS * 2] as usize, 0);
+    order.resize(starts[LISTS] as usize, 0);
     let mut next = starts;
     for (m, &l) in lists.iter().enumerate() {
         let l = l & !DEEP;
@@ -711,10 +746,8 @@ fn pack_shared<L: Wide>(
             next[l as usize] += 1;
         }
     }
-    coloured
-        .list_sides
-        .resize_with(COLOURS * 2, Default::default);
-    let inert = [BundleKind::Block, BundleKind::Points].map(|kind| Bundle::<L>::inert(kind, dummy));
+    coloured.list_sides.resize_with(LISTS, Default::default);
+    let inert = ALL_KINDS.map(|kind| Bundle::<L>::inert(kind, dummy));
     let order = &*order;
     // SAFETY: each block fills its own list and its own side lanes.
     let (out, sides) = unsafe {
@@ -723,7 +756,7 @@ fn pack_shared<L: Wide>(
             SharedSlice::new(&mut coloured.list_sides),
         )
     };
-    region.for_blocks(COLOURS * 2, &|l| {
+    region.for_blocks(LISTS, &|l| {
         // SAFETY: as above.
         let (list, sides) = unsafe { (out.get(l), sides.get(l)) };
         let (list, (bounces, rounds)) = (list.expect("a list"), sides.expect("its side lanes"));
@@ -733,7 +766,7 @@ fn pack_shared<L: Wide>(
         for &m in &order[starts[l] as usize..starts[l + 1] as usize] {
             let i = selected.at(m as usize);
             let (c, k) = (&contacts[i], &prepared[m as usize]);
-            let inert = &inert[l % 2];
+            let inert = &inert[l % KINDS];
             put(
                 list,
                 (bounces, rounds),
@@ -745,8 +778,8 @@ fn pack_shared<L: Wide>(
         }
     });
     coloured.join_sides();
-    let inert_one = [BundleKind::Block, BundleKind::Points].map(|kind| Bundle::inert(kind, dummy));
-    let mut overflowed = [0usize; 2];
+    let inert_one = ALL_KINDS.map(|kind| Bundle::inert(kind, dummy));
+    let mut overflowed = [0usize; KINDS];
     let mut bouncy = false;
     for (m, &l) in lists.iter().enumerate() {
         let (i, l) = (selected.at(m), l & !DEEP);
@@ -756,7 +789,7 @@ fn pack_shared<L: Wide>(
             overflow.put((s, &mut overflowed[s]), &inert_one[s], (i, c), k, bodies);
         }
     }
-    for l in 0..COLOURS * 2 {
+    for l in 0..LISTS {
         bouncy |= !coloured.list_sides[l].0.is_empty();
     }
     bouncy |= !overflow.bounces.is_empty();
@@ -781,11 +814,12 @@ where
         mut prepare,
     } = input;
     let dummy = (bodies.len() - 1) as u32;
-    coloured.reset(COLOURS * 2);
-    let inert = [BundleKind::Block, BundleKind::Points].map(|kind| Bundle::<L>::inert(kind, dummy));
-    let inert_one = [BundleKind::Block, BundleKind::Points].map(|kind| Bundle::inert(kind, dummy));
-    let mut filled = [0usize; COLOURS * 2];
-    let mut overflowed = [0usize; 2];
+    let singles = singles_apart(selected.count(contacts.len()));
+    coloured.reset(LISTS);
+    let inert = ALL_KINDS.map(|kind| Bundle::<L>::inert(kind, dummy));
+    let inert_one = ALL_KINDS.map(|kind| Bundle::inert(kind, dummy));
+    let mut filled = [0usize; LISTS];
+    let mut overflowed = [0usize; KINDS];
     let mut bouncy = false;
     // (Written in place, field by field, and read the same way: returned, the constraint was
     // copied in 16-byte pieces over its 4- and 8-byte stores, which stalls store forwarding.)
@@ -794,17 +828,12 @@ where
         let c = &mut contacts[i];
         let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
         prepare(c, a, b, &mut k);
-        let kind = if c.count == 2 && k.block.is_none() {
-            BundleKind::Points
-        } else {
-            BundleKind::Block
-        };
-        let s = kind_slot(kind);
+        let s = kind_slot(kind_of(c, &k, singles));
         bouncy |= c.restitution != 0.0;
         if c.colour >= OVERFLOW {
             overflow.put((s, &mut overflowed[s]), &inert_one[s], (i, c), &k, bodies);
         } else {
-            let slot = c.colour as usize * 2 + s;
+            let slot = c.colour as usize * KINDS + s;
             coloured.put((slot, &mut filled[slot]), &inert[s], (i, c), &k, bodies);
         }
     });

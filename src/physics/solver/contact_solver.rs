@@ -25,11 +25,15 @@ use crate::physics::math::Real;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum BundleKind {
     /// Two points with a well-conditioned block, both normal impulses at once (2x2 LCP), or
-    /// one point, as a block whose second point never pushes: the same solve, so that
-    /// one-point and two-point contacts of a colour share bundles.
+    /// one point, as a block whose second point never pushes: the same solve, so that in a
+    /// small solve one-point and two-point contacts of a colour share bundles.
     Block,
     /// Two points too nearly coincident for the block: solved one after the other.
     Points,
+    /// One point (a disc's contact, a corner on a face), in a large solve: every stage leaves
+    /// the second point's lanes, inert, alone, so such a contact costs about half a two-point
+    /// one.
+    Single,
 }
 
 /// Per-point lanes of a bundle: lane i is the point of contact i.
@@ -388,7 +392,7 @@ impl<L: Wide> Bundle<L> {
 
     /// Write contact `c` (index `ci`) with its constraint `k` into lane `lane`. A contact
     /// without a usable block keeps the inert identity; a one-point contact leaves its second
-    /// point's lanes zero.
+    /// point's lanes zero (in a block bundle, all but a separation that never closes).
     #[inline(always)]
     pub fn set_contact(
         &mut self,
@@ -436,6 +440,10 @@ impl<L: Wide> Bundle<L> {
             self.i00.set_lane(lane, m);
             self.p[1].adjusted_separation.set_lane(lane, NEVER_TOUCHES);
         }
+        debug_assert!(
+            self.kind != BundleKind::Single || c.count == 1,
+            "one point alone"
+        );
         for ((v, p), kp) in self.p.iter_mut().zip(c.live()).zip(&k.points) {
             let arms = kp.arms;
             for (field, x) in [
@@ -480,9 +488,18 @@ impl<L: Wide> Bundle<L> {
     /// Warm start: apply each point's accumulated impulses (the start of a substep).
     #[inline(always)]
     pub fn warm_start<R: Rows + ?Sized>(&mut self, rows: &mut R) {
+        match self.kind {
+            BundleKind::Single => self.warm_start_points::<1, R>(rows),
+            BundleKind::Block | BundleKind::Points => self.warm_start_points::<2, R>(rows),
+        }
+    }
+
+    /// [`Bundle::warm_start`] of the first `N` points.
+    #[inline(always)]
+    fn warm_start_points<const N: usize, R: Rows + ?Sized>(&mut self, rows: &mut R) {
         let (mut a, mut b) = self.gather(rows);
         let (n, t) = self.axes();
-        for p in &mut self.p {
+        for p in &mut self.p[..N] {
             p.total_normal_impulse += p.normal_impulse;
             BodyLanes::apply(&mut a, &mut b, n, normal_arms(p), p.normal_impulse);
             BodyLanes::apply(&mut a, &mut b, t, p.tangent_arms(), p.tangent_impulse);
@@ -513,16 +530,23 @@ impl<L: Wide> Bundle<L> {
         friction: bool,
     ) {
         // One copy of the kernel for sharp bundles and one for rounded ones, so that neither
-        // asks per point which it is.
-        match sides.round {
-            None => self.solve_turning(rows, (pass, Sharp), sides.bounce, friction),
-            Some(r) => self.solve_turning(rows, (pass, r), sides.bounce, friction),
+        // asks per point which it is; each for one point and for two.
+        let bounce = sides.bounce;
+        match (sides.round, self.kind) {
+            (None, BundleKind::Single) => {
+                self.solve_turning::<1, _, R>(rows, (pass, Sharp), bounce, friction)
+            }
+            (None, _) => self.solve_turning::<2, _, R>(rows, (pass, Sharp), bounce, friction),
+            (Some(r), BundleKind::Single) => {
+                self.solve_turning::<1, _, R>(rows, (pass, r), bounce, friction)
+            }
+            (Some(r), _) => self.solve_turning::<2, _, R>(rows, (pass, r), bounce, friction),
         }
     }
 
-    /// [`Bundle::solve`] for points that turn as `round` says.
+    /// [`Bundle::solve`] of the first `N` points, which turn as `round` says.
     #[inline(always)]
-    fn solve_turning<T: Turning<L>, R: Rows + ?Sized>(
+    fn solve_turning<const N: usize, T: Turning<L>, R: Rows + ?Sized>(
         &mut self,
         rows: &mut R,
         (pass, round): (&Pass<L>, T),
@@ -535,10 +559,10 @@ impl<L: Wide> Bundle<L> {
         // (Written out, here and below, rather than mapped by a closure: a closure does not
         // take the AVX2 compilation of the kernel it is called from, and nothing but inlined
         // functions may stand between the eight-lane kernels and their instructions.)
-        let coeffs = [
-            self.coefficients(&self.p[0], (&a, &b), dp_n, (pass, round)),
-            self.coefficients(&self.p[1], (&a, &b), dp_n, (pass, round)),
-        ];
+        let mut coeffs = [(L::ZERO, L::ZERO, L::ZERO); 2];
+        for (j, k) in coeffs[..N].iter_mut().enumerate() {
+            *k = self.coefficients(&self.p[j], (&a, &b), dp_n, (pass, round));
+        }
         // Where the bundle bounces, each point's normal velocity before this pass pushes it,
         // and whether its surfaces meet (a biased pass that pushes closes the gap within its
         // substep; a relax pass's push on a point still apart only guards the next substep).
@@ -551,8 +575,8 @@ impl<L: Wide> Bundle<L> {
         };
         match self.kind {
             BundleKind::Block => self.solve_block(&mut a, &mut b, &coeffs),
-            BundleKind::Points => {
-                for (p, &(bias, mass_scale, impulse_scale)) in self.p.iter_mut().zip(&coeffs) {
+            BundleKind::Points | BundleKind::Single => {
+                for (p, &(bias, mass_scale, impulse_scale)) in self.p[..N].iter_mut().zip(&coeffs) {
                     let vn = BodyLanes::relative(&a, &b, n, normal_arms(p));
                     let impulse = -p.normal_mass * (mass_scale * vn + bias)
                         - impulse_scale * p.normal_impulse;
@@ -574,7 +598,7 @@ impl<L: Wide> Bundle<L> {
         }
         // Skipped when no lane has friction.
         if friction && L::any(self.friction.cmpgt(L::ZERO)) {
-            for p in &mut self.p {
+            for p in &mut self.p[..N] {
                 let vt = BodyLanes::relative(&a, &b, t, p.tangent_arms());
                 let max_f = self.friction * p.normal_impulse;
                 let total = (p.tangent_impulse - p.tangent_mass * vt).clamp(-max_f, max_f);

@@ -158,7 +158,12 @@ struct Packed<L: Wide> {
     /// When the workers pack: each list's own restitution and rounding lanes, joined to
     /// `bounces` and `rounds` afterwards.
     list_sides: Vec<SideScratch<L>>,
+    /// While packing: bit `slot` set for each list written to, so that closing visits those
+    /// alone (a small solve fills a few of the 96).
+    used: u128,
 }
+
+const _: () = assert!(LISTS <= u128::BITS as usize, "a bit for each list");
 
 /// One list's restitution and rounding lanes while the workers pack.
 type SideScratch<L> = (Vec<BounceLanes<L>>, Vec<RoundLanes<L>>);
@@ -172,6 +177,7 @@ impl<L: Wide> Default for Packed<L> {
             bounces: Vec::new(),
             rounds: Vec::new(),
             list_sides: Vec::new(),
+            used: 0,
         }
     }
 }
@@ -227,6 +233,7 @@ impl<L: Wide> Packed<L> {
         }
         self.bounces.clear();
         self.rounds.clear();
+        self.used = 0;
     }
 
     /// Write contact `c` (index `i`) with its constraint `k` into the next lane of list
@@ -241,6 +248,7 @@ impl<L: Wide> Packed<L> {
         k: &ContactConstraint,
         bodies: &[SolverBody],
     ) {
+        self.used |= 1 << slot;
         let sides = (&mut self.bounces, &mut self.rounds);
         put(
             &mut self.lists[slot],
@@ -275,10 +283,20 @@ impl<L: Wide> Packed<L> {
 
     /// Move the lists in use out, in solve order, once packed.
     fn close(&mut self) {
-        for (slot, list) in self.lists.iter_mut().enumerate() {
+        let mut used = std::mem::take(&mut self.used);
+        while used != 0 {
+            let slot = used.trailing_zeros() as usize;
+            used &= used - 1;
+            self.packed.push(std::mem::take(&mut self.lists[slot]));
+            self.slots.push(slot as u16);
+        }
+    }
+
+    /// Mark the lists the workers filled as used ([`Packed::close`]).
+    fn mark_filled(&mut self) {
+        for (slot, list) in self.lists.iter().enumerate() {
             if !list.is_empty() {
-                self.packed.push(std::mem::take(list));
-                self.slots.push(slot as u16);
+                self.used |= 1 << slot;
             }
         }
     }
@@ -778,6 +796,7 @@ fn pack_shared<L: Wide>(
         }
     });
     coloured.join_sides();
+    coloured.mark_filled();
     let inert_one = ALL_KINDS.map(|kind| Bundle::inert(kind, dummy));
     let mut overflowed = [0usize; KINDS];
     let mut bouncy = false;

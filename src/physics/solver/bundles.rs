@@ -116,8 +116,8 @@ fn run_block<L: Wide>(bundles: &mut [Bundle<L>], rows: BodyRows, work: Work, sid
     let rows = &mut rows;
     match work {
         // (A loop, not `for_each`: a closure does not take the AVX2 compilation of the kernel
-        // it is called from, and once the warm start grew past the inliner's budget it ran
-        // every lane operation as a call, three times slower.)
+        // it is called from, and once the warm start grew past the inliner's budget every lane
+        // operation in it became a call.)
         Work::WarmStart => {
             for bundle in bundles {
                 bundle.warm_start(&mut *rows);

@@ -212,15 +212,9 @@ fn kind_slot(kind: BundleKind) -> usize {
 /// below, the extra lists' half-empty bundles cost more than the second point's lanes saved.
 const SINGLES_FROM: usize = 1024;
 
-/// Whether a solve of `contacts` contacts packs its one-point contacts apart.
-#[inline]
-pub(crate) fn singles_apart(contacts: usize) -> bool {
-    contacts >= SINGLES_FROM
-}
-
 /// The kind of bundle contact `c`, prepared as `k`, goes in: two points without a usable
-/// block one after the other; one point alone if `singles` ([`singles_apart`]); else as a
-/// block.
+/// block one after the other; one point alone if `singles`
+/// ([`ContactBundles::singles_apart`]); else as a block.
 #[inline(always)]
 fn kind_of(c: &Contact, k: &ContactConstraint, singles: bool) -> BundleKind {
     match (c.count, &k.block) {
@@ -297,6 +291,13 @@ impl<L: Wide> Packed<L> {
             self.packed.push(std::mem::take(&mut self.lists[slot]));
             self.slots.push(slot as u16);
         }
+    }
+
+    /// Packed bundles of `kind`.
+    #[cfg(test)]
+    fn count_of(&self, kind: BundleKind) -> usize {
+        let bundles = self.packed.iter().flatten();
+        bundles.filter(|b| b.kind == kind).count()
     }
 
     /// Mark the lists the workers filled as used ([`Packed::close`]).
@@ -474,6 +475,9 @@ pub(crate) struct ContactBundles {
     /// Contacts from which a solve is spread over the workers; `None`: [`SHARED_FROM`]
     /// (tests lower it so that small worlds take the parallel path).
     pub share_from: Option<usize>,
+    /// Contacts from which a solve packs one-point contacts apart; `None`: [`SINGLES_FROM`]
+    /// (tests lower it so that small worlds pack them so).
+    pub singles_from: Option<usize>,
     /// The width of the bundles built last.
     built: Option<Width>,
 }
@@ -508,10 +512,12 @@ impl ContactBundles {
         };
         self.built = Some(width);
         self.overflow.reset(KINDS);
+        let singles = self.singles_apart(input.selected.count(input.contacts.len()));
+        let overflow = &mut self.overflow;
         self.bouncy = match width {
-            Width::One => pack(&mut self.single, &mut self.overflow, input),
-            Width::Four => pack(&mut self.four, &mut self.overflow, input),
-            Width::Eight => pack(&mut self.eight, &mut self.overflow, input),
+            Width::One => pack((&mut self.single, overflow), input, singles),
+            Width::Four => pack((&mut self.four, overflow), input, singles),
+            Width::Eight => pack((&mut self.eight, overflow), input, singles),
         };
     }
 
@@ -578,6 +584,13 @@ impl ContactBundles {
             Some(Width::One) => self.single.apply_restitution(bodies, threshold),
             _ => self.four.apply_restitution(bodies, threshold),
         }
+    }
+
+    /// Whether a solve of `contacts` contacts packs its one-point contacts apart
+    /// ([`BundleKind::Single`]).
+    #[inline]
+    pub fn singles_apart(&self, contacts: usize) -> bool {
+        contacts >= self.singles_from.unwrap_or(SINGLES_FROM)
     }
 
     /// Whether a solve of `constraints` contacts and joints is worth spreading over workers
@@ -660,6 +673,16 @@ impl ContactBundles {
     pub fn overflow_count(&self) -> usize {
         self.overflow.packed.iter().map(Vec::len).sum()
     }
+
+    /// Coloured bundles of one-point contacts ([`BundleKind::Single`]) at the last build.
+    #[cfg(test)]
+    pub fn single_bundles(&self) -> usize {
+        match self.built {
+            Some(Width::Eight) => self.eight.count_of(BundleKind::Single),
+            Some(Width::One) => self.single.count_of(BundleKind::Single),
+            _ => self.four.count_of(BundleKind::Single),
+        }
+    }
 }
 
 /// Write contact `c` (index `i`) with its constraint `k` into the next lane of `list`, of
@@ -698,7 +721,7 @@ fn put<L: Wide>(
 }
 
 /// The list a prepared contact `c` (constraint `k`) is packed into: colour * KINDS + kind,
-/// or for the overflow [`IN_OVERFLOW`] + kind (`singles`: [`singles_apart`]).
+/// or for the overflow [`IN_OVERFLOW`] + kind (`singles`: [`ContactBundles::singles_apart`]).
 #[inline(always)]
 pub(crate) fn list_of(c: &Contact, k: &ContactConstraint, singles: bool) -> u8 {
     let s = kind_slot(kind_of(c, k, singles)) as u8;
@@ -824,11 +847,12 @@ fn pack_shared<L: Wide>(
     bouncy
 }
 
-/// Pack the selected contacts into `coloured` bundles and the `overflow`; whether any bounces.
+/// Pack the selected contacts into `coloured` bundles and the `overflow`, one-point contacts
+/// apart if `singles`; whether any bounces.
 fn pack<L: Wide, P>(
-    coloured: &mut Packed<L>,
-    overflow: &mut Packed<Lanes1>,
+    (coloured, overflow): (&mut Packed<L>, &mut Packed<Lanes1>),
     input: PackInput<'_, '_, P>,
+    singles: bool,
 ) -> bool
 where
     P: FnMut(&mut Contact, &SolverBody, &SolverBody, &mut ContactConstraint),
@@ -840,7 +864,6 @@ where
         mut prepare,
     } = input;
     let dummy = (bodies.len() - 1) as u32;
-    let singles = singles_apart(selected.count(contacts.len()));
     coloured.reset(LISTS);
     let inert = ALL_KINDS.map(|kind| Bundle::<L>::inert(kind, dummy));
     let inert_one = ALL_KINDS.map(|kind| Bundle::inert(kind, dummy));

@@ -23,9 +23,7 @@
 //! the same constraint graph (`graph.rs`): in the warm start and each pass, each colour's
 //! joints run just before its contacts.
 
-use super::bundles::{
-    list_of, singles_apart, ContactBundles, PackInput, SharedPackInput, Work, DEEP,
-};
+use super::bundles::{list_of, ContactBundles, PackInput, SharedPackInput, Work, DEEP};
 use super::constraint::{set_contact_masses, Arms, ContactConstraint, PointConstraint};
 use super::contact_solver::PointImpulses;
 use super::joint::{self, JointPass, JointSet, JointStep, JointWork};
@@ -268,7 +266,7 @@ fn prepare_shared(ctx: &mut StepContext, stiffness: &Stiffness, region: &Region)
             SharedSlice::new(ctx.lists),
         )
     };
-    let (bodies, singles) = (&*ctx.bodies, singles_apart(n));
+    let (bodies, singles) = (&*ctx.bodies, ctx.bundles.singles_apart(n));
     region.for_blocks(n.div_ceil(PREPARED_PER_BLOCK), &|k| {
         for m in block(k, PREPARED_PER_BLOCK, n) {
             // SAFETY: as above.

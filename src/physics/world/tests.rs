@@ -170,11 +170,20 @@ fn mixed_pile() -> World {
 /// Bundles of one, four and eight lanes give the same World bit for bit: a contact's
 /// arithmetic does not depend on which contacts share its bundle (`solver/lanes/`), so the
 /// overflow, which runs the same kernel at width one, is the same code as the lanes. The pile
-/// has restitution, friction on and off, one- and two-point contacts: every kernel path runs.
-/// On a machine without AVX2 the eight-lane kernels never run, and only one and four are
-/// compared.
+/// has restitution, friction on and off, one- and two-point contacts: every kernel path runs,
+/// with one-point contacts in block bundles (a small solve's packing) and in bundles of their
+/// own (a large solve's). On a machine without AVX2 the eight-lane kernels never run, and only
+/// one and four are compared.
 #[test]
 fn one_four_and_eight_lanes_step_bit_identically() {
+    for singles_from in [None, Some(0)] {
+        lanes_step_bit_identically(singles_from);
+    }
+}
+
+/// [`one_four_and_eight_lanes_step_bit_identically`] with one-point contacts packed apart from
+/// `singles_from` contacts (`None`: the default, above this pile's).
+fn lanes_step_bit_identically(singles_from: Option<usize>) {
     let widths: &[Width] = if Width::detect() == Width::Eight {
         &[Width::One, Width::Four, Width::Eight]
     } else {
@@ -186,25 +195,34 @@ fn one_four_and_eight_lanes_step_bit_identically() {
         .map(|&width| {
             let mut w = mixed_pile();
             w.solver.bundles.width = Some(width);
+            w.solver.bundles.singles_from = singles_from;
             w
         })
         .collect();
-    let mut most_contacts = 0;
+    let (mut most_contacts, mut most_singles) = (0, 0);
     for step in 0..240 {
         for w in &mut worlds {
             w.step(1.0 / 60.0).unwrap();
         }
         most_contacts = most_contacts.max(worlds[0].contacts.awake.len());
+        let singles = worlds.iter().map(|w| w.solver.bundles.single_bundles());
+        most_singles = most_singles.max(singles.min().unwrap_or(0));
         for (w, width) in worlds.iter().zip(widths).skip(1) {
             assert!(
                 worlds[0].state_bits().eq(w.state_bits()),
-                "{width:?} differs from one lane after step {step}"
+                "{width:?} differs from one lane after step {step} (singles from {singles_from:?})"
             );
         }
     }
     assert!(
         most_contacts > 100,
         "the pile must be in contact: {most_contacts}"
+    );
+    // One-point contacts packed apart where asked, and only there.
+    assert_eq!(
+        most_singles > 0,
+        singles_from.is_some(),
+        "one-point bundles: {most_singles} (singles from {singles_from:?})"
     );
 }
 
@@ -280,7 +298,8 @@ fn sensor_strip(w: &mut World) {
 /// workers), a kinematic paddle (a fixed body many bundles of a colour share), fast bodies
 /// striking statics (continuous collision), bodies that report touches and hits and sensors
 /// across the pile (the same events in the same order), at four and eight lanes, every stage
-/// spread over the workers however little its work.
+/// spread over the workers however little its work; at four lanes the one-point contacts share
+/// block bundles (a small solve's packing), at eight they have their own (a large solve's).
 #[test]
 fn one_two_and_three_workers_step_bit_identically() {
     let world = |workers: u32, width: Width| {
@@ -288,6 +307,7 @@ fn one_two_and_three_workers_step_bit_identically() {
         w.set_workers(workers).unwrap();
         w.solver.bundles.width = Some(width);
         w.solver.bundles.share_from = Some(0);
+        w.solver.bundles.singles_from = (width == Width::Eight).then_some(0);
         let paddle = BodyDef::kinematic(Shape::rect(3.0, 0.2), vec2(0.0, 6.0), vec2(0.0, 0.0))
             .with_angular_velocity(1.5);
         w.add_body(&paddle).unwrap();

@@ -680,9 +680,8 @@ impl<'a> PairInput<'a> {
             }
         }
         let manifold = self.collide((sa, sb), pair_of(order.0), wake_queue)?;
-        // (A copy: the graph beside it changes.)
-        let previous = continued.then(|| *merge.last(contacts));
-        let contact = self.fresh_contact(order, &manifold, (sa, sb), previous.as_ref());
+        let previous = continued.then(|| merge.last(contacts));
+        let contact = self.fresh_contact(order, &manifold, (sa, sb), previous);
         let input = TierInput::of(&contact, slop);
         let begins = (!continued).then_some([a.inv_mass > 0.0, b.inv_mass > 0.0]);
         merge.write(contacts, contact, begins);
@@ -857,9 +856,9 @@ impl<'a> PairInput<'a> {
             }
         }
         let (a, b) = self.bodies(key).expect("a pair with bodies");
-        let previous = continued.then(|| *merge.last(contacts));
+        let previous = continued.then(|| merge.last(contacts));
         let sides = (Side::whole(a), Side::whole(b));
-        let contact = self.fresh_contact(order, manifold, sides, previous.as_ref());
+        let contact = self.fresh_contact(order, manifold, sides, previous);
         let input = TierInput::of(&contact, slop);
         let begins = (!continued).then_some([a.inv_mass > 0.0, b.inv_mass > 0.0]);
         merge.write(contacts, contact, begins);

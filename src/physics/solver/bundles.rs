@@ -106,6 +106,29 @@ impl<L> Copy for SideLanes<'_, L> {}
 /// What the store stage does with a contact and its points' impulses, from any worker.
 pub(crate) type StoreFn<'a> = dyn Fn(&mut Contact, &[PointImpulses; 2]) + Sync + 'a;
 
+/// Stores one block: [`store_block`] at a width, compiled for it.
+type StoreBlock<L> = fn(&[Bundle<L>], &[BounceLanes<L>], SharedSlice<Contact>, &StoreFn);
+
+/// Hand each contact of `bundles` (one block of a colour) its points' impulses. A contact is in
+/// one lane of one bundle, so the worker that took the block is the only one to reach it.
+#[inline(always)]
+fn store_block<L: Wide>(
+    bundles: &[Bundle<L>],
+    bounces: &[BounceLanes<L>],
+    contacts: SharedSlice<Contact>,
+    then: &StoreFn,
+) {
+    for bundle in bundles {
+        let ends = bundle.impulses(bounces.get(bundle.bounce_index as usize));
+        for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
+            // SAFETY: as above: this lane's contact is this block's alone.
+            if let Some(c) = unsafe { contacts.get(ci as usize) } {
+                then(c, end);
+            }
+        }
+    }
+}
+
 /// Runs one block: [`run_block`] at a width, compiled for it.
 type BlockRun<L> = fn(&mut [Bundle<L>], BodyRows, Work, SideLanes<L>);
 
@@ -412,20 +435,17 @@ impl<L: Wide> Packed<L> {
 
     /// [`Packed::store`] colour by colour, each colour's bundles in blocks spread over
     /// `region`'s workers.
-    fn store_shared(&self, region: &Region, contacts: SharedSlice<Contact>, then: &StoreFn) {
+    fn store_shared(
+        &self,
+        region: &Region,
+        (contacts, then): (SharedSlice<Contact>, &StoreFn),
+        store: StoreBlock<L>,
+    ) {
         for list in &self.packed {
             let len = list.len();
             region.for_blocks(len.div_ceil(BUNDLES_PER_BLOCK), &|k| {
-                for bundle in &list[block(k, BUNDLES_PER_BLOCK, len)] {
-                    let ends = bundle.impulses(self.bounces.get(bundle.bounce_index as usize));
-                    for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
-                        // SAFETY: a contact is in one lane of one bundle, reached by the
-                        // worker that took that bundle's block alone.
-                        if let Some(c) = unsafe { contacts.get(ci as usize) } {
-                            then(c, end);
-                        }
-                    }
-                }
+                let bundles = &list[block(k, BUNDLES_PER_BLOCK, len)];
+                store(bundles, &self.bounces, contacts, then);
             });
         }
     }
@@ -650,7 +670,7 @@ impl ContactBundles {
     ) {
         self.overflow.store(contacts, &mut then);
         match self.built {
-            Some(Width::Eight) => self.eight.store(contacts, &mut then),
+            Some(Width::Eight) => eight::store(&self.eight, contacts, &mut then),
             Some(Width::One) => self.single.store(contacts, &mut then),
             _ => self.four.store(contacts, &mut then),
         }
@@ -661,10 +681,11 @@ impl ContactBundles {
         self.overflow.store(contacts, &mut |c, ends| then(c, ends));
         // SAFETY: each contact is in one bundle's lane (`Packed::store_shared`).
         let contacts = unsafe { SharedSlice::new(contacts) };
+        let to = (contacts, then);
         match self.built {
-            Some(Width::Eight) => self.eight.store_shared(region, contacts, then),
-            Some(Width::One) => self.single.store_shared(region, contacts, then),
-            _ => self.four.store_shared(region, contacts, then),
+            Some(Width::Eight) => self.eight.store_shared(region, to, eight::store_block),
+            Some(Width::One) => self.single.store_shared(region, to, store_block::<Lanes1>),
+            _ => self.four.store_shared(region, to, store_block::<Lanes4>),
         }
     }
 
@@ -895,7 +916,8 @@ where
 /// eight-lane bundles only if the processor has it; elsewhere never chosen.
 mod eight {
     use super::{
-        BodyRows, Bundle, Joints, Lanes8, Packed, PassArgs, Real, SideLanes, SolverBody, Work,
+        BodyRows, BounceLanes, Bundle, Contact, Joints, Lanes8, Packed, PassArgs, PointImpulses,
+        Real, SharedSlice, SideLanes, SolverBody, StoreFn, Work,
     };
 
     /// Runs `$body` compiled for AVX2 where `Lanes8` is an AVX register, plainly elsewhere.
@@ -929,4 +951,31 @@ mod eight {
     avx2!(run_block(bundles: &mut [Bundle<Lanes8>], rows: BodyRows, work: Work, side: SideLanes<Lanes8>) {
         super::run_block(bundles, rows, work, side)
     });
+    avx2!(store_block(bundles: &[Bundle<Lanes8>], bounces: &[BounceLanes<Lanes8>], contacts: SharedSlice<Contact>, then: &StoreFn) {
+        super::store_block(bundles, bounces, contacts, then)
+    });
+
+    /// [`Packed::store`] compiled for AVX2 where `Lanes8` is an AVX register, plainly
+    /// elsewhere (generic over `then`, which the macro's functions cannot be).
+    pub(super) fn store<F>(packed: &Packed<Lanes8>, contacts: &mut [Contact], then: &mut F)
+    where
+        F: FnMut(&mut Contact, &[PointImpulses; 2]),
+    {
+        #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+        {
+            /// # Safety
+            /// The processor must have AVX2.
+            #[target_feature(enable = "avx2")]
+            unsafe fn run<F>(packed: &Packed<Lanes8>, contacts: &mut [Contact], then: &mut F)
+            where
+                F: FnMut(&mut Contact, &[PointImpulses; 2]),
+            {
+                packed.store(contacts, then)
+            }
+            // SAFETY: eight-lane bundles exist only where the processor has AVX2.
+            unsafe { run(packed, contacts, then) }
+        }
+        #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
+        packed.store(contacts, then)
+    }
 }

@@ -278,6 +278,17 @@ pub(super) fn unite_islands(
     }
 }
 
+/// Point every entry of `parent`, after [`unite_islands`], straight at its root, so that a
+/// root is one load away. One pass in order does it: the lower root wins, so an entry's parent
+/// comes before it and has already been pointed at its root.
+pub(super) fn flatten(parent: &mut [u32]) {
+    for i in 0..parent.len() {
+        let p = parent[i] as usize;
+        debug_assert!(p <= i, "a parent comes before its child");
+        parent[i] = parent[p];
+    }
+}
+
 /// Union-find root of `i`, halving paths as it goes.
 #[inline]
 pub(super) fn find(parent: &mut [u32], mut i: u32) -> u32 {

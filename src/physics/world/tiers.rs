@@ -4,7 +4,7 @@
 //! each tier solves its own contacts, taking their colours from the one constraint graph.
 
 use super::contacts::Travel;
-use super::islands::{find, unite_islands};
+use super::islands::{flatten, unite_islands};
 use super::*;
 use crate::physics::shape::Aabb;
 use crate::physics::solver::joint::JOINT_CAP;
@@ -378,7 +378,9 @@ impl World {
             let driven = need >= Tier::Stack && (moving(a) || moving(b));
             self.tiers.driven.push(driven);
             self.tiers.contact_tier.push(need);
-            self.islands.contact_bodies.push(input.bodies);
+            self.islands
+                .contact_bodies
+                .push(island_pair(input.bodies, (ma, mb)));
         }
         top
     }
@@ -388,46 +390,44 @@ impl World {
     /// contacts. Returns the highest.
     fn island_tiers(&mut self) -> Tier {
         let n = self.solver.bodies.len();
-        let bodies = &self.solver.bodies;
-        unite_islands(
-            &mut self.islands.parent,
-            n,
-            &self.islands.contact_bodies,
-            |i| bodies[i as usize].inv_mass > 0.0,
-        );
+        let islands = &mut self.islands;
+        unite_islands(&mut islands.parent, n, &islands.contact_bodies, |_| true);
+        flatten(&mut islands.parent);
         self.measure_islands();
-        let bodies = &self.solver.bodies;
-        let moving = |i: u32| bodies[i as usize].inv_mass > 0.0;
-        let (parent, tiers) = (&mut self.islands.parent, &mut self.tiers);
-        let pairs = &self.islands.contact_bodies;
+        let (parent, pairs) = (&self.islands.parent, &self.islands.contact_bodies);
+        let tiers = &mut self.tiers;
         tiers.body_tier.clear();
         tiers.body_tier.resize(n, Tier::Base);
         tiers.island_driven.clear();
         tiers.island_driven.resize(n, false);
         let needs = tiers.contact_tier.iter().zip(&tiers.driven);
-        for ((&need, &driven), &[a, b]) in needs.zip(pairs) {
-            let root = find(parent, if moving(a) { a } else { b }) as usize;
+        for ((&need, &driven), &[a, _]) in needs.zip(pairs) {
+            let root = parent[a as usize] as usize;
             tiers.body_tier[root] = tiers.body_tier[root].max(need);
             tiers.island_driven[root] |= driven;
         }
         for &b in &tiers.joint_needs {
-            let root = find(parent, b) as usize;
-            tiers.body_tier[root] = Tier::Extreme;
+            tiers.body_tier[parent[b as usize] as usize] = Tier::Extreme;
         }
         let joint_loaded = !tiers.joint_loaded.is_empty();
         if joint_loaded {
             tiers.island_joint_loaded.clear();
             tiers.island_joint_loaded.resize(n, false);
             for &b in &tiers.joint_loaded {
-                tiers.island_joint_loaded[find(parent, b) as usize] = true;
+                tiers.island_joint_loaded[parent[b as usize] as usize] = true;
             }
         }
         let stiff = self.settings.stiff_load_ratio;
         // Depth stands for weight only where there is gravity.
         let weighed = self.gravity.length() > 1e-3;
         let mut top = Tier::Base;
-        let roots = parent.iter().enumerate().filter(|&(i, &p)| p as usize == i);
-        for (i, _) in roots {
+        // A root comes before the rest of its island (the lower root wins), so one pass
+        // settles each root's tier and hands it on.
+        for (i, &root) in parent.iter().enumerate() {
+            if root as usize != i {
+                tiers.body_tier[i] = tiers.body_tier[root as usize];
+                continue;
+            }
             // A loaded island driven by a kinematic body carries the driver's load along its
             // lines of contacts: braced only if it is [`DRIVEN_DEPTH`] bodies deep.
             let extent = &tiers.island_extent[i];
@@ -438,17 +438,12 @@ impl World {
             // heavy tier's stiffer springs: on the braced tier's, a limb under the pile rests
             // 0.16 rad past its hinge's limit; on the heavy tier's, 0.04.
             let heavy = weighed
-                && (tiers.island_extent[i].depth() >= HEAVY_DEPTH
-                    || joint_loaded && tiers.island_joint_loaded[i]);
+                && (extent.depth() >= HEAVY_DEPTH || joint_loaded && tiers.island_joint_loaded[i]);
             tiers.body_tier[i] = island_tier(tiers.body_tier[i], braced, heavy);
             top = top.max(tiers.body_tier[i]);
         }
-        for i in 0..n as u32 {
-            let root = find(parent, i) as usize;
-            tiers.body_tier[i as usize] = tiers.body_tier[root];
-        }
-        for (tier, &[a, b]) in tiers.contact_tier.iter_mut().zip(pairs) {
-            *tier = tiers.body_tier[if moving(a) { a } else { b } as usize];
+        for (tier, &[a, _]) in tiers.contact_tier.iter_mut().zip(pairs) {
+            *tier = tiers.body_tier[a as usize];
         }
         top
     }
@@ -472,11 +467,23 @@ impl World {
         let boxes = self.broad_phase.proxies.iter().zip(&self.broad_phase.reach);
         for (i, (proxy, reach)) in boxes.enumerate() {
             if self.solver.bodies[i].inv_mass > 0.0 {
-                let root = find(&mut self.islands.parent, i as u32) as usize;
+                let root = self.islands.parent[i] as usize;
                 tiers.island_extent[root].add(&proxy.aabb, reach, down, across);
                 tiers.island_bodies[root] += 1;
             }
         }
+    }
+}
+
+/// A contact's bodies `[a, b]` (inverse masses `(ma, mb)`, 1/kg) as the islands see them: a
+/// body that does not move joins nothing, so a contact with one stands for the other alone
+/// (`[b, b]` when neither moves). The first is the body whose island the contact is in.
+#[inline]
+fn island_pair([a, b]: [u32; 2], (ma, mb): (Real, Real)) -> [u32; 2] {
+    match (ma > 0.0, mb > 0.0) {
+        (true, true) => [a, b],
+        (true, false) => [a, a],
+        (false, _) => [b, b],
     }
 }
 

@@ -272,7 +272,10 @@ impl<L: Wide> Packed<L> {
         k: &ContactConstraint,
         bodies: &[SolverBody],
     ) {
-        self.used |= 1 << slot;
+        if *filled == 0 {
+            // (A 128-bit shift takes some ten instructions: once per list, not per contact.)
+            self.used |= 1 << slot;
+        }
         let sides = (&mut self.bounces, &mut self.rounds);
         put(
             &mut self.lists[slot],

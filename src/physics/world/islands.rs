@@ -29,6 +29,9 @@ pub(super) struct IslandScratch {
     /// A body created asleep woke while contacts were being found: its island's contacts
     /// are found before the solve.
     pub refind: bool,
+    /// `parent` holds this step's islands of awake dynamic bodies, found by adaptive
+    /// stiffness before the solve (`tiers.rs`): sleep takes them as they are.
+    pub united: bool,
 }
 
 impl World {
@@ -36,7 +39,10 @@ impl World {
     /// has rested (|v| + |w| r below the threshold) for `time_to_sleep` falls asleep together.
     pub(super) fn update_sleep(&mut self, dt: Real) {
         self.update_rest_times(dt);
-        self.unite_awake_islands();
+        // The tiers' islands are sleep's, unless a joint broke since they were found.
+        if !(std::mem::take(&mut self.islands.united) && self.joints.broken.is_empty()) {
+            self.unite_awake_islands();
+        }
         self.put_rested_islands_to_sleep();
         if self.islands.changed.is_empty() {
             return;

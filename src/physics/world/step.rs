@@ -62,7 +62,7 @@ impl World {
         if self.islands.unsettled {
             self.settle_created_asleep();
         }
-        self.islands.refind = false;
+        (self.islands.refind, self.islands.united) = (false, false);
         if !self.broad_phase.sweep.active_is_empty() {
             // (Otherwise everything is static or asleep, and anything pushed would have been
             // woken: nothing moves, nothing to find or solve.)

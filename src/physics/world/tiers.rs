@@ -393,6 +393,9 @@ impl World {
         let islands = &mut self.islands;
         unite_islands(&mut islands.parent, n, &islands.contact_bodies, |_| true);
         flatten(&mut islands.parent);
+        // (The same islands as sleep's: a pair of moving bodies is a pair of awake dynamic
+        // ones, and a step's joint constraints are the joints with an awake body.)
+        islands.united = true;
         self.measure_islands();
         let (parent, pairs) = (&self.islands.parent, &self.islands.contact_bodies);
         let tiers = &mut self.tiers;

@@ -38,12 +38,13 @@ impl World {
     /// Islands and sleep: bodies joined by contacts form islands; an island whose every body
     /// has rested (|v| + |w| r below the threshold) for `time_to_sleep` falls asleep together.
     pub(super) fn update_sleep(&mut self, dt: Real) {
-        self.update_rest_times(dt);
         // The tiers' islands are sleep's, unless a joint broke since they were found.
         if !(std::mem::take(&mut self.islands.united) && self.joints.broken.is_empty()) {
             self.unite_awake_islands();
         }
-        self.put_rested_islands_to_sleep();
+        if self.update_rest_times(dt) {
+            self.put_rested_islands_to_sleep();
+        }
         if self.islands.changed.is_empty() {
             return;
         }
@@ -54,10 +55,17 @@ impl World {
         self.set_sleeping_joints_aside();
     }
 
-    /// Each awake body's time at rest: how long it has been slower than the threshold.
-    fn update_rest_times(&mut self, dt: Real) {
+    /// Each awake body's time at rest (how long it has been slower than the threshold), and
+    /// each island's (`rest`, at its root): an island rests as long as its most restless
+    /// body. Returns whether any island has rested `time_to_sleep`.
+    fn update_rest_times(&mut self, dt: Real) -> bool {
         let threshold = self.settings.sleep_threshold;
-        for slot in self.bodies.slots.iter_mut() {
+        let n = self.bodies.slots.len();
+        let islands = &mut self.islands;
+        islands.rest.clear();
+        islands.rest.resize(n, Real::INFINITY);
+        islands.changed.clear();
+        for (i, slot) in self.bodies.slots.iter_mut().enumerate() {
             if let Some(b) = slot.body.as_mut().filter(|b| b.is_active()) {
                 let speed =
                     b.linear_velocity.length() + b.angular_velocity.abs() * b.bounding_radius;
@@ -66,14 +74,23 @@ impl World {
                 } else {
                     b.sleep_time + dt
                 };
+                let root = find(&mut islands.parent, i as u32) as usize;
+                islands.rest[root] = islands.rest[root].min(b.sleep_time);
             }
         }
         // Pushed out of a deep overlap this step: moving, however slow its velocity.
         for i in self.solver.recovery.pushed_bodies() {
             if let Some(b) = self.bodies.slots[i as usize].body.as_mut() {
                 b.sleep_time = 0.0;
+                if b.is_active() {
+                    islands.rest[find(&mut islands.parent, i) as usize] = 0.0;
+                }
             }
         }
+        // (An entry no island's body reached stays infinite.)
+        let time_to_sleep = self.settings.time_to_sleep;
+        let rested = |&r: &Real| r.is_finite() && r >= time_to_sleep;
+        islands.rest.iter().any(rested)
     }
 
     /// Islands of awake dynamic bodies joined by contacts and joints (static bodies join
@@ -91,20 +108,10 @@ impl World {
         });
     }
 
-    /// An island rests as long as its most restless body: the islands that have rested
-    /// `time_to_sleep` fall asleep, their bodies listed in `changed`.
+    /// The islands that have rested `time_to_sleep` ([`World::update_rest_times`]) fall
+    /// asleep, their bodies listed in `changed`.
     fn put_rested_islands_to_sleep(&mut self) {
-        let n = self.bodies.slots.len();
         let islands = &mut self.islands;
-        islands.rest.clear();
-        islands.rest.resize(n, Real::INFINITY);
-        for (i, slot) in self.bodies.slots.iter().enumerate() {
-            if let Some(b) = slot.body.as_ref().filter(|b| b.is_active()) {
-                let root = find(&mut islands.parent, i as u32) as usize;
-                islands.rest[root] = islands.rest[root].min(b.sleep_time);
-            }
-        }
-        islands.changed.clear();
         for (i, slot) in self.bodies.slots.iter_mut().enumerate() {
             let root = find(&mut islands.parent, i as u32);
             let Some(b) = slot.body.as_mut().filter(|b| b.is_active()) else {

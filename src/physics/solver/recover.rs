@@ -32,9 +32,20 @@ pub(crate) const LOAD_REACH: Real = 2.0;
 /// convergence in a pile, where none is bought cheaply: in Box2D's `spinner` (about 7,000 deep
 /// points a solve) the pseudo velocities end 42 % short of their targets after 8 sweeps, 34 %
 /// after 16 and 19 % after 64, and what a step leaves the next recovers. 8 sweeps instead of
-/// 16 take 11-13 % off the spinner's step, and every stiff case passes with either
+/// 16 took 11-13 % off the spinner's step, and every stiff case passes with either
 /// (docs/benchmarks.md).
 const SWEEPS: usize = 8;
+
+/// Sweeps over a solve of at least [`MANY_DEEP`] deep points: a pile crushed that deep
+/// converges poorly whatever the count, and each sweep over it is a chain of dependent updates.
+/// Over spinner's 500 steps its large solves end 46 % short of their targets after 4 sweeps,
+/// 36 % after 8, and 4 take 13 % off its step. Small sets, where the sweeps pass a push along
+/// a chain (the stiff suite's overlapped column and pyramid: 14 and about 100 points), keep 8:
+/// at 4 the column's top box rose 8.6 cm above its rest, at 8 not at all.
+const SWEEPS_MANY: usize = 4;
+
+/// Deep points from which a solve takes [`SWEEPS_MANY`] sweeps.
+const MANY_DEEP: usize = 1024;
 
 /// A contact overlapping deeper than the spring's reach, as prepared for this step: one
 /// point, where it is pushed.
@@ -148,7 +159,12 @@ impl Recovery {
         }
         // Forward and back in turn: a chain of deep points (a column placed overlapped) takes
         // a sweep each way to pass a push along, where one way takes a sweep per link.
-        for sweep in 0..SWEEPS {
+        let sweeps = if points.len() >= MANY_DEEP {
+            SWEEPS_MANY
+        } else {
+            SWEEPS
+        };
+        for sweep in 0..sweeps {
             if sweep % 2 == 0 {
                 for p in points.iter_mut() {
                     sweep_point(p, &mut self.velocity);

@@ -353,22 +353,7 @@ impl World {
                 } else {
                     0.0
                 };
-            // A soft contact's spring compresses by its load over m omega^2, and omega can rise
-            // with the substep rate only: 1.5 times the substeps hold 1.5^2 = 2.25 times the
-            // load at the same compression.
-            let need = if g <= 1e-3 {
-                // Without gravity no contact carries a weight: loads come from impacts and
-                // pushes, which the base settings solve (Box2D's `smash`).
-                Tier::Base
-            } else if masses >= extreme {
-                Tier::Extreme
-            } else if masses >= stiff || load >= LOADED_RANGE * stiff {
-                Tier::TallStack
-            } else if load >= stiff || input.unmeasured {
-                Tier::Stack
-            } else {
-                Tier::Base
-            };
+            let need = need_of((load, masses, input.unmeasured), g, (stiff, extreme));
             top = top.max(need);
             // A moving kinematic body (inverse mass 0, but a velocity) pushes or carries.
             let moving = |i: u32| {
@@ -487,6 +472,33 @@ fn island_pair([a, b]: [u32; 2], (ma, mb): (Real, Real)) -> [u32; 2] {
         (true, true) => [a, b],
         (true, false) => [a, a],
         (false, _) => [b, b],
+    }
+}
+
+/// The tier a contact asks for, from its load in its lighter body's weights, its bodies' mass
+/// ratio where the lighter carries the heavier (0 otherwise), and whether its load is yet
+/// unmeasured ([`TierInput`]), under gravity `g` (m/s^2), with `Settings::stiff_load_ratio`
+/// and `Settings::extreme_mass_ratio`. A soft contact's spring compresses by its load over
+/// m omega^2, and omega can rise with the substep rate only: 1.5 times the substeps hold
+/// 1.5^2 = 2.25 times the load at the same compression.
+#[inline]
+fn need_of(
+    (load, masses, unmeasured): (Real, Real, bool),
+    g: Real,
+    (stiff, extreme): (Real, Real),
+) -> Tier {
+    if g <= 1e-3 {
+        // Without gravity no contact carries a weight: loads come from impacts and pushes,
+        // which the base settings solve (Box2D's `smash`).
+        Tier::Base
+    } else if masses >= extreme {
+        Tier::Extreme
+    } else if masses >= stiff || load >= LOADED_RANGE * stiff {
+        Tier::TallStack
+    } else if load >= stiff || unmeasured {
+        Tier::Stack
+    } else {
+        Tier::Base
     }
 }
 

@@ -14,6 +14,7 @@ use super::constraint::ContactConstraint;
 use super::contact_solver::{
     BounceLanes, Bundle, BundleKind, Pass, PointImpulses, RoundLanes, Sides, NO_BOUNCE, NO_ROUNDING,
 };
+use super::gaps::{fill_gaps, Entry, GAPS_FILLED_UP_TO, NOT_A_NODE};
 use super::graph::{COLOURS, OVERFLOW};
 use super::lanes::{eight_lanes_available, prefetch, Lanes1, Lanes4, Lanes8, Wide};
 use super::{BodyRows, PassKind, Selected, SharedRows, SolverBody};
@@ -261,13 +262,13 @@ impl<L: Wide> Packed<L> {
     }
 
     /// Write contact `c` (index `i`) with its constraint `k` into the next lane of list
-    /// `slot`, of which `filled` lanes are taken, opening a bundle (a copy of `inert`) when
-    /// the last is full.
+    /// `slot`, of which `filled` lanes are taken, opening a bundle (`inert()`) when the last
+    /// is full.
     #[inline(always)]
     fn put(
         &mut self,
         (slot, filled): (usize, &mut usize),
-        inert: &Bundle<L>,
+        inert: impl FnOnce() -> Bundle<L>,
         (i, c): (usize, &Contact),
         k: &ContactConstraint,
         bodies: &[SolverBody],
@@ -503,6 +504,11 @@ pub(crate) struct ContactBundles {
     pub singles_from: Option<usize>,
     /// The width of the bundles built last.
     built: Option<Width>,
+    /// Scratch for packing a small solve ([`pack_small`]).
+    small: SmallSolve,
+    /// Contacts up to which a solve fills its half-empty bundles; `None`: [`GAPS_FILLED_UP_TO`]
+    /// (tests set 0 to compare).
+    pub gaps_up_to: Option<usize>,
 }
 
 /// What packing reads: the bodies, the contacts, which of them to pack, and how to prepare
@@ -513,6 +519,9 @@ pub(crate) struct PackInput<'a, 'b, P> {
     pub contacts: &'a mut [Contact],
     pub selected: Selected<'b>,
     pub prepare: P,
+    /// Whether contacts may change colour to fill half-empty bundles ([`fill_gaps`]): not in a
+    /// solve with joints, whose colours the move does not see.
+    pub fill_gaps: bool,
 }
 
 impl ContactBundles {
@@ -535,12 +544,15 @@ impl ContactBundles {
         };
         self.built = Some(width);
         self.overflow.reset(KINDS);
-        let singles = self.singles_apart(input.selected.count(input.contacts.len()));
+        let count = input.selected.count(input.contacts.len());
+        let singles = self.singles_apart(count);
+        let up_to = self.gaps_up_to.unwrap_or(GAPS_FILLED_UP_TO);
+        let small = (input.fill_gaps && (2..=up_to).contains(&count)).then_some(&mut self.small);
         let overflow = &mut self.overflow;
         self.bouncy = match width {
-            Width::One => pack((&mut self.single, overflow), input, singles),
-            Width::Four => pack((&mut self.four, overflow), input, singles),
-            Width::Eight => pack((&mut self.eight, overflow), input, singles),
+            Width::One => pack((&mut self.single, overflow), input, (singles, small)),
+            Width::Four => pack((&mut self.four, overflow), input, (singles, small)),
+            Width::Eight => pack((&mut self.eight, overflow), input, (singles, small)),
         };
     }
 
@@ -698,6 +710,16 @@ impl ContactBundles {
         self.overflow.packed.iter().map(Vec::len).sum()
     }
 
+    /// Coloured bundles at the last build.
+    #[cfg(test)]
+    pub fn coloured_bundles(&self) -> usize {
+        match self.built {
+            Some(Width::Eight) => self.eight.packed.iter().map(Vec::len).sum(),
+            Some(Width::One) => self.single.packed.iter().map(Vec::len).sum(),
+            _ => self.four.packed.iter().map(Vec::len).sum(),
+        }
+    }
+
     /// Coloured bundles of one-point contacts ([`BundleKind::Single`]) at the last build.
     #[cfg(test)]
     pub fn single_bundles(&self) -> usize {
@@ -710,13 +732,13 @@ impl ContactBundles {
 }
 
 /// Write contact `c` (index `i`) with its constraint `k` into the next lane of `list`, of
-/// which `filled` lanes are taken, opening a bundle (a copy of `inert`) when the last is full;
+/// which `filled` lanes are taken, opening a bundle (`inert()`) when the last is full;
 /// its restitution and rounding lanes, if it has them, into `bounces` and `rounds`.
 #[inline(always)]
 fn put<L: Wide>(
     list: &mut Vec<Bundle<L>>,
     (bounces, rounds): (&mut Vec<BounceLanes<L>>, &mut Vec<RoundLanes<L>>),
-    (filled, inert): (&mut usize, &Bundle<L>),
+    (filled, inert): (&mut usize, impl FnOnce() -> Bundle<L>),
     (i, c): (usize, &Contact),
     k: &ContactConstraint,
     bodies: &[SolverBody],
@@ -724,7 +746,7 @@ fn put<L: Wide>(
     let lane = *filled % L::WIDTH;
     *filled += 1;
     if lane == 0 {
-        list.push(*inert);
+        list.push(inert());
     }
     let bundle = list.last_mut().expect("a bundle is open");
     bundle.set_contact(lane, (i as u32, c), k, bodies);
@@ -842,7 +864,7 @@ fn pack_shared<L: Wide>(
             put(
                 list,
                 (bounces, rounds),
-                (&mut filled, inert),
+                (&mut filled, || *inert),
                 (i, c),
                 k,
                 bodies,
@@ -859,7 +881,7 @@ fn pack_shared<L: Wide>(
         if l >= IN_OVERFLOW {
             let s = (l - IN_OVERFLOW) as usize;
             let (c, k) = (&contacts[i], &prepared[m]);
-            overflow.put((s, &mut overflowed[s]), &inert_one[s], (i, c), k, bodies);
+            overflow.put((s, &mut overflowed[s]), || inert_one[s], (i, c), k, bodies);
         }
     }
     for l in 0..LISTS {
@@ -871,12 +893,114 @@ fn pack_shared<L: Wide>(
     bouncy
 }
 
+/// Where packing writes: the coloured lists and the overflow, the fixed dummy body that a new
+/// bundle's empty lanes point at, how full each list is, and whether any contact bounces.
+struct Packer<'p, L: Wide> {
+    coloured: &'p mut Packed<L>,
+    overflow: &'p mut Packed<Lanes1>,
+    dummy: u32,
+    filled: [usize; LISTS],
+    overflowed: [usize; KINDS],
+    bouncy: bool,
+}
+
+impl<'p, L: Wide> Packer<'p, L> {
+    /// Empty lists, for `bodies` (the last the fixed dummy that empty lanes point at).
+    fn new(
+        (coloured, overflow): (&'p mut Packed<L>, &'p mut Packed<Lanes1>),
+        bodies: &[SolverBody],
+    ) -> Self {
+        let dummy = (bodies.len() - 1) as u32;
+        coloured.reset(LISTS);
+        Packer {
+            coloured,
+            overflow,
+            dummy,
+            filled: [0; LISTS],
+            overflowed: [0; KINDS],
+            bouncy: false,
+        }
+    }
+
+    /// Contact `c` (index `i`) prepared as `k` into the next lane of list `kind` of `colour`
+    /// (or of the overflow).
+    #[inline(always)]
+    fn place(
+        &mut self,
+        (i, c): (usize, &Contact),
+        k: &ContactConstraint,
+        (colour, kind): (u8, usize),
+        bodies: &[SolverBody],
+    ) {
+        self.bouncy |= c.restitution != 0.0;
+        if colour >= OVERFLOW {
+            let filled = (kind, &mut self.overflowed[kind]);
+            let inert = || Bundle::inert(ALL_KINDS[kind], self.dummy);
+            self.overflow.put(filled, inert, (i, c), k, bodies);
+        } else {
+            let slot = colour as usize * KINDS + kind;
+            let inert = || Bundle::inert(ALL_KINDS[kind], self.dummy);
+            self.coloured
+                .put((slot, &mut self.filled[slot]), inert, (i, c), k, bodies);
+        }
+    }
+
+    /// Close the lists; whether any contact bounces.
+    fn finish(self) -> bool {
+        self.coloured.close();
+        self.overflow.close();
+        self.bouncy
+    }
+}
+
 /// Pack the selected contacts into `coloured` bundles and the `overflow`, one-point contacts
-/// apart if `singles`; whether any bounces.
+/// apart if `singles`; whether any bounces. A small solve without joints (`small`) fills its
+/// half-empty bundles from other colours ([`pack_small`]).
 fn pack<L: Wide, P>(
-    (coloured, overflow): (&mut Packed<L>, &mut Packed<Lanes1>),
+    lists: (&mut Packed<L>, &mut Packed<Lanes1>),
     input: PackInput<'_, '_, P>,
-    singles: bool,
+    (singles, small): (bool, Option<&mut SmallSolve>),
+) -> bool
+where
+    P: FnMut(&mut Contact, &SolverBody, &SolverBody, &mut ContactConstraint),
+{
+    let mut packer = Packer::new(lists, input.bodies);
+    if let Some(small) = small {
+        return pack_small(packer, input, (singles, small));
+    }
+    let PackInput {
+        bodies,
+        contacts,
+        selected,
+        mut prepare,
+        ..
+    } = input;
+    // (Written in place, field by field, and read the same way: returned, the constraint was
+    // copied in 16-byte pieces over its 4- and 8-byte stores, which stalls store forwarding.)
+    let mut k = ContactConstraint::default();
+    selected.for_each_index(contacts.len(), |i| {
+        let c = &mut contacts[i];
+        let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
+        prepare(c, a, b, &mut k);
+        let kind = kind_slot(kind_of(c, &k, singles));
+        packer.place((i, c), &k, (c.colour, kind), bodies);
+    });
+    packer.finish()
+}
+
+/// A small solve's contacts while [`pack_small`] packs them: prepared, then placed.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct SmallSolve {
+    entries: Vec<Entry>,
+    prepared: Vec<(usize, ContactConstraint)>,
+}
+
+/// [`pack`] in two passes: every contact prepared, then moved between colours where that
+/// saves a bundle and changes no result ([`fill_gaps`]), then placed.
+fn pack_small<L: Wide, P>(
+    mut packer: Packer<'_, L>,
+    input: PackInput<'_, '_, P>,
+    (singles, small): (bool, &mut SmallSolve),
 ) -> bool
 where
     P: FnMut(&mut Contact, &SolverBody, &SolverBody, &mut ContactConstraint),
@@ -886,33 +1010,37 @@ where
         contacts,
         selected,
         mut prepare,
+        ..
     } = input;
-    let dummy = (bodies.len() - 1) as u32;
-    coloured.reset(LISTS);
-    let inert = ALL_KINDS.map(|kind| Bundle::<L>::inert(kind, dummy));
-    let inert_one = ALL_KINDS.map(|kind| Bundle::inert(kind, dummy));
-    let mut filled = [0usize; LISTS];
-    let mut overflowed = [0usize; KINDS];
-    let mut bouncy = false;
-    // (Written in place, field by field, and read the same way: returned, the constraint was
-    // copied in 16-byte pieces over its 4- and 8-byte stores, which stalls store forwarding.)
-    let mut k = ContactConstraint::default();
+    let SmallSolve { entries, prepared } = small;
+    entries.clear();
+    prepared.clear();
+    // Static, kinematic and the dummy: nothing is written to them, so they order nothing.
+    let node = |slot: u32, body: &SolverBody| {
+        let moves = body.inv_mass != 0.0 || body.inv_inertia != 0.0;
+        if moves {
+            slot
+        } else {
+            NOT_A_NODE
+        }
+    };
     selected.for_each_index(contacts.len(), |i| {
         let c = &mut contacts[i];
         let (a, b) = (&bodies[c.a as usize], &bodies[c.b as usize]);
+        let mut k = ContactConstraint::default();
         prepare(c, a, b, &mut k);
-        let s = kind_slot(kind_of(c, &k, singles));
-        bouncy |= c.restitution != 0.0;
-        if c.colour >= OVERFLOW {
-            overflow.put((s, &mut overflowed[s]), &inert_one[s], (i, c), &k, bodies);
-        } else {
-            let slot = c.colour as usize * KINDS + s;
-            coloured.put((slot, &mut filled[slot]), &inert[s], (i, c), &k, bodies);
-        }
+        entries.push(Entry {
+            colour: c.colour,
+            kind: kind_slot(kind_of(c, &k, singles)) as u8,
+            nodes: [node(c.a, a), node(c.b, b)],
+        });
+        prepared.push((i, k));
     });
-    coloured.close();
-    overflow.close();
-    bouncy
+    fill_gaps(entries, L::WIDTH, KINDS);
+    for ((i, k), e) in prepared.iter().zip(entries.iter()) {
+        packer.place((*i, &contacts[*i]), k, (e.colour, e.kind as usize), bodies);
+    }
+    packer.finish()
 }
 
 /// The eight-lane stages: compiled for AVX2 on x86-64, where [`ContactBundles::build`] packs

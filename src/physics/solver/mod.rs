@@ -13,6 +13,7 @@ pub(crate) mod block;
 pub(crate) mod bundles;
 pub(crate) mod constraint;
 pub(crate) mod contact_solver;
+pub(crate) mod gaps;
 pub(crate) mod graph;
 pub(crate) mod joint;
 pub(crate) mod lanes;

@@ -216,6 +216,7 @@ fn prepare_contacts(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>)
                 }
             },
         ),
+        fill_gaps: ctx.joints.is_empty(),
     });
 }
 

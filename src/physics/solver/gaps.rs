@@ -34,41 +34,79 @@ pub(crate) struct Entry {
     pub nodes: [u32; 2],
 }
 
-/// Move contacts of `entries` (packed `width` lanes a bundle, in lists of `kinds` kinds per
-/// colour) between colours where that saves a bundle and changes no body's order of
-/// constraints (see the module's comment). Returns how many bundles it saved.
+/// Move contacts of `entries` (packed `width` lanes a bundle, a power of two, in lists of
+/// `kinds` kinds per colour) between colours where that saves a bundle and changes no body's
+/// order of constraints (see the module's comment). Returns how many bundles it saved.
 pub(crate) fn fill_gaps(entries: &mut [Entry], width: usize, kinds: usize) -> usize {
+    debug_assert!(width.is_power_of_two() && kinds <= 4 && entries.len() <= u8::MAX as usize);
+    let part = width - 1;
     let mut counts = [0u8; COLOURS * 4];
-    debug_assert!(kinds <= 4 && entries.len() <= u8::MAX as usize);
     let list = |colour: usize, kind: u8| colour * kinds + kind as usize;
     for e in entries.iter().filter(|e| e.colour < OVERFLOW) {
         counts[list(e.colour as usize, e.kind)] += 1;
     }
+    // Per kind, a bit for each colour whose last bundle has a free lane.
+    let mut open = [0u64; 4];
+    for (l, &n) in counts.iter().enumerate().take(COLOURS * kinds) {
+        if n as usize & part != 0 {
+            open[l % kinds] |= 1 << (l / kinds);
+        }
+    }
     let mut saved = 0;
     for x in 0..entries.len() {
         let Entry { colour, kind, .. } = entries[x];
-        if colour >= OVERFLOW || counts[list(colour as usize, kind)] as usize % width != 1 {
+        if colour >= OVERFLOW || counts[list(colour as usize, kind)] as usize & part != 1 {
             continue;
         }
-        let taken = colours_on_bodies(entries, x);
-        let free_lane = |c: usize| counts[list(c, kind)] as usize % width != 0;
-        let from = colour as usize;
-        // Down from `from` while no colour on the way is taken, then up the same way.
-        let down = (0..from).rev().take_while(|&c| taken & 1 << c == 0);
-        let up = (from + 1..COLOURS).take_while(|&c| taken & 1 << c == 0);
-        if let Some(to) = down.chain(up).find(|&c| free_lane(c)) {
-            counts[list(from, kind)] -= 1;
-            counts[list(to, kind)] += 1;
-            entries[x].colour = to as u8;
-            saved += 1;
+        let reach = reachable(colours_on_bodies(entries, x), colour as u32);
+        let Some(to) = nearest(open[kind as usize] & reach, colour as u32) else {
+            continue;
+        };
+        for (c, change) in [(colour as usize, -1), (to as usize, 1)] {
+            let n = &mut counts[list(c, kind)];
+            *n = n.wrapping_add_signed(change);
+            let bit = 1u64 << c;
+            open[kind as usize] = if *n as usize & part != 0 {
+                open[kind as usize] | bit
+            } else {
+                open[kind as usize] & !bit
+            };
         }
+        entries[x].colour = to as u8;
+        saved += 1;
     }
     saved
 }
 
+/// The colours a contact of colour `from` may move to, one bit each: those between `from` and
+/// the nearest colour `taken` on either side (by another constraint on one of its bodies).
+fn reachable(taken: u64, from: u32) -> u64 {
+    let below = taken & ((1 << from) - 1);
+    let low = 64 - below.leading_zeros();
+    let above = taken & !((2 << from) - 1);
+    let high = if above == 0 {
+        COLOURS as u32
+    } else {
+        above.trailing_zeros()
+    };
+    let up_to_high = (1u64 << high) - 1;
+    let from_low = !((1u64 << low) - 1);
+    up_to_high & from_low & !(1 << from)
+}
+
+/// The colour of `candidates` nearest below `from`, else nearest above.
+fn nearest(candidates: u64, from: u32) -> Option<u32> {
+    let below = candidates & ((1 << from) - 1);
+    if below != 0 {
+        return Some(63 - below.leading_zeros());
+    }
+    let above = candidates & !((2 << from) - 1);
+    (above != 0).then(|| above.trailing_zeros())
+}
+
 /// The colours of every other contact of `entries` that shares a node with contact `x`, one
 /// bit each (the overflow's left out: it is solved before every colour).
-fn colours_on_bodies(entries: &[Entry], x: usize) -> u32 {
+fn colours_on_bodies(entries: &[Entry], x: usize) -> u64 {
     let nodes = entries[x].nodes;
     let shares = |e: &Entry| {
         e.nodes
@@ -79,7 +117,7 @@ fn colours_on_bodies(entries: &[Entry], x: usize) -> u32 {
         .iter()
         .enumerate()
         .filter(|&(y, e)| y != x && e.colour < OVERFLOW && shares(e))
-        .fold(0, |taken, (_, e)| taken | 1 << e.colour)
+        .fold(0, |taken, (_, e)| taken | 1u64 << e.colour)
 }
 
 #[cfg(test)]
@@ -146,6 +184,20 @@ mod tests {
             "body 2 would see colour 9 before 5"
         );
         assert_eq!(entries[moved[0]].colour, 5);
+    }
+
+    /// Between the nearest taken colours on either side, never itself; the nearest below
+    /// first.
+    #[test]
+    fn reach_stops_at_the_nearest_taken_colours() {
+        let bits = |cs: &[u32]| cs.iter().fold(0u64, |m, &c| m | 1 << c);
+        assert_eq!(reachable(bits(&[3, 10]), 7), bits(&[4, 5, 6, 8, 9]));
+        assert_eq!(reachable(0, 31), bits(&(0..31).collect::<Vec<_>>()));
+        assert_eq!(reachable(bits(&[30]), 31), 0);
+        assert_eq!(reachable(bits(&[0]), 0), bits(&(1..32).collect::<Vec<_>>()));
+        assert_eq!(nearest(bits(&[2, 5, 9]), 7), Some(5));
+        assert_eq!(nearest(bits(&[9, 12]), 7), Some(9));
+        assert_eq!(nearest(bits(&[7]), 7), None);
     }
 
     /// No free lane anywhere, or a lone bundle of its own kind only: nothing moves.

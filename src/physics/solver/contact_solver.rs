@@ -544,6 +544,19 @@ impl<L: Wide> Bundle<L> {
         }
     }
 
+    /// [`Bundle::solve`] of a bundle without rounded sides or restitution lanes, of `N` points
+    /// (1 for [`BundleKind::Single`], else 2).
+    #[inline(always)]
+    pub fn solve_plain<const N: usize, R: Rows + ?Sized>(
+        &mut self,
+        rows: &mut R,
+        pass: &Pass<L>,
+        friction: bool,
+    ) {
+        debug_assert_eq!(N == 1, self.kind == BundleKind::Single);
+        self.solve_turning::<N, _, R>(rows, (pass, Sharp), None, friction)
+    }
+
     /// [`Bundle::solve`] of the first `N` points, which turn as `round` says.
     #[inline(always)]
     fn solve_turning<const N: usize, T: Turning<L>, R: Rows + ?Sized>(

@@ -46,10 +46,11 @@ pub(crate) fn fill_gaps(entries: &mut [Entry], width: usize, kinds: usize) -> us
         counts[list(e.colour as usize, e.kind)] += 1;
     }
     // Per kind, a bit for each colour whose last bundle has a free lane.
+    // (From the contacts, not from every list: a few contacts against 96 lists.)
     let mut open = [0u64; 4];
-    for (l, &n) in counts.iter().enumerate().take(COLOURS * kinds) {
-        if n as usize & part != 0 {
-            open[l % kinds] |= 1 << (l / kinds);
+    for e in entries.iter().filter(|e| e.colour < OVERFLOW) {
+        if counts[list(e.colour as usize, e.kind)] as usize & part != 0 {
+            open[e.kind as usize] |= 1 << e.colour;
         }
     }
     let mut saved = 0;

@@ -12,7 +12,8 @@
 
 use super::constraint::ContactConstraint;
 use super::contact_solver::{
-    BounceLanes, Bundle, BundleKind, Pass, PointImpulses, RoundLanes, Sides, NO_BOUNCE, NO_ROUNDING,
+    BounceLanes, Bundle, BundleKind, Pass, PointImpulses, RoundLanes, Rows, Sides, NO_BOUNCE,
+    NO_ROUNDING,
 };
 use super::gaps::{fill_gaps, Entry, GAPS_FILLED_UP_TO, NOT_A_NODE};
 use super::graph::{COLOURS, OVERFLOW};
@@ -91,10 +92,11 @@ pub(crate) enum Work {
 }
 
 /// What a block reads beside its bundles and the bodies: the rounding lanes, and the
-/// restitution lanes, each bundle's its own.
+/// restitution lanes, each bundle's its own; `plain` when no bundle of its list has either.
 struct SideLanes<'a, L> {
     rounds: &'a [RoundLanes<L>],
     bounces: SharedSlice<'a, BounceLanes<L>>,
+    plain: bool,
 }
 
 impl<L> Clone for SideLanes<'_, L> {
@@ -130,6 +132,31 @@ fn store_block<L: Wide>(
     }
 }
 
+/// A solve pass over `bundles` of one list without rounded or bouncing bundles: one kernel
+/// copy for all. (Most lists: looking up each bundle's sides and choosing its kernel were 5 %
+/// of a pyramid's solve instructions.)
+#[inline(always)]
+fn solve_plain<L: Wide, R: Rows + ?Sized>(
+    bundles: &mut [Bundle<L>],
+    rows: &mut R,
+    pass: &Pass<L>,
+    friction: bool,
+) {
+    // A list holds one kind.
+    if bundles
+        .first()
+        .is_some_and(|b| b.kind == BundleKind::Single)
+    {
+        for bundle in bundles {
+            bundle.solve_plain::<1, R>(rows, pass, friction);
+        }
+    } else {
+        for bundle in bundles {
+            bundle.solve_plain::<2, R>(rows, pass, friction);
+        }
+    }
+}
+
 /// Runs one block: [`run_block`] at a width, compiled for it.
 type BlockRun<L> = fn(&mut [Bundle<L>], BodyRows, Work, SideLanes<L>);
 
@@ -151,6 +178,9 @@ fn run_block<L: Wide>(bundles: &mut [Bundle<L>], rows: BodyRows, work: Work, sid
             let (inv_h, push_out) = (L::splat(inv_h), L::splat(-push_out));
             let pass = Pass::new(inv_h, kind == PassKind::Biased, push_out);
             let friction = kind != PassKind::NormalRelax;
+            if side.plain {
+                return solve_plain(bundles, rows, &pass, friction);
+            }
             for bundle in bundles {
                 // SAFETY: a bundle's restitution lanes are its own, and it is in one block.
                 let sides = Sides {
@@ -389,17 +419,7 @@ impl<L: Wide> Packed<L> {
         for ((list, &slot), &sided) in lists {
             before_colour(&mut joints, bodies, slot);
             if !sided {
-                // (Most lists: the per-bundle look-up of sides and the choice of kernel were
-                // 5 % of a pyramid's solve instructions. A list holds one kind.)
-                if slot as usize % KINDS == kind_slot(BundleKind::Single) {
-                    for bundle in list {
-                        bundle.solve_plain::<1, _>(bodies, pass, friction);
-                    }
-                } else {
-                    for bundle in list {
-                        bundle.solve_plain::<2, _>(bodies, pass, friction);
-                    }
-                }
+                solve_plain(list, bodies, pass, friction);
                 continue;
             }
             for bundle in list {
@@ -440,8 +460,14 @@ impl<L: Wide> Packed<L> {
         let side = SideLanes {
             rounds: &self.rounds,
             bounces,
+            plain: false,
         };
-        for (list, &slot) in self.packed.iter_mut().zip(&self.slots) {
+        let lists = self.packed.iter_mut().zip(&self.slots).zip(&self.sided);
+        for ((list, &slot), &sided) in lists {
+            let side = SideLanes {
+                plain: !sided,
+                ..side
+            };
             if let Some(run_joints) = joints.as_mut() {
                 // SAFETY: between colours no block runs: the other workers wait.
                 run_joints(

@@ -141,10 +141,9 @@ pub(crate) struct Bundle<L: Wide> {
     i00: L,
     i01: L,
     i11: L,
-    /// Inverse masses and inertias of A and B (zero for fixed bodies and empty lanes).
-    inv_mass_a: L,
+    /// Inverse inertias of A and B (zero for fixed bodies and empty lanes). Their inverse
+    /// masses come with their rows (`SolverBody::state`'s eighth word), not in the bundle.
     inv_i_a: L,
-    inv_mass_b: L,
     inv_i_b: L,
     p: [PointLanes<L>; 2],
 }
@@ -291,12 +290,14 @@ struct BodyLanes<L> {
 }
 
 impl<L: Wide> BodyLanes<L> {
-    /// Load the lanes' bodies' velocities and how far they moved this step: each lane's
-    /// body's first eight words (`SolverBody::state`), transposed into one value per field.
-    /// The inverse masses do not change within a step: they come packed in the bundle.
+    /// Load the lanes' bodies' velocities, how far they moved this step and their inverse
+    /// masses: each lane's body's first eight words (`SolverBody::state`), transposed into one
+    /// value per field. The inverse inertias, which the rows have no room for, come packed in
+    /// the bundle, which every pass streams.
     #[inline(always)]
-    fn gather<R: Rows + ?Sized>(rows: &R, idx: &L::Index, inv_mass: L, inv_inertia: L) -> Self {
-        let [vx, vy, w, dpx, dpy, qc, qs, _] = L::columns(|lane| rows.state(idx.as_ref()[lane]));
+    fn gather<R: Rows + ?Sized>(rows: &R, idx: &L::Index, inv_inertia: L) -> Self {
+        let [vx, vy, w, dpx, dpy, qc, qs, inv_mass] =
+            L::columns(|lane| rows.state(idx.as_ref()[lane]));
         BodyLanes {
             vx,
             vy,
@@ -382,9 +383,7 @@ impl<L: Wide> Bundle<L> {
             i00: one,
             i01: zero,
             i11: one,
-            inv_mass_a: zero,
             inv_i_a: zero,
-            inv_mass_b: zero,
             inv_i_b: zero,
             p: [point; 2],
         }
@@ -414,9 +413,7 @@ impl<L: Wide> Bundle<L> {
             (&mut self.mass_scale, sf.mass_scale),
             (&mut self.impulse_scale, sf.impulse_scale),
             (&mut self.creep, k.creep),
-            (&mut self.inv_mass_a, body_a.inv_mass),
             (&mut self.inv_i_a, body_a.inv_inertia),
-            (&mut self.inv_mass_b, body_b.inv_mass),
             (&mut self.inv_i_b, body_b.inv_inertia),
         ] {
             field.set_lane(lane, x);
@@ -467,8 +464,8 @@ impl<L: Wide> Bundle<L> {
     #[inline(always)]
     fn gather<R: Rows + ?Sized>(&self, rows: &R) -> (BodyLanes<L>, BodyLanes<L>) {
         (
-            BodyLanes::gather(rows, &self.a, self.inv_mass_a, self.inv_i_a),
-            BodyLanes::gather(rows, &self.b, self.inv_mass_b, self.inv_i_b),
+            BodyLanes::gather(rows, &self.a, self.inv_i_a),
+            BodyLanes::gather(rows, &self.b, self.inv_i_b),
         )
     }
 

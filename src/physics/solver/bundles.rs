@@ -12,8 +12,8 @@
 
 use super::constraint::ContactConstraint;
 use super::contact_solver::{
-    BounceLanes, Bundle, BundleKind, Pass, PointImpulses, RoundLanes, Rows, Sides, NO_BOUNCE,
-    NO_ROUNDING,
+    BounceLanes, Bundle, BundleKind, Ledger, Pass, PointImpulses, RoundLanes, Rows, Sides,
+    NO_BOUNCE, NO_ROUNDING,
 };
 use super::gaps::{fill_gaps, Entry, GAPS_FILLED_UP_TO, NOT_A_NODE};
 use super::graph::{COLOURS, OVERFLOW};
@@ -110,20 +110,23 @@ impl<L> Copy for SideLanes<'_, L> {}
 pub(crate) type StoreFn<'a> = dyn Fn(&mut Contact, &[PointImpulses; 2]) + Sync + 'a;
 
 /// Stores one block: [`store_block`] at a width, compiled for it.
-type StoreBlock<L> = fn(&[Bundle<L>], &[BounceLanes<L>], SharedSlice<Contact>, &StoreFn);
+type StoreBlock<L> =
+    fn(&[Ledger<L>], &[Bundle<L>], &[BounceLanes<L>], SharedSlice<Contact>, &StoreFn);
 
-/// Hand each contact of `bundles` (one block of a colour) its points' impulses. A contact is in
-/// one lane of one bundle, so the worker that took the block is the only one to reach it.
+/// Hand each contact of `bundles` (one block of a colour, with their `ledgers`) its points'
+/// impulses. A contact is in one lane of one bundle, so the worker that took the block is the
+/// only one to reach it.
 #[inline(always)]
 fn store_block<L: Wide>(
+    ledgers: &[Ledger<L>],
     bundles: &[Bundle<L>],
     bounces: &[BounceLanes<L>],
     contacts: SharedSlice<Contact>,
     then: &StoreFn,
 ) {
-    for bundle in bundles {
-        let ends = bundle.impulses(bounces.get(bundle.bounce_index as usize));
-        for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
+    for (bundle, ledger) in bundles.iter().zip(ledgers) {
+        let ends = bundle.impulses(ledger, bounces.get(bundle.bounce_index as usize));
+        for (end, &ci) in ends.iter().zip(ledger.contact.as_ref()) {
             // SAFETY: as above: this lane's contact is this block's alone.
             if let Some(c) = unsafe { contacts.get(ci as usize) } {
                 then(c, end);
@@ -158,11 +161,19 @@ fn solve_plain<L: Wide, R: Rows + ?Sized>(
 }
 
 /// Runs one block: [`run_block`] at a width, compiled for it.
-type BlockRun<L> = fn(&mut [Bundle<L>], BodyRows, Work, SideLanes<L>);
+type BlockRun<L> = fn(Block<L>, BodyRows, Work, SideLanes<L>);
+
+/// One block of a colour's bundles, with their ledgers.
+type Block<'a, L> = (&'a mut [Bundle<L>], &'a mut [Ledger<L>]);
 
 /// `work` on each of `bundles` (one block of a colour).
 #[inline(always)]
-fn run_block<L: Wide>(bundles: &mut [Bundle<L>], rows: BodyRows, work: Work, side: SideLanes<L>) {
+fn run_block<L: Wide>(
+    (bundles, ledgers): Block<L>,
+    rows: BodyRows,
+    work: Work,
+    side: SideLanes<L>,
+) {
     let mut rows = rows;
     let rows = &mut rows;
     match work {
@@ -170,8 +181,8 @@ fn run_block<L: Wide>(bundles: &mut [Bundle<L>], rows: BodyRows, work: Work, sid
         // it is called from, and once the warm start grew past the inliner's budget every lane
         // operation in it became a call.)
         Work::WarmStart => {
-            for bundle in bundles {
-                bundle.warm_start(&mut *rows);
+            for (bundle, ledger) in bundles.iter_mut().zip(ledgers) {
+                bundle.warm_start(&mut *rows, ledger);
             }
         }
         Work::Solve((kind, inv_h, push_out)) => {
@@ -202,16 +213,39 @@ fn run_block<L: Wide>(bundles: &mut [Bundle<L>], rows: BodyRows, work: Work, sid
     }
 }
 
+/// One (colour, kind)'s bundles and, index for index, their ledgers.
+#[derive(Clone, Debug)]
+struct List<L: Wide> {
+    bundles: Vec<Bundle<L>>,
+    ledgers: Vec<Ledger<L>>,
+}
+
+impl<L: Wide> Default for List<L> {
+    fn default() -> Self {
+        List {
+            bundles: Vec::new(),
+            ledgers: Vec::new(),
+        }
+    }
+}
+
+impl<L: Wide> List<L> {
+    fn clear(&mut self) {
+        self.bundles.clear();
+        self.ledgers.clear();
+    }
+}
+
 /// Bundles of one width, in lists per (colour, kind) flattened as colour * KINDS + kind, solved in
 /// that order, with the restitution lanes of the bundles that bounce.
 #[derive(Clone, Debug)]
 struct Packed<L: Wide> {
     /// While packing: a list per (colour, kind).
-    lists: Vec<Vec<Bundle<L>>>,
+    lists: Vec<List<L>>,
     /// Once packed: the lists that hold a bundle, moved out of `lists` in solve order (a scene
     /// uses a few of the 64, the ground's contacts in the top colours), so the stages walk
     /// them as one sequence; and the slot each came from, to give it back.
-    packed: Vec<Vec<Bundle<L>>>,
+    packed: Vec<List<L>>,
     slots: Vec<u16>,
     /// Once packed: for each list in `packed`, whether a bundle of it bounces or has a rounded
     /// side; the solve passes run the others through the kernel without those sides.
@@ -285,7 +319,7 @@ fn kind_of(c: &Contact, k: &ContactConstraint, singles: bool) -> BundleKind {
 impl<L: Wide> Packed<L> {
     /// Empty, with `lists` lists.
     fn reset(&mut self, lists: usize) {
-        self.lists.resize_with(lists, Vec::new);
+        self.lists.resize_with(lists, List::default);
         for (mut list, slot) in self.packed.drain(..).zip(self.slots.drain(..)) {
             list.clear();
             self.lists[slot as usize] = list;
@@ -331,7 +365,7 @@ impl<L: Wide> Packed<L> {
                 continue;
             }
             let (b0, r0) = (self.bounces.len() as u32, self.rounds.len() as u32);
-            for bundle in list.iter_mut() {
+            for bundle in list.bundles.iter_mut() {
                 if bundle.bounce_index != NO_BOUNCE {
                     bundle.bounce_index += b0;
                 }
@@ -352,7 +386,7 @@ impl<L: Wide> Packed<L> {
             used &= used - 1;
             let list = std::mem::take(&mut self.lists[slot]);
             let plain = |b: &Bundle<L>| b.bounce_index == NO_BOUNCE && b.round_index == NO_ROUNDING;
-            self.sided.push(!list.iter().all(plain));
+            self.sided.push(!list.bundles.iter().all(plain));
             self.packed.push(list);
             self.slots.push(slot as u16);
         }
@@ -361,14 +395,14 @@ impl<L: Wide> Packed<L> {
     /// Packed bundles of `kind`.
     #[cfg(test)]
     fn count_of(&self, kind: BundleKind) -> usize {
-        let bundles = self.packed.iter().flatten();
+        let bundles = self.packed.iter().flat_map(|list| &list.bundles);
         bundles.filter(|b| b.kind == kind).count()
     }
 
     /// Mark the lists the workers filled as used ([`Packed::close`]).
     fn mark_filled(&mut self) {
         for (slot, list) in self.lists.iter().enumerate() {
-            if !list.is_empty() {
+            if !list.bundles.is_empty() {
                 self.used |= 1 << slot;
             }
         }
@@ -382,13 +416,15 @@ impl<L: Wide> Packed<L> {
             let mut joints = joints;
             for (list, &slot) in self.packed.iter_mut().zip(&self.slots) {
                 before_colour(&mut joints, bodies, slot);
-                for bundle in list {
-                    bundle.warm_start(bodies);
+                for (bundle, ledger) in list.bundles.iter_mut().zip(&mut list.ledgers) {
+                    bundle.warm_start(bodies, ledger);
                 }
             }
         } else {
-            for bundle in self.packed.iter_mut().flatten() {
-                bundle.clear_impulses();
+            for list in &mut self.packed {
+                for (bundle, ledger) in list.bundles.iter_mut().zip(&mut list.ledgers) {
+                    bundle.clear_impulses(ledger);
+                }
             }
         }
     }
@@ -419,10 +455,10 @@ impl<L: Wide> Packed<L> {
         for ((list, &slot), &sided) in lists {
             before_colour(&mut joints, bodies, slot);
             if !sided {
-                solve_plain(list, bodies, pass, friction);
+                solve_plain(&mut list.bundles, bodies, pass, friction);
                 continue;
             }
-            for bundle in list {
+            for bundle in &mut list.bundles {
                 // (None for a bundle without them: its index is out of range.)
                 let sides = Sides {
                     round: rounds.get(bundle.round_index as usize),
@@ -437,7 +473,7 @@ impl<L: Wide> Packed<L> {
     #[inline(always)]
     fn apply_restitution(&mut self, bodies: &mut [SolverBody], threshold: Real) {
         let threshold = L::splat(threshold);
-        for bundle in self.packed.iter_mut().flatten() {
+        for bundle in self.packed.iter_mut().flat_map(|list| &mut list.bundles) {
             if bundle.bounce_index != NO_BOUNCE {
                 let bounce = &self.bounces[bundle.bounce_index as usize];
                 bundle.apply_restitution(bounce, bodies, threshold);
@@ -475,12 +511,19 @@ impl<L: Wide> Packed<L> {
                     (slot as usize / KINDS) as u8 + 1,
                 );
             }
-            let len = list.len();
-            // SAFETY: each block is its own run of the colour's bundles.
-            let bundles = unsafe { SharedSlice::new(list) };
+            let len = list.bundles.len();
+            // SAFETY: each block is its own run of the colour's bundles and ledgers.
+            let (bundles, ledgers) = unsafe {
+                (
+                    SharedSlice::new(&mut list.bundles),
+                    SharedSlice::new(&mut list.ledgers),
+                )
+            };
             region.for_blocks(len.div_ceil(BUNDLES_PER_BLOCK), &|k| {
-                // SAFETY: block k's bundles are reached by the worker that took k alone.
-                let block = unsafe { bundles.range(block(k, BUNDLES_PER_BLOCK, len)) };
+                let range = block(k, BUNDLES_PER_BLOCK, len);
+                // SAFETY: block k's bundles and ledgers are reached by the worker that took k
+                // alone.
+                let block = unsafe { (bundles.range(range.clone()), ledgers.range(range)) };
                 run(block, rows.rows(), work, side);
             });
         }
@@ -495,10 +538,11 @@ impl<L: Wide> Packed<L> {
         store: StoreBlock<L>,
     ) {
         for list in &self.packed {
-            let len = list.len();
+            let len = list.bundles.len();
             region.for_blocks(len.div_ceil(BUNDLES_PER_BLOCK), &|k| {
-                let bundles = &list[block(k, BUNDLES_PER_BLOCK, len)];
-                store(bundles, &self.bounces, contacts, then);
+                let range = block(k, BUNDLES_PER_BLOCK, len);
+                let (bundles, ledgers) = (&list.bundles[range.clone()], &list.ledgers[range]);
+                store(ledgers, bundles, &self.bounces, contacts, then);
             });
         }
     }
@@ -511,17 +555,21 @@ impl<L: Wide> Packed<L> {
         contacts: &mut [Contact],
         then: &mut impl FnMut(&mut Contact, &[PointImpulses; 2]),
     ) {
-        let mut bundles = self.packed.iter().flatten().peekable();
-        while let Some(bundle) = bundles.next() {
-            if let Some(next) = bundles.peek() {
+        let bundles = self
+            .packed
+            .iter()
+            .flat_map(|l| l.bundles.iter().zip(&l.ledgers));
+        let mut bundles = bundles.peekable();
+        while let Some((bundle, ledger)) = bundles.next() {
+            if let Some((_, next)) = bundles.peek() {
                 for &ci in next.contact.as_ref() {
                     if let Some(c) = contacts.get(ci as usize) {
                         prefetch(c);
                     }
                 }
             }
-            let ends = bundle.impulses(self.bounces.get(bundle.bounce_index as usize));
-            for (end, &ci) in ends.iter().zip(bundle.contact.as_ref()) {
+            let ends = bundle.impulses(ledger, self.bounces.get(bundle.bounce_index as usize));
+            for (end, &ci) in ends.iter().zip(ledger.contact.as_ref()) {
                 if let Some(c) = contacts.get_mut(ci as usize) {
                     then(c, end);
                 }
@@ -756,16 +804,16 @@ impl ContactBundles {
     /// Contacts in the overflow at the last build.
     #[cfg(test)]
     pub fn overflow_count(&self) -> usize {
-        self.overflow.packed.iter().map(Vec::len).sum()
+        self.overflow.packed.iter().map(|l| l.bundles.len()).sum()
     }
 
     /// Coloured bundles at the last build.
     #[cfg(test)]
     pub fn coloured_bundles(&self) -> usize {
         match self.built {
-            Some(Width::Eight) => self.eight.packed.iter().map(Vec::len).sum(),
-            Some(Width::One) => self.single.packed.iter().map(Vec::len).sum(),
-            _ => self.four.packed.iter().map(Vec::len).sum(),
+            Some(Width::Eight) => self.eight.packed.iter().map(|l| l.bundles.len()).sum(),
+            Some(Width::One) => self.single.packed.iter().map(|l| l.bundles.len()).sum(),
+            _ => self.four.packed.iter().map(|l| l.bundles.len()).sum(),
         }
     }
 
@@ -781,11 +829,11 @@ impl ContactBundles {
 }
 
 /// Write contact `c` (index `i`) with its constraint `k` into the next lane of `list`, of
-/// which `filled` lanes are taken, opening a bundle (`inert()`) when the last is full;
-/// its restitution and rounding lanes, if it has them, into `bounces` and `rounds`.
+/// which `filled` lanes are taken, opening a bundle (`inert()`) and its ledger when the last
+/// is full; its restitution and rounding lanes, if it has them, into `bounces` and `rounds`.
 #[inline(always)]
 fn put<L: Wide>(
-    list: &mut Vec<Bundle<L>>,
+    list: &mut List<L>,
     (bounces, rounds): (&mut Vec<BounceLanes<L>>, &mut Vec<RoundLanes<L>>),
     (filled, inert): (&mut usize, impl FnOnce() -> Bundle<L>),
     (i, c): (usize, &Contact),
@@ -795,10 +843,13 @@ fn put<L: Wide>(
     let lane = *filled % L::WIDTH;
     *filled += 1;
     if lane == 0 {
-        list.push(inert());
+        list.bundles.push(inert());
+        list.ledgers.push(Ledger::empty());
     }
-    let bundle = list.last_mut().expect("a bundle is open");
-    bundle.set_contact(lane, (i as u32, c), k, bodies);
+    let bundle = list.bundles.last_mut().expect("a bundle is open");
+    bundle.set_contact(lane, c, k, bodies);
+    let ledger = list.ledgers.last_mut().expect("its ledger");
+    ledger.set(lane, (i as u32, c));
     if c.restitution != 0.0 {
         if bundle.bounce_index == NO_BOUNCE {
             bundle.bounce_index = bounces.len() as u32;
@@ -1096,8 +1147,8 @@ where
 /// eight-lane bundles only if the processor has it; elsewhere never chosen.
 mod eight {
     use super::{
-        BodyRows, BounceLanes, Bundle, Contact, Joints, Lanes8, Packed, PassArgs, PointImpulses,
-        Real, SharedSlice, SideLanes, SolverBody, StoreFn, Work,
+        Block, BodyRows, BounceLanes, Bundle, Contact, Joints, Lanes8, Ledger, Packed, PassArgs,
+        PointImpulses, Real, SharedSlice, SideLanes, SolverBody, StoreFn, Work,
     };
 
     /// Runs `$body` compiled for AVX2 where `Lanes8` is an AVX register, plainly elsewhere.
@@ -1128,11 +1179,11 @@ mod eight {
     avx2!(apply_restitution(packed: &mut Packed<Lanes8>, bodies: &mut [SolverBody], threshold: Real) {
         packed.apply_restitution(bodies, threshold)
     });
-    avx2!(run_block(bundles: &mut [Bundle<Lanes8>], rows: BodyRows, work: Work, side: SideLanes<Lanes8>) {
-        super::run_block(bundles, rows, work, side)
+    avx2!(run_block(block: Block<Lanes8>, rows: BodyRows, work: Work, side: SideLanes<Lanes8>) {
+        super::run_block(block, rows, work, side)
     });
-    avx2!(store_block(bundles: &[Bundle<Lanes8>], bounces: &[BounceLanes<Lanes8>], contacts: SharedSlice<Contact>, then: &StoreFn) {
-        super::store_block(bundles, bounces, contacts, then)
+    avx2!(store_block(ledgers: &[Ledger<Lanes8>], bundles: &[Bundle<Lanes8>], bounces: &[BounceLanes<Lanes8>], contacts: SharedSlice<Contact>, then: &StoreFn) {
+        super::store_block(ledgers, bundles, bounces, contacts, then)
     });
 
     /// [`Packed::store`] compiled for AVX2 where `Lanes8` is an AVX register, plainly

@@ -53,11 +53,6 @@ pub(crate) struct PointLanes<L> {
     /// Accumulated impulses (N s, per substep).
     normal_impulse: L,
     tangent_impulse: L,
-    /// The normal impulses this step's substeps ended with, summed, less the one the step
-    /// began with: each substep's warm start adds the impulse the last one ended with (the
-    /// first cancels the initial -P exactly), and [`Bundle::impulses`] adds the last. That is
-    /// all the normal constraint applied in the step, without a write per solve pass.
-    total_normal_impulse: L,
 }
 
 impl<L: Wide> PointLanes<L> {
@@ -119,8 +114,6 @@ pub(crate) struct Bundle<L: Wide> {
     pub bounce_index: u32,
     /// Where the bundle's rounding lanes are ([`RoundLanes`]), or [`NO_ROUNDING`].
     pub round_index: u32,
-    /// Contact index per lane; `u32::MAX` for an empty lane.
-    pub contact: L::Index,
     /// Solver-body indices of A and B per lane (the fixed dummy body for empty lanes).
     a: L::Index,
     b: L::Index,
@@ -146,6 +139,40 @@ pub(crate) struct Bundle<L: Wide> {
     inv_i_a: L,
     inv_i_b: L,
     p: [PointLanes<L>; 2],
+}
+
+/// What the store stage reads of a bundle beside its impulses, kept apart from it so that the
+/// solve passes, which read neither, do not stream it: the contact each lane holds, and what
+/// the step's substeps have applied along each point's normal.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ledger<L: Wide> {
+    /// Contact index per lane; `u32::MAX` for an empty lane.
+    pub contact: L::Index,
+    /// The normal impulses this step's substeps ended with, summed, less the one the step
+    /// began with (N s): each substep's warm start adds the impulse the last one ended with
+    /// (the first cancels the initial -P exactly), and [`Bundle::impulses`] adds the last.
+    /// That is all the normal constraint applied in the step, without a write per solve pass.
+    total_normal_impulse: [L; 2],
+}
+
+impl<L: Wide> Ledger<L> {
+    /// Every lane empty.
+    pub fn empty() -> Ledger<L> {
+        Ledger {
+            contact: L::index_splat(u32::MAX),
+            total_normal_impulse: [L::ZERO; 2],
+        }
+    }
+
+    /// Lane `lane` holds contact `c` (index `ci`), whose points begin the step with their
+    /// accumulated impulses.
+    #[inline(always)]
+    pub fn set(&mut self, lane: usize, (ci, c): (u32, &Contact)) {
+        self.contact.as_mut()[lane] = ci;
+        for (total, p) in self.total_normal_impulse.iter_mut().zip(c.live()) {
+            total.set_lane(lane, -p.normal_impulse);
+        }
+    }
 }
 
 /// The separation (m) given to the absent second point of a one-point contact solved in a
@@ -361,13 +388,11 @@ impl<L: Wide> Bundle<L> {
             tangent_mass: zero,
             normal_impulse: zero,
             tangent_impulse: zero,
-            total_normal_impulse: zero,
         };
         Bundle {
             kind,
             bounce_index: NO_BOUNCE,
             round_index: NO_ROUNDING,
-            contact: L::index_splat(u32::MAX),
             a: L::index_splat(dummy),
             b: L::index_splat(dummy),
             nx: zero,
@@ -389,18 +414,18 @@ impl<L: Wide> Bundle<L> {
         }
     }
 
-    /// Write contact `c` (index `ci`) with its constraint `k` into lane `lane`. A contact
+    /// Write contact `c` with its constraint `k` into lane `lane` (its index and starting
+    /// impulses go in the bundle's [`Ledger`]). A contact
     /// without a usable block keeps the inert identity; a one-point contact leaves its second
     /// point's lanes zero (in a block bundle, all but a separation that never closes).
     #[inline(always)]
     pub fn set_contact(
         &mut self,
         lane: usize,
-        (ci, c): (u32, &Contact),
+        c: &Contact,
         k: &ContactConstraint,
         bodies: &[SolverBody],
     ) {
-        self.contact.as_mut()[lane] = ci;
         self.a.as_mut()[lane] = c.a;
         self.b.as_mut()[lane] = c.b;
         let sf = k.softness;
@@ -453,7 +478,6 @@ impl<L: Wide> Bundle<L> {
                 (&mut v.tangent_mass, kp.tangent_mass),
                 (&mut v.normal_impulse, p.normal_impulse),
                 (&mut v.tangent_impulse, p.tangent_impulse),
-                (&mut v.total_normal_impulse, -p.normal_impulse),
             ] {
                 field.set_lane(lane, x);
             }
@@ -482,22 +506,27 @@ impl<L: Wide> Bundle<L> {
         ((self.nx, self.ny), (self.ny, -self.nx))
     }
 
-    /// Warm start: apply each point's accumulated impulses (the start of a substep).
+    /// Warm start: apply each point's accumulated impulses (the start of a substep), and
+    /// count them in the step's total (`ledger`, the bundle's own).
     #[inline(always)]
-    pub fn warm_start<R: Rows + ?Sized>(&mut self, rows: &mut R) {
+    pub fn warm_start<R: Rows + ?Sized>(&mut self, rows: &mut R, ledger: &mut Ledger<L>) {
         match self.kind {
-            BundleKind::Single => self.warm_start_points::<1, R>(rows),
-            BundleKind::Block | BundleKind::Points => self.warm_start_points::<2, R>(rows),
+            BundleKind::Single => self.warm_start_points::<1, R>(rows, ledger),
+            BundleKind::Block | BundleKind::Points => self.warm_start_points::<2, R>(rows, ledger),
         }
     }
 
     /// [`Bundle::warm_start`] of the first `N` points.
     #[inline(always)]
-    fn warm_start_points<const N: usize, R: Rows + ?Sized>(&mut self, rows: &mut R) {
+    fn warm_start_points<const N: usize, R: Rows + ?Sized>(
+        &mut self,
+        rows: &mut R,
+        ledger: &mut Ledger<L>,
+    ) {
         let (mut a, mut b) = self.gather(rows);
         let (n, t) = self.axes();
-        for p in &mut self.p[..N] {
-            p.total_normal_impulse += p.normal_impulse;
+        for (p, total) in self.p[..N].iter().zip(&mut ledger.total_normal_impulse) {
+            *total += p.normal_impulse;
             BodyLanes::apply(&mut a, &mut b, n, normal_arms(p), p.normal_impulse);
             BodyLanes::apply(&mut a, &mut b, t, p.tangent_arms(), p.tangent_impulse);
         }
@@ -506,10 +535,10 @@ impl<L: Wide> Bundle<L> {
 
     /// Warm starting off: zero the accumulated impulses instead (the start of a substep).
     #[inline(always)]
-    pub fn clear_impulses(&mut self) {
-        for p in &mut self.p {
+    pub fn clear_impulses(&mut self, ledger: &mut Ledger<L>) {
+        for (p, total) in self.p.iter_mut().zip(&mut ledger.total_normal_impulse) {
             // The impulse the last substep ended with counts as its share of the total.
-            p.total_normal_impulse += p.normal_impulse;
+            *total += p.normal_impulse;
             p.normal_impulse = L::ZERO;
             p.tangent_impulse = L::ZERO;
         }
@@ -785,20 +814,25 @@ impl<L: Wide> Bundle<L> {
     /// Each lane's points' impulses at the end of the solve (lanes beyond `L::WIDTH` unused),
     /// read out field by field: each field's lanes once, not once per lane.
     #[inline(always)]
-    pub fn impulses(&self, bounce: Option<&BounceLanes<L>>) -> [[PointImpulses; 2]; 8] {
+    pub fn impulses(
+        &self,
+        ledger: &Ledger<L>,
+        bounce: Option<&BounceLanes<L>>,
+    ) -> [[PointImpulses; 2]; 8] {
         let mut ends = [[PointImpulses::default(); 2]; 8];
         for (j, p) in self.p.iter().enumerate() {
+            let total_normal_impulse = ledger.total_normal_impulse[j];
             let (normal, tangent, total) = (
                 p.normal_impulse.to_lanes(),
                 p.tangent_impulse.to_lanes(),
-                p.total_normal_impulse.to_lanes(),
+                total_normal_impulse.to_lanes(),
             );
             // Carried to the next step: the approach of a point some pass pushed this step
             // whose surfaces have not met yet; nothing from a step that did not push it (an
             // approach kept past such a step could bounce a later, slower landing).
             let carried = match bounce {
                 Some(b) => {
-                    let pushed = (p.total_normal_impulse + p.normal_impulse).cmpgt(L::ZERO);
+                    let pushed = (total_normal_impulse + p.normal_impulse).cmpgt(L::ZERO);
                     let keep = pushed & L::ONE.cmpgt(b.touched[j]);
                     L::select(keep, b.approach[j], L::ZERO)
                 }

@@ -36,8 +36,10 @@ pub(crate) enum BundleKind {
     Single,
 }
 
-/// Per-point lanes of a bundle: lane i is the point of contact i.
+/// Per-point lanes of a bundle: lane i is the point of contact i. In declared order, what the
+/// warm start reads first.
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub(crate) struct PointLanes<L> {
     /// rA x n and rB x n (m).
     a_cross_n: L,
@@ -45,14 +47,14 @@ pub(crate) struct PointLanes<L> {
     /// rA . n and rB . n (m). With t = (n_y, -n_x), rA x t = -(rA . n): the tangent arms.
     a_dot_n: L,
     b_dot_n: L,
+    /// Accumulated impulses (N s, per substep).
+    normal_impulse: L,
+    tangent_impulse: L,
     /// Separation less the anchors' part (m; `PointConstraint::adjusted_separation`).
     adjusted_separation: L,
     /// Effective masses along the normal and the tangent (kg).
     normal_mass: L,
     tangent_mass: L,
-    /// Accumulated impulses (N s, per substep).
-    normal_impulse: L,
-    tangent_impulse: L,
 }
 
 impl<L: Wide> PointLanes<L> {
@@ -106,8 +108,10 @@ impl Rows for BodyRows<'_> {
     }
 }
 
-/// Up to `L::WIDTH` contacts packed for the lanes.
+/// Up to `L::WIDTH` contacts packed for the lanes. In declared order: what the warm start
+/// reads first, what the biased pass alone reads last.
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub(crate) struct Bundle<L: Wide> {
     pub kind: BundleKind,
     /// Where the bundle's restitution lanes are ([`BounceLanes`]), or [`NO_BOUNCE`].
@@ -120,13 +124,12 @@ pub(crate) struct Bundle<L: Wide> {
     /// The normal (unit, A to B).
     nx: L,
     ny: L,
+    /// Inverse inertias of A and B (zero for fixed bodies and empty lanes). Their inverse
+    /// masses come with their rows (`SolverBody::state`'s eighth word), not in the bundle.
+    inv_i_a: L,
+    inv_i_b: L,
+    p: [PointLanes<L>; 2],
     friction: L,
-    /// The contact spring ([`super::softness::Softness`]).
-    bias_rate: L,
-    mass_scale: L,
-    impulse_scale: L,
-    /// How far the spring has crept (m; `ContactConstraint::creep`).
-    creep: L,
     /// The block K (symmetric) and its inverse (identity for a contact without one).
     k00: L,
     k01: L,
@@ -134,11 +137,12 @@ pub(crate) struct Bundle<L: Wide> {
     i00: L,
     i01: L,
     i11: L,
-    /// Inverse inertias of A and B (zero for fixed bodies and empty lanes). Their inverse
-    /// masses come with their rows (`SolverBody::state`'s eighth word), not in the bundle.
-    inv_i_a: L,
-    inv_i_b: L,
-    p: [PointLanes<L>; 2],
+    /// The contact spring ([`super::softness::Softness`]).
+    bias_rate: L,
+    mass_scale: L,
+    impulse_scale: L,
+    /// How far the spring has crept (m; `ContactConstraint::creep`).
+    creep: L,
 }
 
 /// What the store stage reads of a bundle beside its impulses, kept apart from it so that the

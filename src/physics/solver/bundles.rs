@@ -160,6 +160,32 @@ fn solve_plain<L: Wide, R: Rows + ?Sized>(
     }
 }
 
+/// The warm start of `bundles` of one list, with their `ledgers`: a list holds one kind, so
+/// one kernel copy runs them all (the first bundle's kind chooses it).
+#[inline(always)]
+fn warm_start_list<L: Wide, R: Rows + ?Sized>(
+    bundles: &mut [Bundle<L>],
+    ledgers: &mut [Ledger<L>],
+    rows: &mut R,
+) {
+    let single = bundles
+        .first()
+        .is_some_and(|b| b.kind == BundleKind::Single);
+    let bundles = bundles.iter_mut().zip(ledgers);
+    // (Loops, not `for_each`: a closure does not take the AVX2 compilation of the kernel it is
+    // called from, and once the warm start grew past the inliner's budget every lane operation
+    // in it became a call.)
+    if single {
+        for (bundle, ledger) in bundles {
+            bundle.warm_start::<1, R>(rows, ledger);
+        }
+    } else {
+        for (bundle, ledger) in bundles {
+            bundle.warm_start::<2, R>(rows, ledger);
+        }
+    }
+}
+
 /// Runs one block: [`run_block`] at a width, compiled for it.
 type BlockRun<L> = fn(Block<L>, BodyRows, Work, SideLanes<L>);
 
@@ -177,14 +203,7 @@ fn run_block<L: Wide>(
     let mut rows = rows;
     let rows = &mut rows;
     match work {
-        // (A loop, not `for_each`: a closure does not take the AVX2 compilation of the kernel
-        // it is called from, and once the warm start grew past the inliner's budget every lane
-        // operation in it became a call.)
-        Work::WarmStart => {
-            for (bundle, ledger) in bundles.iter_mut().zip(ledgers) {
-                bundle.warm_start(&mut *rows, ledger);
-            }
-        }
+        Work::WarmStart => warm_start_list(bundles, ledgers, rows),
         Work::Solve((kind, inv_h, push_out)) => {
             let (inv_h, push_out) = (L::splat(inv_h), L::splat(-push_out));
             let pass = Pass::new(inv_h, kind == PassKind::Biased, push_out);
@@ -416,9 +435,7 @@ impl<L: Wide> Packed<L> {
             let mut joints = joints;
             for (list, &slot) in self.packed.iter_mut().zip(&self.slots) {
                 before_colour(&mut joints, bodies, slot);
-                for (bundle, ledger) in list.bundles.iter_mut().zip(&mut list.ledgers) {
-                    bundle.warm_start(bodies, ledger);
-                }
+                warm_start_list(&mut list.bundles, &mut list.ledgers, bodies);
             }
         } else {
             for list in &mut self.packed {
@@ -846,10 +863,10 @@ fn put<L: Wide>(
         list.bundles.push(inert());
         list.ledgers.push(Ledger::empty());
     }
-    let bundle = list.bundles.last_mut().expect("a bundle is open");
-    bundle.set_contact(lane, c, k, bodies);
-    let ledger = list.ledgers.last_mut().expect("its ledger");
-    ledger.set(lane, (i as u32, c));
+    let (Some(bundle), Some(ledger)) = (list.bundles.last_mut(), list.ledgers.last_mut()) else {
+        unreachable!("a bundle is open, with its ledger");
+    };
+    bundle.set_contact((lane, ledger), (i as u32, c), k, bodies);
     if c.restitution != 0.0 {
         if bundle.bounce_index == NO_BOUNCE {
             bundle.bounce_index = bounces.len() as u32;

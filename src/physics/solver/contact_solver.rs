@@ -109,15 +109,11 @@ impl Rows for BodyRows<'_> {
 }
 
 /// Up to `L::WIDTH` contacts packed for the lanes. In declared order: what the warm start
-/// reads first, what the biased pass alone reads last.
+/// reads first, what the biased pass alone reads after the rest (the kind and side indices,
+/// which a list's passes look up once or not at all, at the end).
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 pub(crate) struct Bundle<L: Wide> {
-    pub kind: BundleKind,
-    /// Where the bundle's restitution lanes are ([`BounceLanes`]), or [`NO_BOUNCE`].
-    pub bounce_index: u32,
-    /// Where the bundle's rounding lanes are ([`RoundLanes`]), or [`NO_ROUNDING`].
-    pub round_index: u32,
     /// Solver-body indices of A and B per lane (the fixed dummy body for empty lanes).
     a: L::Index,
     b: L::Index,
@@ -143,6 +139,11 @@ pub(crate) struct Bundle<L: Wide> {
     impulse_scale: L,
     /// How far the spring has crept (m; `ContactConstraint::creep`).
     creep: L,
+    pub kind: BundleKind,
+    /// Where the bundle's restitution lanes are ([`BounceLanes`]), or [`NO_BOUNCE`].
+    pub bounce_index: u32,
+    /// Where the bundle's rounding lanes are ([`RoundLanes`]), or [`NO_ROUNDING`].
+    pub round_index: u32,
 }
 
 /// What the store stage reads of a bundle beside its impulses, kept apart from it so that the
@@ -165,16 +166,6 @@ impl<L: Wide> Ledger<L> {
         Ledger {
             contact: L::index_splat(u32::MAX),
             total_normal_impulse: [L::ZERO; 2],
-        }
-    }
-
-    /// Lane `lane` holds contact `c` (index `ci`), whose points begin the step with their
-    /// accumulated impulses.
-    #[inline(always)]
-    pub fn set(&mut self, lane: usize, (ci, c): (u32, &Contact)) {
-        self.contact.as_mut()[lane] = ci;
-        for (total, p) in self.total_normal_impulse.iter_mut().zip(c.live()) {
-            total.set_lane(lane, -p.normal_impulse);
         }
     }
 }
@@ -418,18 +409,19 @@ impl<L: Wide> Bundle<L> {
         }
     }
 
-    /// Write contact `c` with its constraint `k` into lane `lane` (its index and starting
-    /// impulses go in the bundle's [`Ledger`]). A contact
+    /// Write contact `c` (index `ci`) with its constraint `k` into lane `lane`, and into the
+    /// bundle's `ledger` its index and starting impulses. A contact
     /// without a usable block keeps the inert identity; a one-point contact leaves its second
     /// point's lanes zero (in a block bundle, all but a separation that never closes).
     #[inline(always)]
     pub fn set_contact(
         &mut self,
-        lane: usize,
-        c: &Contact,
+        (lane, ledger): (usize, &mut Ledger<L>),
+        (ci, c): (u32, &Contact),
         k: &ContactConstraint,
         bodies: &[SolverBody],
     ) {
+        ledger.contact.as_mut()[lane] = ci;
         self.a.as_mut()[lane] = c.a;
         self.b.as_mut()[lane] = c.b;
         let sf = k.softness;
@@ -470,7 +462,9 @@ impl<L: Wide> Bundle<L> {
             self.kind != BundleKind::Single || c.count == 1,
             "one point alone"
         );
-        for ((v, p), kp) in self.p.iter_mut().zip(c.live()).zip(&k.points) {
+        let points = self.p.iter_mut().zip(&mut ledger.total_normal_impulse);
+        for (((v, total), p), kp) in points.zip(c.live()).zip(&k.points) {
+            total.set_lane(lane, -p.normal_impulse);
             let arms = kp.arms;
             for (field, x) in [
                 (&mut v.a_cross_n, arms.a_cross_n),
@@ -510,19 +504,11 @@ impl<L: Wide> Bundle<L> {
         ((self.nx, self.ny), (self.ny, -self.nx))
     }
 
-    /// Warm start: apply each point's accumulated impulses (the start of a substep), and
-    /// count them in the step's total (`ledger`, the bundle's own).
+    /// Warm start: apply the first `N` points' accumulated impulses (the start of a substep;
+    /// `N` is 1 for [`BundleKind::Single`], else 2), and count them in the step's total
+    /// (`ledger`, the bundle's own).
     #[inline(always)]
-    pub fn warm_start<R: Rows + ?Sized>(&mut self, rows: &mut R, ledger: &mut Ledger<L>) {
-        match self.kind {
-            BundleKind::Single => self.warm_start_points::<1, R>(rows, ledger),
-            BundleKind::Block | BundleKind::Points => self.warm_start_points::<2, R>(rows, ledger),
-        }
-    }
-
-    /// [`Bundle::warm_start`] of the first `N` points.
-    #[inline(always)]
-    fn warm_start_points<const N: usize, R: Rows + ?Sized>(
+    pub fn warm_start<const N: usize, R: Rows + ?Sized>(
         &mut self,
         rows: &mut R,
         ledger: &mut Ledger<L>,

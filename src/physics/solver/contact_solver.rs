@@ -146,6 +146,11 @@ pub(crate) struct Bundle<L: Wide> {
     pub round_index: u32,
 }
 
+// Every solve pass streams the bundles: at eight lanes, 35 lane values, the two sides' body
+// indices and the header. A field added here costs every pass (docs/design.md).
+#[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+const _: () = assert!(std::mem::size_of::<Bundle<super::lanes::Lanes8>>() == 1152);
+
 /// What the store stage reads of a bundle beside its impulses, kept apart from it so that the
 /// solve passes, which read neither, do not stream it: the contact each lane holds, and what
 /// the step's substeps have applied along each point's normal.

@@ -742,6 +742,12 @@ impl ContactBundles {
         contacts >= self.singles_from.unwrap_or(SINGLES_FROM)
     }
 
+    /// The fewest items from which a stage is spread over the workers: `default`, or less
+    /// where a test lowered [`ContactBundles::share_from`].
+    pub fn shared_from(&self, default: usize) -> usize {
+        self.share_from.map_or(default, |n| n.min(default))
+    }
+
     /// Whether a solve of `constraints` contacts and joints is worth spreading over workers
     /// ([`SHARED_FROM`]).
     pub fn worth_sharing(&self, constraints: usize) -> bool {

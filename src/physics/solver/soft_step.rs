@@ -170,7 +170,7 @@ pub(crate) fn solve(ctx: &mut StepContext, effort: &Effort) {
 /// over `region`'s workers.
 fn stages(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     prepare_contacts(ctx, plan, region);
-    prepare_joints(ctx, plan);
+    prepare_joints(ctx, plan, region);
     substeps(ctx, plan, region);
     store_impulses(ctx, plan, region);
 }
@@ -287,10 +287,17 @@ fn prepare_shared(ctx: &mut StepContext, stiffness: &Stiffness, region: &Region)
 }
 
 /// Prepare the joints (`joint.rs`): springs, caps, impulses per substep.
-fn prepare_joints(ctx: &mut StepContext, plan: &Plan) {
+fn prepare_joints(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     if !ctx.joints.is_empty() {
-        joint::prepare(ctx.joints, ctx.joint_selected, plan.joints);
+        let region = joint_region(ctx, region);
+        joint::prepare(ctx.joints, ctx.joint_selected, plan.joints, region);
     }
+}
+
+/// `region`, if the selected joints are enough to spread their prepare and store over it.
+fn joint_region<'r>(ctx: &StepContext, region: Option<&'r Region<'r>>) -> Option<&'r Region<'r>> {
+    let n = ctx.joint_selected.count(ctx.joints.constraints.len());
+    region.filter(|_| n >= ctx.bundles.shared_from(joint::SHARED_JOINTS_FROM))
 }
 
 /// Warm start: apply each joint's and contact's accumulated impulses (zero them with warm
@@ -388,7 +395,13 @@ fn apply_restitution(ctx: &mut StepContext, region: Option<&Region>) {
 /// Store: each joint's and contact's impulses back into it, per step, and its load.
 fn store_impulses(ctx: &mut StepContext, plan: &Plan, region: Option<&Region>) {
     if !ctx.joints.is_empty() {
-        joint::store(ctx.joints, ctx.joint_selected, ctx.bodies, plan.joints);
+        joint::store(
+            ctx.joints,
+            ctx.joint_selected,
+            ctx.bodies,
+            plan.joints,
+            region,
+        );
     }
     let (substeps, inv_dt) = (plan.substeps as Real, 1.0 / ctx.dt);
     let then = |c: &mut Contact, ends: &[PointImpulses; 2]| finish(c, ends, substeps, inv_dt);

@@ -137,11 +137,7 @@ impl World {
         bp.sweep
             .find_pairs(&bp.proxies, &bp.pieces, &mut bp.pair_keys);
         // (Tests that lower the solve's threshold lower this one with it.)
-        let from = self
-            .solver
-            .bundles
-            .share_from
-            .map_or(SHARED_PAIRS_FROM, |n| n.min(SHARED_PAIRS_FROM));
+        let from = self.solver.bundles.shared_from(SHARED_PAIRS_FROM);
         let collided = match region {
             Some(region) if bp.pair_keys.len() >= from => {
                 self.collide_pairs(dt, region);

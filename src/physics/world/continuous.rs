@@ -65,11 +65,7 @@ impl World {
             place[slot as usize] = i as u32;
         }
         // (Tests that lower the solve's threshold lower this one with it.)
-        let from = self
-            .solver
-            .bundles
-            .share_from
-            .map_or(SHARED_IMPACTS_FROM, |n| n.min(SHARED_IMPACTS_FROM));
+        let from = self.solver.bundles.shared_from(SHARED_IMPACTS_FROM);
         match region {
             Some(region) if fast.len() >= from => {
                 self.pair_impacts_shared(region, &place, &mut hits)

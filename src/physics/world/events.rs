@@ -161,10 +161,7 @@ impl World {
     /// The fewest awake contacts for which the workers look at them for events.
     fn shared_events_from(&self) -> usize {
         // (Tests that lower the solve's threshold lower this one with it.)
-        self.solver
-            .bundles
-            .share_from
-            .map_or(SHARED_EVENTS_FROM, |n| n.min(SHARED_EVENTS_FROM))
+        self.solver.bundles.shared_from(SHARED_EVENTS_FROM)
     }
 
     /// `mark(c)` for every awake contact, by index, spread over `region`'s workers: what a
@@ -298,9 +295,6 @@ impl World {
     /// The fewest sensing bodies for which the workers look at them.
     pub(super) fn shared_sensors_from(&self) -> usize {
         // (Tests that lower the solve's threshold lower this one with it.)
-        self.solver
-            .bundles
-            .share_from
-            .map_or(SHARED_SENSORS_FROM, |n| n.min(SHARED_SENSORS_FROM))
+        self.solver.bundles.shared_from(SHARED_SENSORS_FROM)
     }
 }

@@ -6,9 +6,11 @@ use super::*;
 use crate::physics::broad_phase::pair_key;
 use crate::physics::joint::{Joint, JointDef, JointId, JointImpulses, JointKind};
 use crate::physics::solver::graph::UNCOLOURED;
-use crate::physics::solver::joint::{solve_rank, Frame, JointSet};
+use crate::physics::solver::joint::{solve_rank, Frame, JointSet, JointSource, SHARED_JOINTS_FROM};
+use crate::physics::team::{block, Region, SharedSlice};
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// One entry of the joint array: a joint, or a free slot remembering its generation.
 #[derive(Clone, Debug, Default)]
@@ -349,14 +351,15 @@ impl World {
     /// are at the start of the step, carrying last step's impulses, in the solve order of
     /// their colours. A joint whose island woke (or new) takes its colour here, in slot order.
     #[inline(never)]
-    pub(super) fn build_joint_constraints(&mut self) {
+    pub(super) fn build_joint_constraints(&mut self, region: Option<&Region>) {
         if !self.joints.sorted_kept {
             self.sort_awake_joints();
         }
         let fixed = self.solver.bodies.len() as u32 - 1;
         let mut constraints = std::mem::take(&mut self.joints.constraints);
-        constraints.clear();
-        for &slot in &self.joints.sorted {
+        let sorted = &self.joints.sorted;
+        let source = |k: usize| {
+            let slot = sorted[k];
             let j = self.joints.slots[slot as usize].joint.as_ref();
             let j = j.expect("listed live");
             let d = &j.def;
@@ -364,15 +367,25 @@ impl World {
             let b = self
                 .body(d.body_b)
                 .expect("joints of removed bodies are removed");
-            let ends = [solver_index(d.body_a, fixed), d.body_b.index];
-            let stiffness = (d.constraint_hertz, d.constraint_damping_ratio);
-            constraints.push(
-                (slot, ends, j.colour),
-                (&d.kind, rest_length(&d.kind)),
-                frame(d, a, b),
-                &j.impulses,
-                stiffness,
-            );
+            JointSource {
+                slot,
+                ends: [solver_index(d.body_a, fixed), d.body_b.index],
+                colour: j.colour,
+                kind: &d.kind,
+                length: rest_length(&d.kind),
+                frame: frame(d, a, b),
+                impulses: &j.impulses,
+                hertz: d.constraint_hertz,
+                zeta: d.constraint_damping_ratio,
+            }
+        };
+        let from = self.solver.bundles.shared_from(SHARED_JOINTS_FROM);
+        match region.filter(|_| sorted.len() >= from) {
+            Some(region) => constraints.build_shared(sorted.len(), region, &source),
+            None => {
+                constraints.clear();
+                (0..sorted.len()).for_each(|k| constraints.push(source(k)));
+            }
         }
         self.joints.constraints = constraints;
     }
@@ -422,15 +435,50 @@ impl World {
     /// joints whose force or torque passed their break force or torque are removed, in id
     /// order, and listed in [`World::broken_joints`].
     #[inline(never)]
-    pub(super) fn finish_joints(&mut self) {
+    pub(super) fn finish_joints(&mut self, region: Option<&Region>) {
         self.joints.broken.clear();
         self.joints.broken_loads.clear();
         let set = &self.joints.constraints;
-        for (index, k) in set.cold.iter().enumerate() {
-            let j = self.joints.slots[k.slot as usize].joint.as_mut();
-            let j = j.expect("constraints are of live joints");
+        // Whether any joint is past its breaking force or torque.
+        let overloaded = AtomicBool::new(false);
+        let finish = |index: usize, j: &mut Joint| {
+            let k = &set.cold[index];
             j.impulses = set.impulses(index);
             (j.force, j.torque) = (k.force, k.torque);
+            if j.overloaded() {
+                overloaded.store(true, Ordering::Relaxed);
+            }
+        };
+        let n = set.cold.len();
+        let from = self.solver.bundles.shared_from(SHARED_JOINTS_FROM);
+        match region.filter(|_| n >= from) {
+            Some(region) => {
+                // SAFETY: each constraint is of its own joint slot, and each block reaches
+                // only its constraints' slots.
+                let slots = unsafe { SharedSlice::new(&mut self.joints.slots) };
+                region.for_blocks(n.div_ceil(FINISHED_PER_BLOCK), &|b| {
+                    for index in block(b, FINISHED_PER_BLOCK, n) {
+                        // SAFETY: as above.
+                        let slot = unsafe { slots.get(set.cold[index].slot as usize) };
+                        finish(index, live(slot));
+                    }
+                });
+            }
+            None => {
+                for index in 0..n {
+                    finish(
+                        index,
+                        live(self.joints.slots.get_mut(set.cold[index].slot as usize)),
+                    );
+                }
+            }
+        }
+        if !overloaded.into_inner() {
+            return;
+        }
+        for k in &self.joints.constraints.cold {
+            let j = self.joints.slots[k.slot as usize].joint.as_ref();
+            let j = j.expect("constraints are of live joints");
             if j.overloaded() {
                 self.joints.broken.push(j.id);
             }
@@ -443,6 +491,15 @@ impl World {
         }
     }
 }
+
+/// The live joint of a slot a constraint names.
+fn live(slot: Option<&mut JointSlot>) -> &mut Joint {
+    let j = slot.and_then(|s| s.joint.as_mut());
+    j.expect("constraints are of live joints")
+}
+
+/// How many joints a worker finishes at a time.
+const FINISHED_PER_BLOCK: usize = 64;
 
 /// The definition with a missing reference angle or length taken from the bodies as they are
 /// (`a` None: the world).

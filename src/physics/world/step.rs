@@ -35,11 +35,7 @@ impl World {
         // they are in use (the step borrows the rest of the World).
         let mut workers = std::mem::take(&mut self.workers);
         // (Tests that lower the solve's threshold lower this one with it.)
-        let from = self
-            .solver
-            .bundles
-            .share_from
-            .map_or(SHARED_STEP_FROM, |n| n.min(SHARED_STEP_FROM));
+        let from = self.solver.bundles.shared_from(SHARED_STEP_FROM);
         // (Sensors query the tree even while everything else sleeps.)
         let share = self.broad_phase.sweep.active_count() >= from
             || self.bodies.asking.sensors >= self.shared_sensors_from();
@@ -77,7 +73,7 @@ impl World {
             self.load_solver_bodies();
             self.joints.constraints.clear();
             if self.joints.count > 0 {
-                self.build_joint_constraints();
+                self.build_joint_constraints(region);
             }
             self.solver.recovery.clear();
             match self.settings.solver {
@@ -91,7 +87,7 @@ impl World {
             self.joints.broken.clear();
             self.joints.broken_loads.clear();
             if !self.joints.constraints.is_empty() {
-                self.finish_joints();
+                self.finish_joints(region);
             }
             self.solve_continuous(region);
             if self.settings.enable_sleep {
@@ -128,7 +124,7 @@ impl World {
             hertz_scale: 1.0,
             cap: joint::JOINT_CAP,
         };
-        joint::prepare(joints, Selected::All, step);
+        joint::prepare(joints, Selected::All, step, None);
         joint::warm_start(joints, Selected::All, bodies);
         let inv_dt = 1.0 / dt;
         let solve_joints = |bodies: &mut [SolverBody]| {
@@ -142,7 +138,7 @@ impl World {
             dt,
             solve_joints,
         );
-        joint::store(joints, Selected::All, bodies, step);
+        joint::store(joints, Selected::All, bodies, step, None);
         let movers = (Moving::All, solver.kinematic.as_slice());
         integrate_positions(&mut solver.bodies, movers, (dt, limits), None);
         let (bodies, constraints) = (&mut solver.bodies, &solver.constraints);

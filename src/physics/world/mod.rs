@@ -214,6 +214,12 @@ struct BroadPhase {
     manifolds: Vec<crate::physics::collide::Manifold>,
     /// Where each block of `pair_keys`' contacts begin among last step's (and the end).
     found_from: Vec<usize>,
+    /// Whether each block is steady: its pairs' contacts are last step's, each updated in
+    /// place, and none of last step's in its run ended (the merge keeps them at once).
+    steady: Vec<bool>,
+    /// What adaptive stiffness reads of each contact updated in place, indexed like
+    /// `pair_keys`.
+    tier_found: Vec<tiers::TierInput>,
     /// The static bodies of several shapes, swept shape by shape (see [`Piece`]), by slot.
     pieced_slots: Vec<u32>,
     /// Their shapes' boxes for this step.

@@ -698,14 +698,19 @@ fn a_moving_pile_is_as_deep_as_a_resting_one() {
 /// go at the front, in the middle and at the end of the key order: a row of resting boxes on
 /// the floor; the first thrown up (its contact gone from the front while it flies, back when
 /// it lands), then removed; a box added in its freed slot (new contacts at the front), one
-/// dropped onto the middle of the row (new contacts in the middle) and the last thrown up
-/// (gone from the end). Each step's state is compared to the bit, and the in-place writing
-/// must have run.
+/// dropped onto the middle of the row (new contacts in the middle), the last thrown up (gone
+/// from the end) and one in the middle thrown so hard that its pair with the floor is gone in
+/// one step (a contact ended among pairs that all go on). The same on two workers, whose
+/// merge keeps a steady block of pairs (all last step's contacts, none ended) at once, in
+/// place and copying. Each step's state is
+/// compared to the bit, and the in-place writing and the steady blocks must have run.
 #[test]
 fn contacts_found_in_place_step_like_contacts_found_anew() {
-    let row = |copy: bool| {
+    let row = |copy: bool, workers: u32| {
         let mut w = awake_world_on_floor(40.0);
         w.contacts.copy_for_tests = copy;
+        w.set_workers(workers).unwrap();
+        w.solver.bundles.share_from = Some(0);
         let ids: Vec<BodyId> = (0..12)
             .map(|i| {
                 let centre = vec2(-11.0 + 2.0 * i as Real, 0.5);
@@ -715,11 +720,12 @@ fn contacts_found_in_place_step_like_contacts_found_anew() {
             .collect();
         (w, ids)
     };
-    let (mut in_place, ids) = row(false);
-    let (mut fresh, _) = row(true);
-    let mut kept_in_place = 0;
+    let ids = row(false, 1).1;
+    // In place and copying, on one worker and on two.
+    let mut worlds = [(false, 1), (true, 1), (false, 2), (true, 2)].map(|(c, n)| row(c, n).0);
+    let (mut kept_in_place, mut steady) = (0, [0; 2]);
     for step in 0..120 {
-        for w in [&mut in_place, &mut fresh] {
+        for w in &mut worlds {
             match step {
                 10 => w.apply_impulse(ids[0], vec2(0.0, 4.0)).unwrap(),
                 30 => drop(w.remove_body(ids[0]).unwrap()),
@@ -732,26 +738,37 @@ fn contacts_found_in_place_step_like_contacts_found_anew() {
                         .unwrap(),
                 ),
                 80 => w.apply_impulse(ids[11], vec2(0.0, 4.0)).unwrap(),
+                100 => w.apply_impulse(ids[5], vec2(0.0, 20.0)).unwrap(),
                 _ => {}
             }
         }
-        let previous = in_place.contacts.awake.as_ptr();
-        in_place.step(1.0 / 60.0).unwrap();
-        fresh.step(1.0 / 60.0).unwrap();
-        if in_place.contacts.awake.as_ptr() == previous {
+        let previous = worlds[0].contacts.awake.as_ptr();
+        for w in &mut worlds {
+            w.step(1.0 / 60.0).unwrap();
+        }
+        if worlds[0].contacts.awake.as_ptr() == previous {
             kept_in_place += 1;
         }
-        assert!(
-            in_place.state_bits().eq(fresh.state_bits()),
-            "step {step}: the states differ"
-        );
-        assert_eq!(
-            in_place.contacts.awake.len(),
-            fresh.contacts.awake.len(),
-            "step {step}"
-        );
+        for (count, w) in steady.iter_mut().zip(&worlds[2..]) {
+            *count += usize::from(w.broad_phase.steady == [true]);
+        }
+        for (k, w) in worlds.iter().enumerate().skip(1) {
+            assert!(
+                worlds[0].state_bits().eq(w.state_bits()),
+                "step {step}: world {k}'s state differs"
+            );
+            assert_eq!(
+                worlds[0].contacts.awake.len(),
+                w.contacts.awake.len(),
+                "step {step}, world {k}"
+            );
+        }
     }
     assert!(kept_in_place > 90, "in place {kept_in_place} of 120 steps");
+    assert!(
+        steady.iter().all(|&n| n > 60),
+        "steady blocks: {steady:?} of 120 steps"
+    );
 }
 
 /// Restitution acts only where a point pushed this step. A disc falls at 2 m/s onto a

@@ -552,6 +552,13 @@ pub(super) struct TierInput {
 }
 
 impl TierInput {
+    /// A placeholder, overwritten before it is read.
+    pub const NONE: TierInput = TierInput {
+        bodies: [0, 0],
+        load: 0.0,
+        unmeasured: false,
+    };
+
     /// The contact's inputs; `slop` is `Settings::linear_slop` (m).
     #[inline]
     pub fn of(c: &Contact, slop: Real) -> TierInput {

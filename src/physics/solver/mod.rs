@@ -28,7 +28,7 @@ use super::math::{Real, Rot, Vec2};
 use super::team::{block, Region, SharedSlice};
 
 /// How many bodies a worker integrates at a time in the parallel step.
-const BODIES_PER_BLOCK: usize = 256;
+pub(crate) const BODIES_PER_BLOCK: usize = 256;
 
 /// What a soft-step solve pass solves: the biased pass (normal and friction, with the soft
 /// bias), a relax pass (both, without), or a normal relax pass (the normal constraints only,
@@ -379,6 +379,17 @@ pub(crate) struct Kinematic {
     pub index: u32,
     pub v: Vec2,
     pub w: Real,
+}
+
+impl Kinematic {
+    /// The kinematic body in slot `index`, moving as its solver body `body` says.
+    pub fn of(index: usize, body: &SolverBody) -> Kinematic {
+        Kinematic {
+            index: index as u32,
+            v: body.v,
+            w: body.w,
+        }
+    }
 }
 
 /// Semi-implicit Euler, position half: x += h v, theta += h w (appendix eqs. 65-68),

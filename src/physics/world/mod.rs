@@ -271,6 +271,9 @@ struct SolverScratch {
     /// The bodies that moved far for their size this step, in slot order, and the fraction
     /// of the step each keeps (continuous collision).
     fast: Vec<u32>,
+    /// On workers: each slot's mark (a fast body at finalize, a moving kinematic one at load),
+    /// gathered in slot order once any is marked.
+    marks: Vec<bool>,
     fast_hits: Vec<Real>,
     /// Each slot's place in `fast`, or [`continuous::NOT_FAST`] (kept so between steps).
     fast_place: Vec<u32>,

@@ -6,7 +6,9 @@ use super::tiers::Tier;
 use super::*;
 use crate::physics::solver::joint::{self, JointConstraint, JointStep};
 use crate::physics::solver::soft_step::{self, StepContext};
-use crate::physics::team::Region;
+use crate::physics::solver::BODIES_PER_BLOCK;
+use crate::physics::team::{block, Region, SharedSlice};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Awake bodies (the broad phase's active list, kinematic bodies among them) from which a World
 /// with workers wakes them for a step: below, the step takes some tens of microseconds, about
@@ -70,7 +72,7 @@ impl World {
             if self.bodies.flagged > 0 {
                 self.find_hit_candidates(region);
             }
-            self.load_solver_bodies();
+            self.load_solver_bodies(region);
             self.joints.constraints.clear();
             if self.joints.count > 0 {
                 self.build_joint_constraints(region);
@@ -80,7 +82,7 @@ impl World {
                 SolverKind::Sequential => self.solve_sequential(dt),
                 SolverKind::SoftStep => self.solve_soft_step(dt, region),
             }
-            self.finalize_bodies();
+            self.finalize_bodies(region);
             if !self.events.hit_candidates.is_empty() {
                 self.confirm_hits();
             }
@@ -291,82 +293,161 @@ impl World {
 
     /// Copy what the solver needs into the compact solver array: awake dynamic bodies, and
     /// kinematic ones (infinite mass that moves: contacts see its velocity, nothing changes
-    /// it); everything else is fixed. Lists the kinematic bodies that move.
-    fn load_solver_bodies(&mut self) {
+    /// it); everything else is fixed. Lists the kinematic bodies that move. Spread over
+    /// `region`'s workers if given, in the blocks the integration takes.
+    fn load_solver_bodies(&mut self, region: Option<&Region>) {
         let g = self.gravity;
         let solver = &mut self.solver;
-        solver.bodies.clear();
         solver.kinematic.clear();
-        for (i, slot) in self.bodies.slots.iter().enumerate() {
-            let body = match &slot.body {
-                Some(b) if b.is_active() => SolverBody {
-                    v: b.linear_velocity,
-                    w: b.angular_velocity,
-                    inv_mass: b.inv_mass,
-                    inv_inertia: b.inv_inertia,
-                    accel: g + b.inv_mass * b.force,
-                    alpha: b.inv_inertia * b.torque,
-                    dp: Vec2::ZERO,
-                    dtheta: 0.0,
-                    dq: Rot::IDENTITY,
-                },
-                Some(b) if b.kinematic => {
-                    if b.is_moving_kinematic() {
-                        solver.kinematic.push(Kinematic {
-                            index: i as u32,
-                            v: b.linear_velocity,
-                            w: b.angular_velocity,
-                        });
-                    }
-                    SolverBody {
-                        v: b.linear_velocity,
-                        w: b.angular_velocity,
-                        ..SolverBody::FIXED
-                    }
+        let slots = &self.bodies.slots;
+        let Some(region) = region else {
+            solver.bodies.clear();
+            for (i, slot) in slots.iter().enumerate() {
+                let (body, moving) = solver_body(slot, g);
+                if moving {
+                    solver.kinematic.push(Kinematic::of(i, &body));
                 }
-                _ => SolverBody::FIXED,
-            };
-            solver.bodies.push(body);
+                solver.bodies.push(body);
+            }
+            // One more fixed body, last, for the empty lanes of bundles.
+            solver.bodies.push(SolverBody::FIXED);
+            return;
+        };
+        let n = slots.len();
+        // (Only new room is filled: every row is written below.)
+        solver.bodies.resize(n + 1, SolverBody::FIXED);
+        solver.bodies[n] = SolverBody::FIXED;
+        solver.marks.resize(n, false);
+        let any = AtomicBool::new(false);
+        // SAFETY: each block writes its own run of rows and marks.
+        let (rows, marks) = unsafe {
+            (
+                SharedSlice::new(&mut solver.bodies),
+                SharedSlice::new(&mut solver.marks),
+            )
+        };
+        region.for_blocks((n + 1).div_ceil(BODIES_PER_BLOCK), &|k| {
+            let run = block(k, BODIES_PER_BLOCK, n);
+            // SAFETY: as above.
+            let (rows, marks) = unsafe { (rows.range(run.clone()), marks.range(run.clone())) };
+            for ((row, mark), slot) in rows.iter_mut().zip(marks).zip(&slots[run]) {
+                let moving;
+                (*row, moving) = solver_body(slot, g);
+                *mark = moving;
+                if moving {
+                    any.store(true, Ordering::Relaxed);
+                }
+            }
+        });
+        if any.into_inner() {
+            let (bodies, marks) = (&solver.bodies, &solver.marks);
+            let moving = marks.iter().enumerate().filter(|(_, &m)| m);
+            solver
+                .kinematic
+                .extend(moving.map(|(i, _)| Kinematic::of(i, &bodies[i])));
         }
-        // One more fixed body, last, for the empty lanes of bundles.
-        solver.bodies.push(SolverBody::FIXED);
     }
 
     /// Finalize: write velocities and the step's motion back to the bodies the solver moved
     /// (awake dynamic ones, and kinematic ones by their own velocity); clear forces.
     /// The dynamic bodies that moved far for their size are listed for continuous collision.
-    fn finalize_bodies(&mut self) {
+    /// Spread over `region`'s workers if given, in the blocks the integration takes.
+    fn finalize_bodies(&mut self, region: Option<&Region>) {
         let max_speed = self.settings.max_linear_speed;
-        let fast = &mut self.solver.fast;
-        let slots = self.bodies.slots.iter_mut().zip(&self.solver.bodies);
-        for (i, (slot, sb)) in slots.enumerate() {
-            let Some(b) = slot.body.as_mut() else {
-                continue;
-            };
-            b.force = Vec2::ZERO;
-            b.torque = 0.0;
-            if b.is_active() {
-                // The relax passes after the last position update may leave a body faster
-                // than the cap, and a blown-apart joint (see `joint::store`) not finite.
-                b.linear_velocity = clamp_speed(sb.v, max_speed);
-                b.angular_velocity = if sb.w.is_finite() { sb.w } else { 0.0 };
-                let limit = FAST_FRACTION * b.min_extent;
-                // Turning moves the shape's core at most its reach (a disc's not at all).
-                let rounding = if b.compound().is_none() {
-                    b.shape.rounding()
-                } else {
-                    0.0
-                };
-                let core_reach = b.bounding_radius - rounding;
-                if moved_more_than(sb.dp, sb.dtheta, core_reach, limit) {
-                    fast.push(i as u32);
+        let (solver, slots) = (&mut self.solver, &mut self.bodies.slots);
+        let Some(region) = region else {
+            for (i, (slot, sb)) in slots.iter_mut().zip(&solver.bodies).enumerate() {
+                if finalize_body(slot, sb, max_speed) {
+                    solver.fast.push(i as u32);
                 }
-            } else if !b.is_moving_kinematic() {
-                continue;
             }
-            b.position += sb.dp;
-            b.angle += sb.dtheta;
-            b.rot = Rot::from_angle(b.angle);
+            return;
+        };
+        let n = slots.len();
+        solver.marks.resize(n, false);
+        let any = AtomicBool::new(false);
+        let rows = &solver.bodies;
+        // SAFETY: each block writes its own run of slots and marks.
+        let (shared_slots, marks) =
+            unsafe { (SharedSlice::new(slots), SharedSlice::new(&mut solver.marks)) };
+        region.for_blocks((n + 1).div_ceil(BODIES_PER_BLOCK), &|k| {
+            let run = block(k, BODIES_PER_BLOCK, n);
+            // SAFETY: as above.
+            let (slots, marks) =
+                unsafe { (shared_slots.range(run.clone()), marks.range(run.clone())) };
+            for ((slot, mark), sb) in slots.iter_mut().zip(marks).zip(&rows[run]) {
+                *mark = finalize_body(slot, sb, max_speed);
+                if *mark {
+                    any.store(true, Ordering::Relaxed);
+                }
+            }
+        });
+        if any.into_inner() {
+            let fast = solver.marks.iter().enumerate().filter(|(_, &m)| m);
+            solver.fast.extend(fast.map(|(i, _)| i as u32));
         }
     }
+}
+
+/// Slot `slot`'s solver body under gravity `g`, and whether it is a kinematic body that moves.
+#[inline]
+fn solver_body(slot: &Slot, g: Vec2) -> (SolverBody, bool) {
+    match &slot.body {
+        Some(b) if b.is_active() => {
+            let body = SolverBody {
+                v: b.linear_velocity,
+                w: b.angular_velocity,
+                inv_mass: b.inv_mass,
+                inv_inertia: b.inv_inertia,
+                accel: g + b.inv_mass * b.force,
+                alpha: b.inv_inertia * b.torque,
+                dp: Vec2::ZERO,
+                dtheta: 0.0,
+                dq: Rot::IDENTITY,
+            };
+            (body, false)
+        }
+        Some(b) if b.kinematic => {
+            let body = SolverBody {
+                v: b.linear_velocity,
+                w: b.angular_velocity,
+                ..SolverBody::FIXED
+            };
+            (body, b.is_moving_kinematic())
+        }
+        _ => (SolverBody::FIXED, false),
+    }
+}
+
+/// Finalize slot `slot`'s body from its solver body `sb`; whether it moved far for its size
+/// this step (a dynamic body, for continuous collision).
+#[inline]
+fn finalize_body(slot: &mut Slot, sb: &SolverBody, max_speed: Real) -> bool {
+    let Some(b) = slot.body.as_mut() else {
+        return false;
+    };
+    b.force = Vec2::ZERO;
+    b.torque = 0.0;
+    let mut fast = false;
+    if b.is_active() {
+        // The relax passes after the last position update may leave a body faster than the
+        // cap, and a blown-apart joint (see `joint::store`) not finite.
+        b.linear_velocity = clamp_speed(sb.v, max_speed);
+        b.angular_velocity = if sb.w.is_finite() { sb.w } else { 0.0 };
+        let limit = FAST_FRACTION * b.min_extent;
+        // Turning moves the shape's core at most its reach (a disc's not at all).
+        let rounding = if b.compound().is_none() {
+            b.shape.rounding()
+        } else {
+            0.0
+        };
+        let core_reach = b.bounding_radius - rounding;
+        fast = moved_more_than(sb.dp, sb.dtheta, core_reach, limit);
+    } else if !b.is_moving_kinematic() {
+        return false;
+    }
+    b.position += sb.dp;
+    b.angle += sb.dtheta;
+    b.rot = Rot::from_angle(b.angle);
+    fast
 }

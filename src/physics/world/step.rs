@@ -152,7 +152,7 @@ impl World {
     /// apart with their tier's work (`tiers.rs`); the rest, usually everything, in one solve.
     fn solve_soft_step(&mut self, dt: Real, region: Option<&Region>) {
         let top = if self.settings.adaptive_stiffness {
-            self.assign_tiers()
+            self.assign_tiers(region)
         } else {
             Tier::Base
         };

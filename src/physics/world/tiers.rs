@@ -9,6 +9,7 @@ use super::*;
 use crate::physics::shape::Aabb;
 use crate::physics::solver::joint::JOINT_CAP;
 use crate::physics::solver::soft_step::Effort;
+use crate::physics::team::{block, Region, SharedSlice};
 
 /// A stiffness tier, in order of the work it does.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
@@ -214,9 +215,9 @@ impl World {
     /// `extreme_mass_ratio` apart for [`Tier::Extreme`], where the light body carries the heavy
     /// one's weight and no joint holds the heavy one to a fixed body. Fills `contact_tier` and
     /// `body_tier`; returns the highest tier.
-    pub(super) fn assign_tiers(&mut self) -> Tier {
+    pub(super) fn assign_tiers(&mut self, region: Option<&Region>) -> Tier {
         self.mark_anchored();
-        let need = self.contact_needs().max(self.joint_needs());
+        let need = self.contact_needs(region).max(self.joint_needs());
         if need == Tier::Base {
             return Tier::Base;
         }
@@ -291,16 +292,8 @@ impl World {
 
     /// What each contact asks of its island before the island's shape is known, into
     /// `contact_tier` (and each contact's bodies into `islands.contact_bodies`); the most any
-    /// asks.
-    fn contact_needs(&mut self) -> Tier {
-        let g = self.gravity.length();
-        // (Multiplied by, not divided by, per contact: the two divisions a contact took were a
-        // sixth of this stage.)
-        let per_g = 1.0 / g.max(1e-3);
-        let (stiff, extreme) = (
-            self.settings.stiff_load_ratio,
-            self.settings.extreme_mass_ratio,
-        );
+    /// asks. Spread over `region`'s workers if given: each contact's need is its own.
+    fn contact_needs(&mut self, region: Option<&Region>) -> Tier {
         if self.tiers.inputs.len() != self.contacts.awake.len() {
             // Contacts joined since they were found (an island woke): read them all again.
             let slop = self.settings.linear_slop;
@@ -310,62 +303,57 @@ impl World {
                 .inputs
                 .extend(awake.iter().map(|c| TierInput::of(c, slop)));
         }
-        self.tiers.contact_tier.clear();
-        self.tiers.driven.clear();
-        self.islands.contact_bodies.clear();
-        let mut top = Tier::Base;
-        // Up, against gravity (none without gravity: nothing rests on anything then).
-        let up = if g > 1e-3 {
-            -self.gravity / g
-        } else {
-            Vec2::ZERO
+        // (Tests that lower the solve's threshold lower this one with it.)
+        let from = self.solver.bundles.shared_from(SHARED_NEEDS_FROM);
+        let (tiers, islands) = (&mut self.tiers, &mut self.islands);
+        let (inputs, n) = (&tiers.inputs, tiers.inputs.len());
+        let asks = Asks::new(&self.settings, self.gravity);
+        let (bodies, contacts) = (&self.solver.bodies, &self.contacts.awake);
+        let anchored = &tiers.anchored;
+        // Contacts `run`'s needs, whether each is driven and their pairs, into the three.
+        let fill = |run: std::ops::Range<usize>, (needs, driven, pairs): Needs| {
+            let out = needs.iter_mut().zip(driven.iter_mut().zip(pairs));
+            for (k, (need, (is_driven, pair))) in run.zip(out) {
+                let input = &inputs[k];
+                (*need, *is_driven, *pair) = asks.of(k, input, (bodies, contacts), anchored);
+            }
         };
-        for (k, input) in self.tiers.inputs.iter().enumerate() {
-            let [a, b] = input.bodies;
-            let inv_mass = |i: u32| self.solver.bodies[i as usize].inv_mass;
-            // Inverse masses: the lighter body has the larger one; static bodies have zero.
-            let (ma, mb) = (inv_mass(a), inv_mass(b));
-            let (light_inv, heavy_inv) = (ma.max(mb), ma.min(mb));
-            let load = if light_inv > 0.0 {
-                input.load * light_inv * per_g
-            } else {
-                0.0
-            };
-            // The masses' ratio light_inv / heavy_inv reaches `stiff` (rarely): divided then.
-            let ratio_stiff = heavy_inv > 0.0 && light_inv >= stiff * heavy_inv;
-            // (The contact's normal is read only for such a pair: rare, and kept out of the
-            // 16 bytes read for every contact. None if the inputs no longer line up with the
-            // contacts.)
-            let normal = || match self.contacts.awake.get(k) {
-                Some(c) if [c.a, c.b] == input.bodies => c.normal,
-                _ => Vec2::ZERO,
-            };
-            // (Read only for such a pair, as the normal is.)
-            let anchored = || {
-                let heavy = if mb <= ma { b } else { a };
-                self.tiers.anchored.get(heavy as usize) == Some(&true)
-            };
-            let masses =
-                if ratio_stiff && !anchored() && carries_heavy(input, (ma, mb), (up, normal), g) {
-                    light_inv / heavy_inv
-                } else {
-                    0.0
+        // (Only new room is filled: every entry is written below.)
+        tiers.contact_tier.resize(n, Tier::Base);
+        tiers.driven.resize(n, false);
+        islands.contact_bodies.resize(n, [0, 0]);
+        let outputs = (
+            &mut tiers.contact_tier[..],
+            &mut tiers.driven[..],
+            &mut islands.contact_bodies[..],
+        );
+        match region.filter(|_| n >= from) {
+            None => fill(0..n, outputs),
+            Some(region) => {
+                // SAFETY: each block writes its own run of each.
+                let (needs, driven, pairs) = unsafe {
+                    (
+                        SharedSlice::new(outputs.0),
+                        SharedSlice::new(outputs.1),
+                        SharedSlice::new(outputs.2),
+                    )
                 };
-            let need = need_of((load, masses, input.unmeasured), g, (stiff, extreme));
-            top = top.max(need);
-            // A moving kinematic body (inverse mass 0, but a velocity) pushes or carries.
-            let moving = |i: u32| {
-                let s = &self.solver.bodies[i as usize];
-                s.inv_mass == 0.0 && (s.v != Vec2::ZERO || s.w != 0.0)
-            };
-            let driven = need >= Tier::Stack && (moving(a) || moving(b));
-            self.tiers.driven.push(driven);
-            self.tiers.contact_tier.push(need);
-            self.islands
-                .contact_bodies
-                .push(island_pair(input.bodies, (ma, mb)));
+                region.for_blocks(n.div_ceil(NEEDS_PER_BLOCK), &|b| {
+                    let run = block(b, NEEDS_PER_BLOCK, n);
+                    // SAFETY: as above.
+                    let out = unsafe {
+                        (
+                            needs.range(run.clone()),
+                            driven.range(run.clone()),
+                            pairs.range(run.clone()),
+                        )
+                    };
+                    fill(run, out);
+                });
+            }
         }
-        top
+        let needs = self.tiers.contact_tier.iter().copied();
+        needs.max().unwrap_or(Tier::Base)
     }
 
     /// Islands by union-find over the contacts between awake dynamic bodies; each island's
@@ -567,6 +555,96 @@ impl TierInput {
             load: c.load,
             unmeasured: c.age < NEW_CONTACT_STEPS && c.live().iter().any(|p| p.separation <= slop),
         }
+    }
+}
+
+/// The fewest contacts whose needs are found on the workers...
+const SHARED_NEEDS_FROM: usize = 1024;
+/// ...and how many a worker takes at a time.
+const NEEDS_PER_BLOCK: usize = 512;
+
+/// A run of contacts' needs, whether each is driven, and their pairs of bodies.
+type Needs<'a> = (&'a mut [Tier], &'a mut [bool], &'a mut [[u32; 2]]);
+
+/// What a contact's need reads besides the contact: the settings and gravity, worked out once
+/// a step.
+struct Asks {
+    /// g (m/s^2) and its inverse (none below 1e-3).
+    g: Real,
+    per_g: Real,
+    stiff: Real,
+    extreme: Real,
+    /// Up, against gravity (none without gravity: nothing rests on anything then).
+    up: Vec2,
+}
+
+impl Asks {
+    fn new(settings: &Settings, gravity: Vec2) -> Asks {
+        let g = gravity.length();
+        Asks {
+            g,
+            // (Multiplied by, not divided by, per contact: the two divisions a contact took
+            // were a sixth of this stage.)
+            per_g: 1.0 / g.max(1e-3),
+            stiff: settings.stiff_load_ratio,
+            extreme: settings.extreme_mass_ratio,
+            up: if g > 1e-3 { -gravity / g } else { Vec2::ZERO },
+        }
+    }
+
+    /// Contact `k`'s need (its `input`), whether a moving kinematic body drives it, and its
+    /// pair of bodies for the islands; `anchored` as `TierScratch::anchored`.
+    #[inline(always)]
+    fn of(
+        &self,
+        k: usize,
+        input: &TierInput,
+        (bodies, contacts): (&[SolverBody], &[Contact]),
+        anchored: &[bool],
+    ) -> (Tier, bool, [u32; 2]) {
+        let [a, b] = input.bodies;
+        let inv_mass = |i: u32| bodies[i as usize].inv_mass;
+        // Inverse masses: the lighter body has the larger one; static bodies have zero.
+        let (ma, mb) = (inv_mass(a), inv_mass(b));
+        let (light_inv, heavy_inv) = (ma.max(mb), ma.min(mb));
+        let load = if light_inv > 0.0 {
+            input.load * light_inv * self.per_g
+        } else {
+            0.0
+        };
+        // The masses' ratio light_inv / heavy_inv reaches `stiff` (rarely): divided then.
+        let ratio_stiff = heavy_inv > 0.0 && light_inv >= self.stiff * heavy_inv;
+        // (The contact's normal is read only for such a pair: rare, and kept out of the
+        // 16 bytes read for every contact. None if the inputs no longer line up with the
+        // contacts.)
+        let normal = || match contacts.get(k) {
+            Some(c) if [c.a, c.b] == input.bodies => c.normal,
+            _ => Vec2::ZERO,
+        };
+        // (Read only for such a pair, as the normal is.)
+        let anchored = || {
+            let heavy = if mb <= ma { b } else { a };
+            anchored.get(heavy as usize) == Some(&true)
+        };
+        let g = self.g;
+        let masses =
+            if ratio_stiff && !anchored() && carries_heavy(input, (ma, mb), (self.up, normal), g) {
+                light_inv / heavy_inv
+            } else {
+                0.0
+            };
+        let need = need_of(
+            (load, masses, input.unmeasured),
+            g,
+            (self.stiff, self.extreme),
+        );
+        // A moving kinematic body (inverse mass 0, but a velocity) pushes or carries.
+        let moving = |i: u32| {
+            let s = &bodies[i as usize];
+            s.inv_mass == 0.0 && (s.v != Vec2::ZERO || s.w != 0.0)
+        };
+        let driven = need >= Tier::Stack && (moving(a) || moving(b));
+        (need, driven, island_pair(input.bodies, (ma, mb)))
     }
 }
 

@@ -35,6 +35,7 @@
 
 use super::math::Real;
 use super::shape::Aabb;
+use super::team::{block, Region, SharedSlice};
 
 /// What the broad phase needs to know about one body slot.
 #[derive(Clone, Copy, Debug)]
@@ -56,6 +57,31 @@ pub(crate) struct Piece {
 pub(crate) fn pair_key(a: u32, b: u32) -> u64 {
     let (lo, hi) = if a < b { (a, b) } else { (b, a) };
     (lo as u64) << 32 | hi as u64
+}
+
+/// How many items a worker marks at a time.
+const MARKED_PER_BLOCK: usize = 1024;
+
+/// `marks[i] = test(&items[i])` for every item, in blocks spread over `region`'s workers.
+fn mark_shared<T: Sync>(
+    region: &Region,
+    items: &[T],
+    marks: &mut Vec<bool>,
+    test: &(dyn Fn(&T) -> bool + Sync),
+) {
+    let n = items.len();
+    // (Only new room is filled: every mark is written below.)
+    marks.resize(n, false);
+    // SAFETY: each block writes its own run of marks.
+    let shared = unsafe { SharedSlice::new(marks) };
+    region.for_blocks(n.div_ceil(MARKED_PER_BLOCK), &|k| {
+        let run = block(k, MARKED_PER_BLOCK, n);
+        // SAFETY: as above.
+        let marks = unsafe { shared.range(run.clone()) };
+        for (mark, item) in marks.iter_mut().zip(&items[run]) {
+            *mark = test(item);
+        }
+    });
 }
 
 /// The two slot indices of a pair key, lower first.
@@ -97,6 +123,9 @@ pub(crate) struct SweepAndPrune {
     /// Scratch for `find_pairs`: the slots outside their fat boxes, and a flag per slot.
     outside: Vec<u32>,
     outside_flag: Vec<bool>,
+    /// Scratch for `find_pairs` on workers: a mark per body of the lists (outside its fat
+    /// box) or per kept pair (its boxes overlap), gathered in order on one thread.
+    marks: Vec<bool>,
     /// Scratch for `update`: the moved bodies' boxes and their new pairs.
     moved_boxes: Vec<SortedBox>,
     new_pairs: Vec<u64>,
@@ -238,32 +267,24 @@ impl SweepAndPrune {
     /// overlap, sorted ascending. `proxies` is indexed by slot; `pieces` are the shapes of the
     /// static bodies swept shape by shape, by slot (a pair with one of them is kept where a
     /// piece's fat box meets the other body's and their whole boxes overlap).
-    pub fn find_pairs(&mut self, proxies: &[Proxy], pieces: &[Piece], out: &mut Vec<u64>) {
+    pub fn find_pairs(
+        &mut self,
+        proxies: &[Proxy],
+        pieces: &[Piece],
+        out: &mut Vec<u64>,
+        region: Option<&Region>,
+    ) {
         out.clear();
         if self.active_is_empty() {
             return;
         }
         self.flag_pieced(proxies.len(), pieces);
-        let inside = |i: &u32| {
-            let (tight, fat) = (&proxies[*i as usize].aabb, &self.fat[*i as usize]);
-            fat.min.x <= tight.min.x
-                && fat.min.y <= tight.min.y
-                && tight.max.x <= fat.max.x
-                && tight.max.y <= fat.max.y
-        };
         self.outside.clear();
         let kept = self.fat_valid && self.fat.len() == proxies.len();
         // More than this many outside and the whole sweep runs: the count stops there.
         let most = self.active.len() / UPDATE_FRACTION;
         if kept {
-            for &i in self.active.iter().chain(&self.passive) {
-                if !inside(&i) {
-                    self.outside.push(i);
-                    if self.outside.len() > most {
-                        break;
-                    }
-                }
-            }
+            self.find_outside(proxies, most, region);
         }
         // A body swept by pieces that grew (the margins changed) is swept again whole.
         let pieced = &self.pieced;
@@ -280,10 +301,47 @@ impl SweepAndPrune {
         } else if !self.outside.is_empty() {
             self.update(proxies);
         }
-        out.extend(self.fat_pairs.iter().copied().filter(|&key| {
-            let (a, b) = pair_of(key);
+        let overlap = |key: &u64| {
+            let (a, b) = pair_of(*key);
             proxies[a as usize].aabb.overlaps(&proxies[b as usize].aabb)
-        }));
+        };
+        let pairs = &self.fat_pairs;
+        match region {
+            None => out.extend(pairs.iter().copied().filter(overlap)),
+            Some(region) => {
+                mark_shared(region, pairs, &mut self.marks, &overlap);
+                let kept = pairs.iter().zip(&self.marks).filter(|(_, &m)| m);
+                out.extend(kept.map(|(&key, _)| key));
+            }
+        }
+    }
+
+    /// Into `outside`, the first `most + 1` bodies of the lists (active, then passive) whose
+    /// boxes left their fat boxes.
+    fn find_outside(&mut self, proxies: &[Proxy], most: usize, region: Option<&Region>) {
+        let fat = &self.fat;
+        let left = |i: &u32| {
+            let (tight, fat) = (&proxies[*i as usize].aabb, &fat[*i as usize]);
+            !(fat.min.x <= tight.min.x
+                && fat.min.y <= tight.min.y
+                && tight.max.x <= fat.max.x
+                && tight.max.y <= fat.max.y)
+        };
+        let Some(region) = region else {
+            let all = self.active.iter().chain(&self.passive);
+            self.outside
+                .extend(all.filter(|i| left(i)).take(most + 1).copied());
+            return;
+        };
+        // The active list, then the passive one (whose boxes do not move: few leave).
+        mark_shared(region, &self.active, &mut self.marks, &left);
+        let marked = self.active.iter().zip(&self.marks).filter(|(_, &m)| m);
+        self.outside.extend(marked.take(most + 1).map(|(&i, _)| i));
+        if self.outside.len() <= most {
+            let rest = most + 1 - self.outside.len();
+            let passive = self.passive.iter().filter(|i| left(i));
+            self.outside.extend(passive.take(rest).copied());
+        }
     }
 
     /// Flag the slots swept by `pieces` (a world without any skips this).
@@ -791,19 +849,19 @@ mod tests {
             sap.insert(i, true);
         }
         let mut out = Vec::new();
-        sap.find_pairs(&proxies, &[], &mut out);
+        sap.find_pairs(&proxies, &[], &mut out, None);
         let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
         assert_eq!(pairs, vec![(0, 1), (0, 3), (0, 4), (1, 5)]);
 
         // Body 1 falls asleep: its pair with the passive 5 is no longer examined.
         sap.set_passive(&[1], true);
-        sap.find_pairs(&proxies, &[], &mut out);
+        sap.find_pairs(&proxies, &[], &mut out, None);
         let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
         assert_eq!(pairs, vec![(0, 1), (0, 3), (0, 4)]);
 
         // Everything asleep: nothing at all.
         sap.set_passive(&[0, 2], true);
-        sap.find_pairs(&proxies, &[], &mut out);
+        sap.find_pairs(&proxies, &[], &mut out, None);
         assert!(out.is_empty());
     }
 
@@ -870,7 +928,7 @@ mod tests {
         }
         let mut out = Vec::new();
         for round in 0..6 {
-            sap.find_pairs(&proxies, &[], &mut out);
+            sap.find_pairs(&proxies, &[], &mut out, None);
             let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
             let expected = brute_force(&proxies, &active, &alive);
             assert!(
@@ -1038,7 +1096,7 @@ mod tests {
                     sap.insert(gone[0] as u32, !active[gone[0]]);
                 }
             }
-            sap.find_pairs(&proxies, &[], &mut out);
+            sap.find_pairs(&proxies, &[], &mut out, None);
             let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
             assert_eq!(pairs, brute_force(&proxies, &active, &alive), "step {step}");
         }
@@ -1090,7 +1148,7 @@ mod tests {
                 p.aabb.min += d;
                 p.aabb.max += d;
             }
-            sap.find_pairs(&proxies, &pieces, &mut out);
+            sap.find_pairs(&proxies, &pieces, &mut out, None);
             let pairs: Vec<_> = out.iter().map(|&k| pair_of(k)).collect();
             let mut expected = brute_force(&proxies, &active, &alive);
             expected.retain(|&(a, b)| {

@@ -137,7 +137,7 @@ impl World {
         self.update_proxies(dt, region);
         let bp = &mut self.broad_phase;
         bp.sweep
-            .find_pairs(&bp.proxies, &bp.pieces, &mut bp.pair_keys);
+            .find_pairs(&bp.proxies, &bp.pieces, &mut bp.pair_keys, region);
         // (Tests that lower the solve's threshold lower this one with it.)
         let from = self.solver.bundles.shared_from(SHARED_PAIRS_FROM);
         let collided = match region {

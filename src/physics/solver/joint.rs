@@ -127,7 +127,8 @@ pub(crate) struct JointCold {
     soft: Softness,
     /// The point block's pull and largest force (N).
     point: Option<(Pull, Real)>,
-    /// The force (N) and torque (N m) on B at the end of the solve.
+    /// The force (N) and torque (N m) on B at the end of the solve (the force: last step's
+    /// until the store).
     pub force: Vec2,
     pub torque: Real,
 }
@@ -345,6 +346,8 @@ pub(crate) struct JointSource<'a> {
     pub frame: Frame,
     /// Last step's impulses.
     pub impulses: &'a JointImpulses,
+    /// Last step's force on B (N).
+    pub force: Vec2,
     /// Its rigid rows' stiffness (Hz) and damping ratio.
     pub hertz: Real,
     pub zeta: Real,
@@ -377,7 +380,7 @@ impl JointSource<'_> {
             zeta: self.zeta,
             soft: Softness::RIGID,
             point,
-            force: Vec2::ZERO,
+            force: self.force,
             torque: 0.0,
         };
         (constraint, cold)

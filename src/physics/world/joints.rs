@@ -375,6 +375,7 @@ impl World {
                 length: rest_length(&d.kind),
                 frame: frame(d, a, b),
                 impulses: &j.impulses,
+                force: j.force,
                 hertz: d.constraint_hertz,
                 zeta: d.constraint_damping_ratio,
             }

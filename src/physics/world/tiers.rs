@@ -280,8 +280,9 @@ impl World {
                 self.tiers.joint_needs.push(k.b);
                 top = Tier::Extreme;
             }
-            let joint = self.joints.slots[cold.slot as usize].joint.as_ref();
-            let force = joint.map_or(0.0, |j| j.force.length());
+            // (Last step's, carried by the constraint: reading it from the joint's slot was a
+            // cache miss per joint.)
+            let force = cold.force.length();
             // The lighter body's weight is g / its inverse mass.
             if g > 1e-3 && force * ma.max(mb) >= stiff * g {
                 self.tiers.joint_loaded.push(k.b);

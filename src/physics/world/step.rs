@@ -73,9 +73,11 @@ impl World {
                 self.find_hit_candidates(region);
             }
             self.load_solver_bodies(region);
-            self.joints.constraints.clear();
+            // (The build replaces last step's constraints; on workers it fills only new room.)
             if self.joints.count > 0 {
                 self.build_joint_constraints(region);
+            } else {
+                self.joints.constraints.clear();
             }
             self.solver.recovery.clear();
             match self.settings.solver {

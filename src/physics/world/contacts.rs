@@ -212,7 +212,7 @@ impl World {
                     tier_found.range(run.clone()),
                 )
             };
-            let (mut at, mut in_place) = (0, 0);
+            let (mut at, mut in_place, mut fresh) = (0, 0, false);
             let pairs_found = found.iter_mut().zip(manifolds).zip(tier_found);
             for (&key, ((f, m), t)) in keys[run.clone()].iter().zip(pairs_found) {
                 *f = if sorting && !(filters_allow(key, bodies) && joints.may_collide(key)) {
@@ -220,14 +220,18 @@ impl World {
                 } else {
                     pairs.collide_first(key, (old, &mut at), m)
                 };
-                if *f == Found::InPlace as u8 {
+                let kind = *f & !(WAKE_A | WAKE_B);
+                if kind == Found::InPlace as u8 {
                     *t = TierInput::of(&old[at], slop);
                     in_place += 1;
                 }
+                fresh |= kind == Found::Fresh as u8 || kind == Found::Parts as u8;
             }
+            // Steady: nothing for the merge to make, and every one of last step's contacts in
+            // the run is one of the pairs' made in place (each such pair has its own), so none
+            // ended. (Pairs with nothing to keep may come between.)
             // SAFETY: as above.
-            *unsafe { steady.get(k) }.expect("a block's flag") =
-                in_place == run.len() && old.len() == run.len();
+            *unsafe { steady.get(k) }.expect("a block's flag") = !fresh && in_place == old.len();
         });
     }
 
@@ -309,10 +313,17 @@ impl World {
             for (k, run) in keys.chunks(PAIRS_PER_BLOCK).enumerate() {
                 let start = k * PAIRS_PER_BLOCK;
                 if broad_phase.steady[k] {
-                    merge.seek(contacts, (run[0], 0));
-                    merge.keep_run(contacts, run.len());
-                    let found = &broad_phase.tier_found[start..start + run.len()];
-                    tiers.inputs.extend_from_slice(found);
+                    let found = &broad_phase.found[start..start + run.len()];
+                    let kept = |p: &usize| found[*p - start] == Found::InPlace as u8;
+                    let mut kept_pairs = (start..start + run.len()).filter(kept);
+                    if let Some(first) = kept_pairs.next() {
+                        merge.seek(contacts, (keys[first], 0));
+                        let inputs = std::iter::once(first).chain(kept_pairs);
+                        let inputs = inputs.map(|p| broad_phase.tier_found[p]);
+                        let before = tiers.inputs.len();
+                        tiers.inputs.extend(inputs);
+                        merge.keep_run(contacts, tiers.inputs.len() - before);
+                    }
                     continue;
                 }
                 for (p, &key) in (start..).zip(run) {

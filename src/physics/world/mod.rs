@@ -215,7 +215,8 @@ struct BroadPhase {
     /// Where each block of `pair_keys`' contacts begin among last step's (and the end).
     found_from: Vec<usize>,
     /// Whether each block is steady: its pairs' contacts are last step's, each updated in
-    /// place, and none of last step's in its run ended (the merge keeps them at once).
+    /// place, none of last step's in its run ended, and no pair begins one (the merge keeps
+    /// them at once).
     steady: Vec<bool>,
     /// What adaptive stiffness reads of each contact updated in place, indexed like
     /// `pair_keys`.

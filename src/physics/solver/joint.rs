@@ -634,11 +634,12 @@ pub(crate) const SHARED_JOINTS_FROM: usize = 256;
 
 /// Run `f` on every selected joint with its cold part and rows: on this thread, or spread
 /// over `region`'s workers in blocks (each joint touches only its own parts).
+#[inline(always)]
 fn for_each_joint(
     set: &mut JointSet,
     selected: Selected,
     region: Option<&Region>,
-    f: &(dyn Fn(&mut JointConstraint, &mut JointCold, &mut [Row]) + Sync),
+    f: &(impl Fn(&mut JointConstraint, &mut JointCold, &mut [Row]) + Sync),
 ) {
     let n = selected.count(set.constraints.len());
     let JointSet {

@@ -49,6 +49,22 @@ enum Found {
     Nothing,
 }
 
+/// What the workers found for one pair of shapes of a pair of bodies of several shapes
+/// ([`PairInput::collide_parts_first`]), for the merge to write in order
+/// ([`PairInput::update_found`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PartFound {
+    /// The pair of bodies, and their shapes as `i << 16 | j`.
+    key: u64,
+    shapes: u32,
+    /// Whether last step's contact of these shapes recycles `manifold`; else `manifold` is
+    /// fresh (no points: none).
+    recycled: bool,
+    manifold: Manifold,
+    /// The bodies it wakes ([`WAKE_A`], [`WAKE_B`]).
+    wakes: u8,
+}
+
 /// Where the contacts of pair `key` and after begin among `old` (in pair order), reading
 /// only their keys and shapes.
 ///
@@ -173,6 +189,11 @@ impl World {
         let blocks = n.div_ceil(PAIRS_PER_BLOCK);
         broad_phase.found_from.resize(blocks + 1, 0);
         broad_phase.steady.resize(blocks, false);
+        // (Kept from step to step: a block's lists grow only while it meets more shapes.)
+        if broad_phase.parts_found.len() < blocks {
+            broad_phase.parts_found.resize_with(blocks, Vec::new);
+            broad_phase.parts_scratch.resize_with(blocks, Vec::new);
+        }
         broad_phase.tier_found.resize(n, TierInput::NONE);
         let keys = &broad_phase.pair_keys;
         let (joints, bodies) = (&*joints, &*bodies);
@@ -189,6 +210,13 @@ impl World {
                 SharedSlice::new(&mut broad_phase.found_from),
                 SharedSlice::new(&mut broad_phase.steady),
                 SharedSlice::new(&mut broad_phase.tier_found),
+            )
+        };
+        // SAFETY: as above, block k's lists are its own.
+        let (parts_found, parts_scratch) = unsafe {
+            (
+                SharedSlice::new(&mut broad_phase.parts_found),
+                SharedSlice::new(&mut broad_phase.parts_scratch),
             )
         };
         // Where each block's pairs' contacts begin (a search each, reading keys only: no
@@ -212,6 +240,10 @@ impl World {
                     tier_found.range(run.clone()),
                 )
             };
+            // SAFETY: as above.
+            let parts = unsafe { (parts_scratch.get(k), parts_found.get(k)) };
+            let (scratch, parts) = (parts.0.expect("a block's"), parts.1.expect("a block's"));
+            parts.clear();
             let (mut at, mut in_place, mut fresh) = (0, 0, false);
             let pairs_found = found.iter_mut().zip(manifolds).zip(tier_found);
             for (&key, ((f, m), t)) in keys[run.clone()].iter().zip(pairs_found) {
@@ -220,6 +252,9 @@ impl World {
                 } else {
                     pairs.collide_first(key, (old, &mut at), m)
                 };
+                if *f == Found::Parts as u8 {
+                    pairs.collide_parts_first(key, old, (scratch, parts));
+                }
                 let kind = *f & !(WAKE_A | WAKE_B);
                 if kind == Found::InPlace as u8 {
                     *t = TierInput::of(&old[at], slop);
@@ -326,6 +361,7 @@ impl World {
                     }
                     continue;
                 }
+                let mut parts = broad_phase.parts_found[k].iter().peekable();
                 for (p, &key) in (start..).zip(run) {
                     let bp = &*broad_phase;
                     let found = (bp.found[p], &bp.manifolds[p], bp.tier_found[p]);
@@ -335,11 +371,16 @@ impl World {
                         Some(Some(input)) => tiers.inputs.push(input),
                         Some(None) => {}
                         None => {
-                            // Bodies of several shapes: below.
+                            // Bodies of several shapes: what the workers found for each pair
+                            // of their shapes, in order.
                             let (a, b) = pairs.bodies(key).expect("a pair with bodies");
-                            let wake = &mut islands.wake_queue;
-                            let out = (wake, &mut tiers.inputs, &mut broad_phase.shape_pairs);
-                            pairs.update_parts(key, (a, b), &mut merge, contacts, out);
+                            while let Some(part) = parts.next_if(|f| f.key == key) {
+                                let wake = &mut islands.wake_queue;
+                                let out = (&mut merge, &mut *contacts, wake);
+                                if let Some(input) = pairs.update_found(part, (a, b), out) {
+                                    tiers.inputs.push(input);
+                                }
+                            }
                         }
                     }
                 }
@@ -705,6 +746,83 @@ impl<'a> PairInput<'a> {
                 inputs.push(input);
             }
         }
+    }
+
+    /// The first half of [`PairInput::update_parts`] for pair `key`, run by the workers
+    /// before the merge: each pair of shapes that may touch, with last step's manifold
+    /// recycled or a fresh one, pushed onto `out` (reading last step's contacts `old`, in
+    /// order, and nothing else; `scratch`: the pairs of shapes).
+    fn collide_parts_first(
+        &self,
+        key: u64,
+        old: &[Contact],
+        (scratch, out): (&mut Vec<u32>, &mut Vec<PartFound>),
+    ) {
+        let (a, b) = self.bodies(key).expect("a pair with bodies");
+        let margin =
+            self.settings.speculative_distance + closing_reach(a, b, self.gravity, self.dt);
+        shape_pairs(a, b, margin, scratch);
+        for &ij in scratch.iter() {
+            let ((sa, fa), (sb, fb)) = (Side::of(a, ij >> 16), Side::of(b, ij & 0xffff));
+            if !(fa.should_collide(&fb) && sa.aabb().inflated(margin).overlaps(&sb.aabb())) {
+                continue;
+            }
+            if self.flagged && (is_sensor(a, ij >> 16) || is_sensor(b, ij & 0xffff)) {
+                continue;
+            }
+            let order = (key, ij);
+            let last = old.get(old.partition_point(|c| c.order() < order));
+            let last = last.filter(|c| c.order() == order);
+            let (recycled, manifold, wakes) = match last.and_then(|c| self.recycled(c, a, b)) {
+                Some(manifold) => (true, manifold, 0),
+                None => match self.collide_pair((sa, sb)) {
+                    (Some(manifold), wakes) => (false, manifold, wakes),
+                    (None, _) => (false, Manifold::EMPTY, 0),
+                },
+            };
+            out.push(PartFound {
+                key,
+                shapes: ij,
+                recycled,
+                manifold,
+                wakes,
+            });
+        }
+    }
+
+    /// The second half, in the merge: what the workers `found` for a pair of shapes of `a`
+    /// and `b`, written as [`PairInput::update`] would.
+    fn update_found(
+        &self,
+        found: &PartFound,
+        (a, b): (&Body, &Body),
+        (merge, contacts, wake_queue): (&mut Merge, &mut Contacts, &mut Vec<u32>),
+    ) -> Option<TierInput> {
+        let (order, ij) = ((found.key, found.shapes), found.shapes);
+        let sides = (Side::of(a, ij >> 16).0, Side::of(b, ij & 0xffff).0);
+        let continued = merge.seek(contacts, order);
+        let slop = self.settings.linear_slop;
+        if found.recycled {
+            debug_assert!(continued, "a recycled contact was last step's");
+            let contact = merge.keep(contacts);
+            self.set_geometry(contact, &found.manifold, sides);
+            return Some(TierInput::of(contact, slop));
+        }
+        let (ia, ib) = pair_of(found.key);
+        for (bit, i) in [(WAKE_A, ia), (WAKE_B, ib)] {
+            if found.wakes & bit != 0 {
+                wake_queue.push(i);
+            }
+        }
+        if found.manifold.count == 0 {
+            return None;
+        }
+        let previous = continued.then(|| merge.last(contacts));
+        let contact = self.fresh_contact(order, &found.manifold, sides, previous);
+        let input = TierInput::of(&contact, slop);
+        let begins = (!continued).then_some([a.inv_mass > 0.0, b.inv_mass > 0.0]);
+        merge.write(contacts, contact, begins);
+        Some(input)
     }
 
     /// The contact of shapes `sides` (`order`: their pair key and shapes) this step: last

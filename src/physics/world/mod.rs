@@ -214,6 +214,10 @@ struct BroadPhase {
     manifolds: Vec<crate::physics::collide::Manifold>,
     /// Where each block of `pair_keys`' contacts begin among last step's (and the end).
     found_from: Vec<usize>,
+    /// Per block: what its pairs of bodies of several shapes found, pair of shapes by pair of
+    /// shapes in order, and scratch for those pairs of shapes.
+    parts_found: Vec<Vec<contacts::PartFound>>,
+    parts_scratch: Vec<Vec<u32>>,
     /// Whether each block is steady: its pairs' contacts are last step's, each updated in
     /// place, none of last step's in its run ended, and no pair begins one (the merge keeps
     /// them at once).

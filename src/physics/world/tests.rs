@@ -355,6 +355,29 @@ fn jointed_rig(w: &mut World) {
         .unwrap();
 }
 
+/// Bodies of several shapes: a static flight of ten stairs (one body) with a box on each, and
+/// L-shaped bodies of two boxes dropped onto it.
+fn compound_stairs(w: &mut World) {
+    use crate::physics::part::PartDef;
+    let stair = |i: usize| vec2(50.0 + 3.0 * i as Real, 0.5 * i as Real);
+    let mut stairs = BodyDef::fixed(Shape::rect(3.0, 0.5), stair(0));
+    for i in 1..10 {
+        stairs
+            .parts
+            .push(PartDef::new(Shape::rect(3.0, 0.5), stair(i) - stair(0)));
+    }
+    w.add_body(&stairs).unwrap();
+    for i in 0..10 {
+        let at = stair(i) + vec2(-0.6, 0.75);
+        w.add_body(&BodyDef::dynamic(Shape::rect(0.5, 1.0), at))
+            .unwrap();
+        let mut l = BodyDef::dynamic(Shape::rect(1.0, 0.2), stair(i) + vec2(0.6, 2.0));
+        l.parts
+            .push(PartDef::new(Shape::rect(0.2, 0.8), vec2(-0.4, 0.5)));
+        w.add_body(&l).unwrap();
+    }
+}
+
 /// Bodies for continuous collision and events beside a pile: discs fired at 120 m/s into a
 /// thin static wall, thin planks spinning at 40 rad/s just above a floor of their own, and
 /// boxes dropped onto the pile; the discs and the boxes report touches and hits.
@@ -419,6 +442,7 @@ fn one_two_and_three_workers_step_bit_identically() {
         // 80 links: each of the chain's two colours holds 40 joints, enough to be spread.
         hang_chain(&mut w, 80, false);
         jointed_rig(&mut w);
+        compound_stairs(&mut w);
         fast_bodies(&mut w);
         sensor_strip(&mut w);
         w
@@ -430,12 +454,19 @@ fn one_two_and_three_workers_step_bit_identically() {
     };
     for &width in widths {
         let mut worlds: Vec<World> = [1, 2, 3].map(|n| world(n, width)).into();
-        let (mut impacts, mut reported, mut sensed) = (0, 0, 0);
+        let (mut impacts, mut reported, mut sensed, mut parted) = (0, 0, 0, 0);
         for step in 0..180 {
             for w in &mut worlds {
                 w.step(1.0 / 60.0).unwrap();
             }
             // Continuous collision on the workers: pairs struck within this step.
+            // Pairs of bodies of several shapes collided on the workers.
+            parted += worlds[1]
+                .broad_phase
+                .parts_found
+                .iter()
+                .map(Vec::len)
+                .sum::<usize>();
             let hits = &worlds[1].solver.pair_hits;
             impacts += hits.iter().filter(|&&t| t < 1.0).count();
             worlds[1].solver.pair_hits.clear();
@@ -453,6 +484,10 @@ fn one_two_and_three_workers_step_bit_identically() {
         assert!(impacts > 0, "no fast body struck a static on the workers");
         assert!(reported > 0, "no hit or touch was reported");
         assert!(sensed > 0, "no shape entered a sensor");
+        assert!(
+            parted > 0,
+            "no pair of bodies of several shapes on the workers"
+        );
         for (w, n) in worlds.iter().zip(1..).skip(1) {
             let Workers::Own(team) = &w.workers else {
                 panic!("{n} workers: no team of its own")

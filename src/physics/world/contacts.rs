@@ -49,6 +49,17 @@ enum Found {
     Nothing,
 }
 
+/// What one block of pairs writes on a worker ([`PairInput::collide_block`]): each pair's
+/// [`Found`], fresh manifold and tier input, and what its pairs of bodies of several shapes
+/// found (with their scratch).
+struct BlockOut<'b> {
+    found: &'b mut [u8],
+    manifolds: &'b mut [Manifold],
+    tier_found: &'b mut [TierInput],
+    parts: &'b mut Vec<PartFound>,
+    scratch: &'b mut Vec<u32>,
+}
+
 /// What the workers found for one pair of shapes of a pair of bodies of several shapes
 /// ([`PairInput::collide_parts_first`]), for the merge to write in order
 /// ([`PairInput::update_found`]).
@@ -197,7 +208,7 @@ impl World {
         broad_phase.tier_found.resize(n, TierInput::NONE);
         let keys = &broad_phase.pair_keys;
         let (joints, bodies) = (&*joints, &*bodies);
-        let slop = settings.linear_slop;
+        let kept_apart = |key| sorting && !(filters_allow(key, bodies) && joints.may_collide(key));
         // SAFETY: each block writes its own run of `found`, `manifolds`, `tier_found`,
         // `found_from` and `steady`, and only the contacts of its own pairs (contacts are
         // ordered by pair, and a pair is one block's); the first stage only reads the
@@ -243,30 +254,16 @@ impl World {
             // SAFETY: as above.
             let parts = unsafe { (parts_scratch.get(k), parts_found.get(k)) };
             let (scratch, parts) = (parts.0.expect("a block's"), parts.1.expect("a block's"));
-            parts.clear();
-            let (mut at, mut in_place, mut fresh) = (0, 0, false);
-            let pairs_found = found.iter_mut().zip(manifolds).zip(tier_found);
-            for (&key, ((f, m), t)) in keys[run.clone()].iter().zip(pairs_found) {
-                *f = if sorting && !(filters_allow(key, bodies) && joints.may_collide(key)) {
-                    Found::Skip as u8
-                } else {
-                    pairs.collide_first(key, (old, &mut at), m)
-                };
-                if *f == Found::Parts as u8 {
-                    pairs.collide_parts_first(key, old, (scratch, parts));
-                }
-                let kind = *f & !(WAKE_A | WAKE_B);
-                if kind == Found::InPlace as u8 {
-                    *t = TierInput::of(&old[at], slop);
-                    in_place += 1;
-                }
-                fresh |= kind == Found::Fresh as u8 || kind == Found::Parts as u8;
-            }
-            // Steady: nothing for the merge to make, and every one of last step's contacts in
-            // the run is one of the pairs' made in place (each such pair has its own), so none
-            // ended. (Pairs with nothing to keep may come between.)
+            let out = BlockOut {
+                found,
+                manifolds,
+                tier_found,
+                parts,
+                scratch,
+            };
+            let is_steady = pairs.collide_block(&keys[run], old, out, &kept_apart);
             // SAFETY: as above.
-            *unsafe { steady.get(k) }.expect("a block's flag") = !fresh && in_place == old.len();
+            *unsafe { steady.get(k) }.expect("a block's flag") = is_steady;
         });
     }
 
@@ -731,21 +728,30 @@ impl<'a> PairInput<'a> {
         contacts: &mut Contacts,
         (wake, inputs, found): (&mut Vec<u32>, &mut Vec<TierInput>, &mut Vec<u32>),
     ) {
-        let margin =
-            self.settings.speculative_distance + closing_reach(a, b, self.gravity, self.dt);
-        shape_pairs(a, b, margin, found);
-        for &ij in found.iter() {
-            let ((sa, fa), (sb, fb)) = (Side::of(a, ij >> 16), Side::of(b, ij & 0xffff));
-            if !(fa.should_collide(&fb) && sa.aabb().inflated(margin).overlaps(&sb.aabb())) {
-                continue;
-            }
-            if self.flagged && (is_sensor(a, ij >> 16) || is_sensor(b, ij & 0xffff)) {
-                continue;
-            }
+        for (ij, sa, sb) in self.touching_parts((a, b), found) {
             if let Some(input) = self.update((key, ij), (sa, sb), merge, contacts, wake) {
                 inputs.push(input);
             }
         }
+    }
+
+    /// The pairs of shapes of `a` and `b` whose boxes meet within the margin and that may
+    /// collide (filters, sensors), each as `i << 16 | j` with its two sides, in order
+    /// (`scratch`: the candidates).
+    fn touching_parts<'b>(
+        &'b self,
+        (a, b): (&'b Body, &'b Body),
+        scratch: &'b mut Vec<u32>,
+    ) -> impl Iterator<Item = (u32, Side<'b>, Side<'b>)> + 'b {
+        let margin =
+            self.settings.speculative_distance + closing_reach(a, b, self.gravity, self.dt);
+        shape_pairs(a, b, margin, scratch);
+        scratch.iter().filter_map(move |&ij| {
+            let ((sa, fa), (sb, fb)) = (Side::of(a, ij >> 16), Side::of(b, ij & 0xffff));
+            let meet = fa.should_collide(&fb) && sa.aabb().inflated(margin).overlaps(&sb.aabb());
+            let sensed = || self.flagged && (is_sensor(a, ij >> 16) || is_sensor(b, ij & 0xffff));
+            (meet && !sensed()).then_some((ij, sa, sb))
+        })
     }
 
     /// The first half of [`PairInput::update_parts`] for pair `key`, run by the workers
@@ -759,17 +765,7 @@ impl<'a> PairInput<'a> {
         (scratch, out): (&mut Vec<u32>, &mut Vec<PartFound>),
     ) {
         let (a, b) = self.bodies(key).expect("a pair with bodies");
-        let margin =
-            self.settings.speculative_distance + closing_reach(a, b, self.gravity, self.dt);
-        shape_pairs(a, b, margin, scratch);
-        for &ij in scratch.iter() {
-            let ((sa, fa), (sb, fb)) = (Side::of(a, ij >> 16), Side::of(b, ij & 0xffff));
-            if !(fa.should_collide(&fb) && sa.aabb().inflated(margin).overlaps(&sb.aabb())) {
-                continue;
-            }
-            if self.flagged && (is_sensor(a, ij >> 16) || is_sensor(b, ij & 0xffff)) {
-                continue;
-            }
+        for (ij, sa, sb) in self.touching_parts((a, b), scratch) {
             let order = (key, ij);
             let last = old.get(old.partition_point(|c| c.order() < order));
             let last = last.filter(|c| c.order() == order);
@@ -950,6 +946,42 @@ impl<'a> PairInput<'a> {
         // A sleeper beside a kinematic body at rest: nothing to solve.
         let solve = a.is_active() || b.is_active() || wakes != 0;
         (solve.then_some(manifold), wakes)
+    }
+
+    /// One block of pairs `keys` on a worker, against its run `old` of last step's contacts,
+    /// into `out` ([`PairInput::collide_first`] and [`PairInput::collide_parts_first`] for
+    /// each pair not `kept_apart`). Returns whether the block is steady: nothing for the merge
+    /// to make, and every one of last step's contacts in the run one of the pairs' made in
+    /// place (each such pair has its own), so none ended (pairs with nothing to keep may come
+    /// between).
+    fn collide_block(
+        &self,
+        keys: &[u64],
+        old: &mut [Contact],
+        out: BlockOut,
+        kept_apart: &impl Fn(u64) -> bool,
+    ) -> bool {
+        out.parts.clear();
+        let slop = self.settings.linear_slop;
+        let (mut at, mut in_place, mut fresh) = (0, 0, false);
+        let pairs_found = out.found.iter_mut().zip(out.manifolds).zip(out.tier_found);
+        for (&key, ((f, m), t)) in keys.iter().zip(pairs_found) {
+            *f = if kept_apart(key) {
+                Found::Skip as u8
+            } else {
+                self.collide_first(key, (old, &mut at), m)
+            };
+            if *f == Found::Parts as u8 {
+                self.collide_parts_first(key, old, (out.scratch, out.parts));
+            }
+            let kind = *f & !(WAKE_A | WAKE_B);
+            if kind == Found::InPlace as u8 {
+                *t = TierInput::of(&old[at], slop);
+                in_place += 1;
+            }
+            fresh |= kind == Found::Fresh as u8 || kind == Found::Parts as u8;
+        }
+        !fresh && in_place == old.len()
     }
 
     /// The first half of [`PairInput::update`] for pair `key`, run by the workers before the

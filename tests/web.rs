@@ -816,8 +816,9 @@ async fn the_page_draws_the_world_and_tilts_and_spawns_in_chromium() {
 }
 
 /// Two fingers on two bricks in the page drag them at once (touches dispatched to headless
-/// Chromium, the bricks' poses read from the daemon's own scene): 200 ms after the fingers stop,
-/// each brick's grabbed point is within 5 cm of its finger; let go, both fall.
+/// Chromium, the bricks' poses read from the daemon's own scene): once the fingers stop, each
+/// brick's grabbed point comes within 5 cm of its finger (within 2 s; the time is printed);
+/// let go, both fall.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn two_fingers_drag_two_bricks_in_chromium() {
     let _lock = BROWSER_LOCK.lock().await;
@@ -877,18 +878,38 @@ async fn two_fingers_drag_two_bricks_in_chromium() {
         .unwrap();
         tokio::time::sleep(Duration::from_millis(25)).await;
     }
-    // The page sends the last position within a frame of the last move; 200 ms after that.
-    tokio::time::sleep(Duration::from_millis(260)).await;
-    let sc = scene(&s, &keys).await;
-    for (b, (x, y)) in [&red, &blue].iter().zip(targets) {
-        let now = sc.bodies.iter().find(|n| n.id == b.id).unwrap().position;
-        // The finger landed on the brick's centre to within a pixel; 5 cm is the bound.
-        let pixel = 1.0 / (to_px(1.0, 0.0).0 - to_px(0.0, 0.0).0) as f32;
-        let off = ((now.x - x).powi(2) + (now.y - y).powi(2)).sqrt();
+    // The page sends the last position within a frame of the last move, and the bricks
+    // reach it some 200 ms later on an idle machine. Under CI's load (tests running beside
+    // the browser on two cores) one brick was once still 23 cm short 260 ms after the last
+    // move, on its way: so the daemon's scene is read until both are there, for up to 2 s,
+    // and the time taken is printed.
+    let stopped = Instant::now();
+    // The finger landed on the brick's centre to within a pixel; 5 cm is the bound.
+    let pixel = 1.0 / (to_px(1.0, 0.0).0 - to_px(0.0, 0.0).0) as f32;
+    let offs = loop {
+        let sc = scene(&s, &keys).await;
+        let offs: Vec<(String, Vector, f32)> = [&red, &blue]
+            .iter()
+            .zip(targets)
+            .map(|(b, (x, y))| {
+                let now = sc.bodies.iter().find(|n| n.id == b.id).unwrap().position;
+                let off = ((now.x - x).powi(2) + (now.y - y).powi(2)).sqrt();
+                (b.name.clone(), now, off)
+            })
+            .collect();
+        if offs.iter().all(|o| o.2 < 0.05 + pixel) || stopped.elapsed() > Duration::from_secs(2) {
+            break offs;
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    };
+    println!(
+        "both bricks within 5 cm of their fingers {:.0} ms after the last move",
+        stopped.elapsed().as_secs_f64() * 1000.0
+    );
+    for ((name, now, off), (x, y)) in offs.into_iter().zip(targets) {
         assert!(
             off < 0.05 + pixel,
-            "{} at {now:?}, finger at ({x}, {y}): {off} m",
-            b.name
+            "{name} at {now:?}, finger at ({x}, {y}): {off} m, 2 s after the last move"
         );
     }
     page.call("Input.dispatchTouchEvent", send("touchEnd", json!([])))

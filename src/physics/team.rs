@@ -265,7 +265,12 @@ impl Region<'_> {
             let grouped = |k: usize| (k * per..((k + 1) * per).min(blocks)).for_each(run);
             return self.for_blocks(blocks.div_ceil(per), &grouped);
         }
-        if blocks == 0 {
+        if blocks <= 1 {
+            // One block: run here, without waking the others for it (they wait meanwhile,
+            // as they would for a stage).
+            if blocks == 1 {
+                run(0);
+            }
             return;
         }
         let shared = self.shared;

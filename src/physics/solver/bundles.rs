@@ -106,6 +106,70 @@ impl<L> Clone for SideLanes<'_, L> {
 }
 impl<L> Copy for SideLanes<'_, L> {}
 
+/// One list's share of a colour's stage in the parallel step: its bundles and ledgers,
+/// whether the list is plain ([`SideLanes::plain`]), and the stage's first block that is its.
+struct ColourPart<'a, L: Wide> {
+    bundles: SharedSlice<'a, Bundle<L>>,
+    ledgers: SharedSlice<'a, Ledger<L>>,
+    plain: bool,
+    first: usize,
+}
+
+/// The lists of one colour (at most one a kind), run as one stage: its blocks numbered
+/// list after list.
+struct ColourParts<'a, L: Wide> {
+    parts: [Option<ColourPart<'a, L>>; KINDS],
+    /// The stage's blocks, over all its lists.
+    blocks: usize,
+}
+
+impl<L: Wide> Default for ColourParts<'_, L> {
+    fn default() -> Self {
+        ColourParts {
+            parts: [None, None, None],
+            blocks: 0,
+        }
+    }
+}
+
+impl<'a, L: Wide> ColourParts<'a, L> {
+    /// Add `list` (the next kind of the colour), `plain` or not.
+    fn push(&mut self, list: &'a mut List<L>, plain: bool) {
+        let Some(free) = self.parts.iter_mut().find(|p| p.is_none()) else {
+            unreachable!("a colour has one list a kind");
+        };
+        let first = self.blocks;
+        self.blocks += list.bundles.len().div_ceil(BUNDLES_PER_BLOCK);
+        // SAFETY: each block of the stage reaches its own run of one list's bundles and
+        // ledgers ([`ColourParts::find`]).
+        let (bundles, ledgers) = unsafe {
+            (
+                SharedSlice::new(&mut list.bundles),
+                SharedSlice::new(&mut list.ledgers),
+            )
+        };
+        *free = Some(ColourPart {
+            bundles,
+            ledgers,
+            plain,
+            first,
+        });
+    }
+
+    /// The list block `k` of the stage is in, and its number within that list.
+    #[inline]
+    fn find(&self, k: usize) -> (&ColourPart<'a, L>, usize) {
+        let part = self
+            .parts
+            .iter()
+            .flatten()
+            .take_while(|p| p.first <= k)
+            .last();
+        let part = part.expect("a block of the stage is in one of its lists");
+        (part, k - part.first)
+    }
+}
+
 /// What the store stage does with a contact and its points' impulses, from any worker.
 pub(crate) type StoreFn<'a> = dyn Fn(&mut Contact, &[PointImpulses; 2]) + Sync + 'a;
 
@@ -498,8 +562,9 @@ impl<L: Wide> Packed<L> {
         }
     }
 
-    /// `work` colour by colour, each colour's bundles in blocks spread over `region`'s
-    /// workers by `run`, with `joints` run before each colour by this thread alone.
+    /// `work` colour by colour, each colour's bundles (of every kind) in blocks spread over
+    /// `region`'s workers by `run`, one stage a colour, with `joints` run before each colour
+    /// by this thread alone.
     fn run_shared(
         &mut self,
         region: &Region,
@@ -515,53 +580,58 @@ impl<L: Wide> Packed<L> {
             bounces,
             plain: false,
         };
-        let lists = self.packed.iter_mut().zip(&self.slots).zip(&self.sided);
-        for ((list, &slot), &sided) in lists {
-            let side = SideLanes {
-                plain: !sided,
-                ..side
-            };
+        let mut lists = (self.packed.iter_mut().zip(&self.slots).zip(&self.sided)).peekable();
+        while let Some(((list, &slot), &sided)) = lists.next() {
+            let colour = slot as usize / KINDS;
             if let Some(run_joints) = joints.as_mut() {
                 // SAFETY: between colours no block runs: the other workers wait.
-                run_joints(
-                    unsafe { rows.exclusive() },
-                    (slot as usize / KINDS) as u8 + 1,
-                );
+                run_joints(unsafe { rows.exclusive() }, colour as u8 + 1);
             }
-            let len = list.bundles.len();
-            // SAFETY: each block is its own run of the colour's bundles and ledgers.
-            let (bundles, ledgers) = unsafe {
-                (
-                    SharedSlice::new(&mut list.bundles),
-                    SharedSlice::new(&mut list.ledgers),
-                )
-            };
-            region.for_blocks(len.div_ceil(BUNDLES_PER_BLOCK), &|k| {
-                let range = block(k, BUNDLES_PER_BLOCK, len);
+            // The colour's lists (one per kind in it) share no dynamic body either: one stage.
+            let mut parts = ColourParts::default();
+            parts.push(list, !sided);
+            while let Some(((list, _), &sided)) =
+                lists.next_if(|((_, &s), _)| s as usize / KINDS == colour)
+            {
+                parts.push(list, !sided);
+            }
+            region.for_blocks(parts.blocks, &|k| {
+                let (part, k) = parts.find(k);
+                let range = block(k, BUNDLES_PER_BLOCK, part.bundles.len());
                 // SAFETY: block k's bundles and ledgers are reached by the worker that took k
                 // alone.
-                let block = unsafe { (bundles.range(range.clone()), ledgers.range(range)) };
+                let block =
+                    unsafe { (part.bundles.range(range.clone()), part.ledgers.range(range)) };
+                let side = SideLanes {
+                    plain: part.plain,
+                    ..side
+                };
                 run(block, rows.rows(), work, side);
             });
         }
     }
 
-    /// [`Packed::store`] colour by colour, each colour's bundles in blocks spread over
-    /// `region`'s workers.
+    /// [`Packed::store`] in one stage: every list's bundles in blocks spread over `region`'s
+    /// workers (each contact is in one lane of one bundle, so no two blocks write one).
     fn store_shared(
         &self,
         region: &Region,
         (contacts, then): (SharedSlice<Contact>, &StoreFn),
         store: StoreBlock<L>,
     ) {
-        for list in &self.packed {
-            let len = list.bundles.len();
-            region.for_blocks(len.div_ceil(BUNDLES_PER_BLOCK), &|k| {
-                let range = block(k, BUNDLES_PER_BLOCK, len);
-                let (bundles, ledgers) = (&list.bundles[range.clone()], &list.ledgers[range]);
-                store(ledgers, bundles, &self.bounces, contacts, then);
-            });
+        let blocks_of = |list: &List<L>| list.bundles.len().div_ceil(BUNDLES_PER_BLOCK);
+        let mut starts = [0; LISTS + 1];
+        for (k, list) in self.packed.iter().enumerate() {
+            starts[k + 1] = starts[k] + blocks_of(list);
         }
+        let starts = &starts[..=self.packed.len()];
+        region.for_blocks(starts[starts.len() - 1], &|k| {
+            let l = starts.partition_point(|&s| s <= k) - 1;
+            let list = &self.packed[l];
+            let range = block(k - starts[l], BUNDLES_PER_BLOCK, list.bundles.len());
+            let (bundles, ledgers) = (&list.bundles[range.clone()], &list.ledgers[range]);
+            store(ledgers, bundles, &self.bounces, contacts, then);
+        });
     }
 
     /// Hand each contact its points' impulses. Bundles hold contacts from all over the array:

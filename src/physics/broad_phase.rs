@@ -11,7 +11,7 @@
 //! A sweep along x alone tests every pair whose boxes overlap in x, and a column of bodies
 //! overlaps all along itself: 2,000 boxes falling in a 40 x 50 grid took 41,000 tests a sweep
 //! for no pair, 119,000 for 6,000 as they landed. So the active bodies are swept in horizontal
-//! bands as tall as the tallest of their boxes ([`band_pairs`]), each box in the bands it
+//! bands as tall as the tallest of their boxes ([`bands_of`]), each box in the bands it
 //! reaches into, each pair reported in one band only; a pile's sweeps test about a tenth as
 //! many pairs and find the same ones.
 //!
@@ -129,9 +129,11 @@ pub(crate) struct SweepAndPrune {
     /// Scratch for `update`: the moved bodies' boxes and their new pairs.
     moved_boxes: Vec<SortedBox>,
     new_pairs: Vec<u64>,
-    /// Scratch for [`band_pairs`]: the active boxes band by band, and where each band starts.
+    /// Scratch for [`bands_of`]: the active boxes band by band, and where each band ends.
     band_boxes: Vec<SortedBox>,
     band_start: Vec<u32>,
+    /// Scratch for a sweep on workers: the pairs each block found.
+    block_pairs: Vec<Vec<u64>>,
     /// Scratch for [`sort_keys`].
     sort_scratch: Vec<u64>,
     /// Scratch for [`sort_by_min_x`]: each body's left edge, place in the old order and slot.
@@ -295,7 +297,7 @@ impl SweepAndPrune {
                 .extend(proxies.iter().map(|p| p.aabb.inflated(FAT_MARGIN)));
             let fat = std::mem::take(&mut self.fat);
             let mut pairs = std::mem::take(&mut self.fat_pairs);
-            self.sweep(&fat, pieces, &mut pairs);
+            self.sweep(&fat, pieces, &mut pairs, region);
             (self.fat, self.fat_pairs) = (fat, pairs);
             self.fat_valid = true;
         } else if !self.outside.is_empty() {
@@ -431,8 +433,15 @@ impl SweepAndPrune {
 
     /// Fill `out` with the active-active and active-passive pairs of overlapping `boxes`
     /// (indexed by slot), the bodies swept by `pieces` through their pieces (grown as `boxes`
-    /// are), sorted ascending.
-    fn sweep(&mut self, boxes: &[Aabb], pieces: &[Piece], out: &mut Vec<u64>) {
+    /// are), sorted ascending; the sweeps in blocks over `region`'s workers, if any and there
+    /// are enough boxes (sorted, the pairs are the same whoever found them).
+    fn sweep(
+        &mut self,
+        boxes: &[Aabb],
+        pieces: &[Piece],
+        out: &mut Vec<u64>,
+        region: Option<&Region>,
+    ) {
         out.clear();
         self.sweeps += 1;
         let min_x = |i: u32| boxes[i as usize].min.x;
@@ -453,12 +462,16 @@ impl SweepAndPrune {
             self.sort_pieces_in(boxes, pieces);
         }
         let (active, passive) = (&self.active_boxes, &self.passive_boxes);
-
-        // Active with active.
-        band_pairs(active, &mut self.band_boxes, &mut self.band_start, out);
-
-        // Active with passive: each active box against the passive list, from both sides.
-        cross_pairs(active, passive, out);
+        let bands = bands_of(active, &mut self.band_boxes, &mut self.band_start);
+        let swept = Swept {
+            active,
+            passive,
+            bands: bands.map(|n| (&self.band_boxes[..], &self.band_start[..n])),
+        };
+        match region.filter(|_| active.len() >= SHARED_SWEEP_FROM) {
+            None => swept.pairs(out),
+            Some(region) => swept.pairs_shared(region, &mut self.block_pairs, out),
+        }
         sort_keys(out, &mut self.sort_scratch, boxes.len());
         if !pieces.is_empty() {
             // A body near two pieces of one body paired with each.
@@ -507,20 +520,20 @@ impl SweepAndPrune {
     }
 }
 
-/// Push every overlapping pair of `active` (sorted by left edge), sweeping along x in
-/// horizontal bands: band k holds the boxes that reach into [y0 + k h, y0 + (k + 1) h), with h
-/// the tallest box's height but the outliers' (so a box is in one or two bands, three only by
-/// rounding; an outlier in as many as it reaches), each
-/// band in the list's order. A pair is pushed only in the band of the higher of its two lower edges: that edge
-/// lies in both boxes' height, so both are in its band (the band of a height is
-/// non-decreasing in it, rounding included), and it is one band. Within a band the tests are
-/// the plain sweep's, so the pairs are exactly its pairs. `boxes` and `starts` are scratch.
-fn band_pairs(
+/// Sort `active` (sorted by left edge) into horizontal bands for the sweep along x, into
+/// `boxes`, and return how many (band k ends at `starts[k]`), or None when one plain sweep
+/// of `active` is the sweep. Band k holds the boxes that reach into [y0 + k h, y0 + (k + 1) h),
+/// with h the tallest box's height but the outliers' (so a box is in one or two bands, three
+/// only by rounding; an outlier in as many as it reaches), each band in the list's order. A
+/// pair is pushed only in the band of the higher of its two lower edges: that edge lies in
+/// both boxes' height, so both are in its band (the band of a height is non-decreasing in it,
+/// rounding included), and it is one band. Within a band the tests are the plain sweep's, so
+/// the pairs are exactly its pairs.
+fn bands_of(
     active: &[SortedBox],
     boxes: &mut Vec<SortedBox>,
     starts: &mut Vec<u32>,
-    out: &mut Vec<u64>,
-) {
+) -> Option<usize> {
     let (mut y0, mut y1, mut sum) = (Real::INFINITY, Real::NEG_INFINITY, 0.0 as Real);
     let mut slots = 0;
     for b in active {
@@ -563,24 +576,141 @@ fn band_pairs(
         || bands < 2.0
         || !flaggable
     {
-        sweep_band(active, false, out);
-        return;
+        return None;
     }
     // Every y here is at or above y0, so truncating is flooring (and no call to floorf).
     // Multiplying by the reciprocal is as monotonic as dividing, and cheaper.
     let per_height = 1.0 / height;
     let band = |y: Real| (((y - y0) * per_height) as usize).min(bands as usize - 1);
     sort_into_bands(active, (band, bands as usize), boxes, starts);
-    // The band of the higher lower edge is the higher of the two lower edges' bands (the band
-    // is non-decreasing in the height), and both boxes reach into band k, so neither lower
-    // edge's band is above k: the pair is band k's when either box is lowest in it.
-    let mut start = 0;
-    for &end in &starts[..bands as usize] {
-        let end = end as usize;
-        sweep_band(&boxes[start..end], true, out);
-        start = end;
+    Some(bands as usize)
+}
+
+/// What a full sweep pairs: the active boxes with each other (in bands, if [`bands_of`] made
+/// them: the boxes band by band and each band's end) and with the passive ones.
+struct Swept<'a> {
+    active: &'a [SortedBox],
+    passive: &'a [SortedBox],
+    bands: Option<(&'a [SortedBox], &'a [u32])>,
+}
+
+impl Swept<'_> {
+    /// Push every pair, on this thread.
+    fn pairs(&self, out: &mut Vec<u64>) {
+        match self.bands {
+            None => sweep_band(self.active, false, out),
+            Some((boxes, ends)) => {
+                let mut start = 0;
+                for &end in ends {
+                    sweep_band(&boxes[start..end as usize], true, out);
+                    start = end as usize;
+                }
+            }
+        }
+        // Active with passive: each active box against the passive list, from both sides.
+        cross_from(self.active, self.passive, out);
+        cross_to(self.active, self.passive, out);
+    }
+
+    /// Push every pair, in blocks spread over `region`'s workers: runs of bands of about
+    /// [`SWEPT_PER_BLOCK`] boxes, then runs of the active boxes against the passive list, then
+    /// runs of the passive boxes against the active list, each block's pairs into its own
+    /// list of `per_block`, appended to `out` in block order.
+    fn pairs_shared(&self, region: &Region, per_block: &mut Vec<Vec<u64>>, out: &mut Vec<u64>) {
+        // The bands' blocks: where each run of bands ends (one plain sweep: one block).
+        let mut band_runs = [0u32; MAX_BAND_BLOCKS];
+        let runs = match self.bands {
+            None => {
+                band_runs[0] = 1;
+                1
+            }
+            Some((boxes, ends)) => {
+                let per = boxes.len().div_ceil(MAX_BAND_BLOCKS).max(SWEPT_PER_BLOCK);
+                let mut runs = 0;
+                let mut from = 0;
+                for (k, &end) in ends.iter().enumerate() {
+                    if end as usize - from >= per || k + 1 == ends.len() {
+                        band_runs[runs] = k as u32 + 1;
+                        runs += 1;
+                        from = end as usize;
+                    }
+                }
+                runs
+            }
+        };
+        let (active, passive) = (self.active, self.passive);
+        let from_blocks = active.len().div_ceil(SWEPT_PER_BLOCK);
+        let to_blocks = passive.len().div_ceil(SWEPT_PER_BLOCK);
+        let blocks = runs + from_blocks + to_blocks;
+        if per_block.len() < blocks {
+            per_block.resize_with(blocks, Vec::new);
+        }
+        // SAFETY: each block writes its own list.
+        let lists = unsafe { SharedSlice::new(&mut per_block[..blocks]) };
+        let band_runs = &band_runs[..runs];
+        region.for_blocks(blocks, &|k| {
+            // SAFETY: as above.
+            let out = unsafe { lists.get(k) }.expect("a list a block");
+            out.clear();
+            if k < runs {
+                self.band_run(band_runs, k, out);
+            } else if k < runs + from_blocks {
+                let run = block(k - runs, SWEPT_PER_BLOCK, active.len());
+                cross_from(&active[run], passive, out);
+            } else {
+                let run = block(k - runs - from_blocks, SWEPT_PER_BLOCK, passive.len());
+                cross_to(active, &passive[run], out);
+            }
+        });
+        for list in &per_block[..blocks] {
+            out.extend_from_slice(list);
+        }
+    }
+
+    /// The pairs of run `k` of the bands (`runs`: where each ends, in bands).
+    fn band_run(&self, runs: &[u32], k: usize, out: &mut Vec<u64>) {
+        let Some((boxes, ends)) = self.bands else {
+            return sweep_band(self.active, false, out);
+        };
+        let first = if k == 0 { 0 } else { runs[k - 1] as usize };
+        let mut start = if first == 0 {
+            0
+        } else {
+            ends[first - 1] as usize
+        };
+        for &end in &ends[first..runs[k] as usize] {
+            sweep_band(&boxes[start..end as usize], true, out);
+            start = end as usize;
+        }
     }
 }
+
+/// Push every overlapping pair of `active` (sorted by left edge), in bands where
+/// [`bands_of`] makes them; `boxes` and `starts` are scratch.
+#[cfg(test)]
+fn band_pairs(
+    active: &[SortedBox],
+    boxes: &mut Vec<SortedBox>,
+    starts: &mut Vec<u32>,
+    out: &mut Vec<u64>,
+) {
+    let bands = bands_of(active, boxes, starts);
+    let swept = Swept {
+        active,
+        passive: &[],
+        bands: bands.map(|n| (&boxes[..], &starts[..n])),
+    };
+    swept.pairs(out);
+}
+
+/// Active boxes from which a full sweep is spread over the workers.
+const SHARED_SWEEP_FROM: usize = 2048;
+
+/// Boxes a worker sweeps at a time (at least; a band is not split).
+const SWEPT_PER_BLOCK: usize = 1024;
+
+/// The most blocks the bands of a shared sweep are cut into.
+const MAX_BAND_BLOCKS: usize = 64;
 
 /// Counting sort of the `active` boxes into `bands` horizontal bands (`band`: the band of a
 /// height), each box into every band from its lower edge's to its upper edge's, keeping the
@@ -619,7 +749,7 @@ fn sort_into_bands(
 }
 
 /// The flag, in the high bit of a slot copied into a band, of the band its box's lower edge
-/// lies in (a slot is below 2^31 there: `band_pairs` checks).
+/// lies in (a slot is below 2^31 there: `bands_of` checks).
 const LOWEST: u32 = 1 << 31;
 
 /// The plain sweep over `boxes` (sorted by left edge): every pair overlapping in x is tested
@@ -714,14 +844,21 @@ const UPDATE_FRACTION: usize = 8;
 /// Push every pair of a box of `moved` and a box of `list` (both sorted by left edge) that
 /// overlap, a box never with itself, with the sweep's closed overlap test. A pair overlaps in
 /// x exactly when the list box's left edge lies within the moved box (strictly right of its
-/// left edge) or the moved box's left edge lies within the list box (at or right of its left
-/// edge): each side is a binary search and a short scan, so the cost is linear in the list
-/// whatever the boxes' widths (no search window as wide as the widest). The sweep pairs the
-/// active boxes with the passive ones this way too.
+/// left edge: [`cross_from`]) or the moved box's left edge lies within the list box (at or
+/// right of its left edge: [`cross_to`]): each side is a binary search and a short scan, so
+/// the cost is linear in the list whatever the boxes' widths (no search window as wide as the
+/// widest). The sweep pairs the active boxes with the passive ones this way too.
 fn cross_pairs(moved: &[SortedBox], list: &[SortedBox], out: &mut Vec<u64>) {
     if moved.is_empty() {
         return;
     }
+    cross_from(moved, list, out);
+    cross_to(moved, list, out);
+}
+
+/// [`cross_pairs`]' pairs whose `list` box's left edge lies strictly right of the `moved`
+/// box's and within it.
+fn cross_from(moved: &[SortedBox], list: &[SortedBox], out: &mut Vec<u64>) {
     for m in moved {
         let start = list.partition_point(|b| b.min_x <= m.min_x);
         for b in &list[start..] {
@@ -733,6 +870,11 @@ fn cross_pairs(moved: &[SortedBox], list: &[SortedBox], out: &mut Vec<u64>) {
             }
         }
     }
+}
+
+/// [`cross_pairs`]' pairs whose `moved` box's left edge lies at or right of the `list` box's
+/// and within it.
+fn cross_to(moved: &[SortedBox], list: &[SortedBox], out: &mut Vec<u64>) {
     for b in list {
         let start = moved.partition_point(|m| m.min_x < b.min_x);
         for m in &moved[start..] {
@@ -820,6 +962,7 @@ const INSERTION_MOVES: usize = 16;
 mod tests {
     use super::*;
     use crate::physics::math::{vec2, Real};
+    use crate::physics::team::Team;
 
     fn proxy(x0: Real, y0: Real, x1: Real, y1: Real) -> Proxy {
         Proxy {
@@ -890,6 +1033,80 @@ mod tests {
             }
         }
         pairs
+    }
+
+    /// A full sweep spread over two and three workers finds exactly the pairs one thread
+    /// finds, and those are a full search's: 3,000 active boxes in bands (beyond
+    /// [`SHARED_SWEEP_FROM`], several blocks of bands and of boxes against the passive list),
+    /// 2,500 passive ones and a static body swept by its pieces; then the active boxes in one
+    /// row (a single band, one block). Every round moves them all, so every query sweeps.
+    #[test]
+    fn a_sweep_on_workers_finds_the_pairs_of_one_thread() {
+        let mut rand = xorshift(0x0bad_cafe);
+        let (active_n, passive_n) = (3_000, 2_500);
+        let n = active_n + passive_n + 1;
+        let mut proxies: Vec<Proxy> = (0..n).map(|_| proxy(0.0, 0.0, 0.0, 0.0)).collect();
+        let pieced = (n - 1) as u32;
+        let pieces: Vec<Piece> = (0..6)
+            .map(|k| Piece {
+                slot: pieced,
+                aabb: proxy(10.0 * k as Real, 7.0, 10.0 * k as Real + 4.0, 7.5).aabb,
+            })
+            .collect();
+        let alive = vec![true; n];
+        let mut active = vec![false; n];
+        active[..active_n].fill(true);
+        let mut saps: Vec<SweepAndPrune> = (0..3).map(|_| SweepAndPrune::default()).collect();
+        for sap in &mut saps {
+            for (i, &a) in active.iter().enumerate() {
+                sap.insert(i as u32, !a);
+            }
+        }
+        let mut teams = [Team::new(2), Team::new(3)].map(|t| t.expect("threads start"));
+        for round in 0..4 {
+            // Rounds 0-2: a 60 m x 40 m field; round 3: every box in one 0.5 m tall row.
+            let tall = if round < 3 { 40.0 } else { 0.0 };
+            // (The passive boxes are placed once: static bodies do not move.)
+            let moving = if round == 0 { n - 1 } else { active_n };
+            for p in proxies.iter_mut().take(moving) {
+                let (x, y, w) = (60.0 * rand(), tall * rand(), 0.2 + 0.8 * rand());
+                *p = proxy(x, y, x + w, y + 0.2 + 0.3 * rand());
+            }
+            proxies[n - 1] = proxy(0.0, 7.0, 54.0, 7.5);
+            let mut one = Vec::new();
+            saps[0].find_pairs(&proxies, &pieces, &mut one, None);
+            for (k, team) in teams.iter_mut().enumerate() {
+                let (sap, mut out) = (&mut saps[k + 1], Vec::new());
+                team.region(|r| sap.find_pairs(&proxies, &pieces, &mut out, Some(r)));
+                assert_eq!(out, one, "round {round}: {} workers", k + 2);
+            }
+            assert!(one.len() > 1_000, "round {round}: {} pairs", one.len());
+            // Against a full search. The pieced body pairs where a body's box meets its box
+            // and its fat box meets a piece's (the sweep's test on the pieces).
+            let mut expected = brute_force(&proxies[..n - 1], &active[..n - 1], &alive[..n - 1]);
+            let whole = proxies[n - 1].aabb;
+            let near_piece = |i: usize| {
+                let b = proxies[i].aabb;
+                let fat = b.inflated(FAT_MARGIN);
+                let piece_met = pieces
+                    .iter()
+                    .any(|p| p.aabb.inflated(FAT_MARGIN).overlaps(&fat));
+                piece_met && b.overlaps(&whole)
+            };
+            expected.extend(
+                (0..active_n)
+                    .filter(|&i| near_piece(i))
+                    .map(|i| (i as u32, pieced)),
+            );
+            expected.sort_unstable();
+            let found: Vec<_> = one.iter().map(|&k| pair_of(k)).collect();
+            assert!(
+                found == expected,
+                "round {round}: {} found, {} expected",
+                found.len(),
+                expected.len()
+            );
+        }
     }
 
     /// The banded sweep (from [`BANDS_FROM`] active bodies) finds exactly a full search's

@@ -174,7 +174,7 @@ impl World {
             }
             _ => false,
         };
-        self.merge_contacts(dt, collided);
+        self.merge_contacts(dt, region.filter(|_| collided));
         self.wake_queued();
     }
 
@@ -322,7 +322,7 @@ impl World {
 
     /// Walk the candidate pairs in key order beside last step's contacts: each pair's contact
     /// updated or begun, the pairs no longer in contact ended.
-    fn merge_contacts(&mut self, dt: Real, collided: bool) {
+    fn merge_contacts(&mut self, dt: Real, collided: Option<&Region>) {
         let World {
             settings,
             gravity,
@@ -341,21 +341,13 @@ impl World {
         // they had ends here); a World with none pays one test per step for it.
         let sorting = joints.keeps_pairs_apart() || bodies.filtered > 0 || bodies.flagged > 0;
         let keys = &broad_phase.pair_keys;
-        if collided {
+        if let Some(region) = collided {
+            merge.defer = true;
             for (k, run) in keys.chunks(PAIRS_PER_BLOCK).enumerate() {
                 let start = k * PAIRS_PER_BLOCK;
                 if broad_phase.steady[k] {
-                    let found = &broad_phase.found[start..start + run.len()];
-                    let kept = |p: &usize| found[*p - start] == Found::InPlace as u8;
-                    let mut kept_pairs = (start..start + run.len()).filter(kept);
-                    if let Some(first) = kept_pairs.next() {
-                        merge.seek(contacts, (keys[first], 0));
-                        let inputs = std::iter::once(first).chain(kept_pairs);
-                        let inputs = inputs.map(|p| broad_phase.tier_found[p]);
-                        let before = tiers.inputs.len();
-                        tiers.inputs.extend(inputs);
-                        merge.keep_run(contacts, tiers.inputs.len() - before);
-                    }
+                    let found = (&*broad_phase, &mut tiers.inputs);
+                    keep_steady(&mut merge, contacts, found, start..start + run.len());
                     continue;
                 }
                 let mut parts = broad_phase.parts_found[k].iter().peekable();
@@ -382,7 +374,7 @@ impl World {
                     }
                 }
             }
-            merge.end(contacts);
+            merge.end(contacts, Some(region));
             return;
         }
         for (p, &key) in keys.iter().enumerate() {
@@ -406,7 +398,28 @@ impl World {
                 pairs.update_parts(key, (a, b), &mut merge, contacts, out);
             }
         }
-        merge.end(contacts);
+        merge.end(contacts, None);
+    }
+}
+
+/// The contacts of a steady block of `pairs` ([`BroadPhase::steady`]: none begins, and
+/// each of last step's in its run was made in place by a worker) kept as one run, and their
+/// tier inputs as the workers found them.
+fn keep_steady(
+    merge: &mut Merge,
+    contacts: &mut Contacts,
+    (bp, inputs): (&BroadPhase, &mut Vec<TierInput>),
+    pairs: std::ops::Range<usize>,
+) {
+    let found = &bp.found[pairs.clone()];
+    let start = pairs.start;
+    let mut kept = pairs.filter(|p| found[p - start] == Found::InPlace as u8);
+    if let Some(first) = kept.next() {
+        merge.seek(contacts, (bp.pair_keys[first], 0));
+        let before = inputs.len();
+        let found = std::iter::once(first).chain(kept);
+        inputs.extend(found.map(|p| bp.tier_found[p]));
+        merge.keep_run(contacts, inputs.len() - before);
     }
 }
 
@@ -526,12 +539,37 @@ fn is_sensor(body: &Body, i: u32) -> bool {
 
 /// Where the merge stands: in place (this step's contacts are `awake[..written]`, last
 /// step's the rest) or copying (this step's are pushed to a fresh `awake`, last step's are
-/// `previous[read..]`).
+/// `previous[read..]`). Copying after the workers' narrow phase (`defer`), this step's
+/// contacts are noted as runs of last step's and of those written, and the workers copy
+/// them into `awake` at the end: a contact that begins early in key order turns the rest of
+/// the walk into copies (4.6 MB a step in Box2D's `spinner`), which would otherwise run on
+/// this thread alone.
 struct Merge {
     in_place: bool,
     written: usize,
     read: usize,
+    defer: bool,
 }
+
+/// A run of this step's contacts while the merge defers its copies.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Run {
+    /// Last step's `previous[from..from + len]`, as they are.
+    Kept { from: u32, len: u32 },
+    /// Contacts the merge wrote, `Contacts::written[from..from + len]`.
+    Written { from: u32, len: u32 },
+}
+
+impl Run {
+    fn len(self) -> usize {
+        match self {
+            Run::Kept { len, .. } | Run::Written { len, .. } => len as usize,
+        }
+    }
+}
+
+/// Contacts a worker copies at a time at the end of a deferred merge.
+const COPIED_PER_BLOCK: usize = 512;
 
 impl Merge {
     /// Start the walk, in place (tests may ask to copy from the start).
@@ -541,6 +579,7 @@ impl Merge {
             in_place: true,
             written: 0,
             read: 0,
+            defer: false,
         };
         #[cfg(test)]
         if contacts.copy_for_tests {
@@ -552,14 +591,44 @@ impl Merge {
     }
 
     /// Stop writing in place: last step's contacts become `previous` (those before `written`
-    /// already overwritten by this step's), and this step's so far are copied to `awake`.
+    /// already overwritten by this step's), and this step's so far are copied to `awake`
+    /// (noted, when deferred).
     fn copy_from_here(&mut self, contacts: &mut Contacts) {
         std::mem::swap(&mut contacts.awake, &mut contacts.previous);
         contacts.awake.clear();
-        contacts
-            .awake
-            .extend_from_slice(&contacts.previous[..self.written]);
+        contacts.runs.clear();
+        contacts.written.clear();
+        if self.defer {
+            Merge::note_kept(contacts, 0, self.written);
+        } else {
+            contacts
+                .awake
+                .extend_from_slice(&contacts.previous[..self.written]);
+        }
         (self.in_place, self.read) = (false, self.written);
+    }
+
+    /// Note `previous[from..from + n]` as this step's next contacts (a deferred copy).
+    fn note_kept(contacts: &mut Contacts, from: usize, n: usize) {
+        if n == 0 {
+            return;
+        }
+        let (from, len) = (from as u32, n as u32);
+        match contacts.runs.last_mut() {
+            Some(Run::Kept { from: f, len: l }) if *f + *l == from => *l += len,
+            _ => contacts.runs.push(Run::Kept { from, len }),
+        }
+    }
+
+    /// Note `contact` as this step's next contact (a deferred copy); it can still be updated.
+    fn note_written(contacts: &mut Contacts, contact: Contact) -> &mut Contact {
+        let from = contacts.written.len() as u32;
+        contacts.written.push(contact);
+        match contacts.runs.last_mut() {
+            Some(Run::Written { from: f, len: l }) if *f + *l == from => *l += 1,
+            _ => contacts.runs.push(Run::Written { from, len: 1 }),
+        }
+        contacts.written.last_mut().expect("just pushed")
     }
 
     /// Move to `key` among last step's contacts, ending those passed over; whether last step
@@ -609,6 +678,10 @@ impl Merge {
         if self.in_place {
             self.written += 1;
             &mut contacts.awake[self.written - 1]
+        } else if self.defer {
+            self.read += 1;
+            let contact = contacts.previous[self.read - 1];
+            Merge::note_written(contacts, contact)
         } else {
             contacts.awake.push(contacts.previous[self.read]);
             self.read += 1;
@@ -616,11 +689,19 @@ impl Merge {
         }
     }
 
+    /// Keep last step's contact for this key as this step's, as it is.
+    fn keep_as_is(&mut self, contacts: &mut Contacts) {
+        self.keep_run(contacts, 1);
+    }
+
     /// Keep the next `n` of last step's contacts as this step's, as they are (the key of the
     /// first just sought).
     fn keep_run(&mut self, contacts: &mut Contacts, n: usize) {
         if self.in_place {
             self.written += n;
+        } else if self.defer {
+            Merge::note_kept(contacts, self.read, n);
+            self.read += n;
         } else {
             let run = self.read..self.read + n;
             contacts.awake.extend_from_slice(&contacts.previous[run]);
@@ -648,13 +729,18 @@ impl Merge {
             }
             self.written += 1;
         } else {
-            contacts.awake.push(contact);
+            if self.defer {
+                Merge::note_written(contacts, contact);
+            } else {
+                contacts.awake.push(contact);
+            }
             self.read += usize::from(continued);
         }
     }
 
-    /// Finish the walk: last step's contacts not reached are gone.
-    fn end(self, contacts: &mut Contacts) {
+    /// Finish the walk: last step's contacts not reached are gone; deferred copies are made
+    /// on `region`'s workers.
+    fn end(self, contacts: &mut Contacts, region: Option<&Region>) {
         let gone = if self.in_place {
             &contacts.awake[self.written..]
         } else {
@@ -665,8 +751,68 @@ impl Merge {
         }
         if self.in_place {
             contacts.awake.truncate(self.written);
+        } else if self.defer {
+            copy_runs(contacts, region);
         }
     }
+}
+
+/// A deferred merge's runs copied into `awake` (empty), in blocks of [`COPIED_PER_BLOCK`]
+/// spread over `region`'s workers (on this thread without one).
+fn copy_runs(contacts: &mut Contacts, region: Option<&Region>) {
+    let Contacts {
+        awake,
+        previous,
+        runs,
+        written,
+        run_starts,
+        ..
+    } = contacts;
+    run_starts.clear();
+    run_starts.push(0);
+    let mut total = 0;
+    for run in runs.iter() {
+        total += run.len();
+        run_starts.push(total as u32);
+    }
+    debug_assert!(awake.is_empty(), "a deferred merge writes a fresh array");
+    awake.reserve(total);
+    let (runs, run_starts) = (&*runs, &*run_starts);
+    let (previous, written) = (&*previous, &*written);
+    // Contacts `range` of this step's into `out` (as many).
+    let copy = |range: std::ops::Range<usize>, out: &mut [std::mem::MaybeUninit<Contact>]| {
+        let mut k = run_starts.partition_point(|&s| s as usize <= range.start) - 1;
+        let mut at = range.start;
+        while at < range.end {
+            let (start, end) = (run_starts[k] as usize, run_starts[k + 1] as usize);
+            let n = end.min(range.end) - at;
+            let source = match runs[k] {
+                Run::Kept { from, .. } => &previous[from as usize..],
+                Run::Written { from, .. } => &written[from as usize..],
+            };
+            let source = &source[at - start..at - start + n];
+            let to = &mut out[at - range.start..at - range.start + n];
+            for (to, from) in to.iter_mut().zip(source) {
+                to.write(*from);
+            }
+            (at, k) = (at + n, k + 1);
+        }
+    };
+    let spare = &mut awake.spare_capacity_mut()[..total];
+    match region {
+        None => copy(0..total, spare),
+        Some(region) => {
+            // SAFETY: each block writes its own run of the new contacts.
+            let out = unsafe { SharedSlice::new(spare) };
+            region.for_blocks(total.div_ceil(COPIED_PER_BLOCK), &|b| {
+                let range = block(b, COPIED_PER_BLOCK, total);
+                // SAFETY: as above.
+                copy(range.clone(), unsafe { out.range(range) });
+            });
+        }
+    }
+    // SAFETY: every one of the first `total` was written just above.
+    unsafe { awake.set_len(total) };
 }
 
 /// What updating a pair's contact reads.
@@ -1053,7 +1199,7 @@ impl<'a> PairInput<'a> {
         let continued = merge.seek(contacts, order);
         if kind == Found::InPlace as u8 {
             debug_assert!(continued, "a contact updated in place was last step's");
-            merge.keep(contacts);
+            merge.keep_as_is(contacts);
             return Some(Some(in_place));
         }
         if kind == Found::Nothing as u8 {

@@ -191,6 +191,14 @@ struct Contacts {
     sleeping: Vec<Contact>,
     /// Every awake contact's colour.
     graph: ConstraintGraph,
+    /// While a merge after the workers' narrow phase copies (`contacts::Merge`): this step's
+    /// contacts as runs of last step's and of those it wrote, copied into `awake` by the
+    /// workers at its end...
+    runs: Vec<contacts::Run>,
+    /// ...the contacts it wrote, in order...
+    written: Vec<Contact>,
+    /// ...and where each run starts in `awake`.
+    run_starts: Vec<u32>,
     /// Tests: find contacts into a fresh array every step, never in place.
     #[cfg(test)]
     copy_for_tests: bool,

@@ -136,8 +136,10 @@ pub(crate) struct SweepAndPrune {
     block_pairs: Vec<Vec<u64>>,
     /// Scratch for [`sort_keys`].
     sort_scratch: Vec<u64>,
-    /// Scratch for [`sort_by_min_x`]: each body's left edge, place in the old order and slot.
+    /// Scratch for [`sort_by_min_x`]: each body's left edge, place in the old order and slot;
+    /// and whether the last sweep's order was sorted afresh.
     order_scratch: Vec<(Real, u32, u32)>,
+    sorted_afresh: bool,
     /// Each slot's: whether its body is swept by its [`Piece`]s (sized only when some are).
     pieced: Vec<bool>,
     /// Scratch for `sweep`: the pieces' fat boxes, sorted by left edge.
@@ -445,7 +447,8 @@ impl SweepAndPrune {
         out.clear();
         self.sweeps += 1;
         let min_x = |i: u32| boxes[i as usize].min.x;
-        sort_by_min_x(&mut self.active, boxes, &mut self.order_scratch);
+        let scratch = (&mut self.order_scratch, &mut self.sorted_afresh);
+        sort_by_min_x(&mut self.active, boxes, scratch);
         if self.passive_dirty {
             self.passive
                 .sort_unstable_by(|&a, &b| min_x(a).total_cmp(&min_x(b)).then(a.cmp(&b)));
@@ -923,13 +926,33 @@ fn merge_sorted(into: &mut Vec<u64>, extra: &[u64]) {
 /// order). An order that barely changed since the last sweep (a pile at rest, falling or
 /// sliding together) is restored by insertion sort in close to linear time. One that changed
 /// a lot is sorted afresh: Box2D's `spinner` stirs its pile round the ring at 25 m/s, and
-/// insertion sort moved each body past 500 others a step.
-fn sort_by_min_x(order: &mut [u32], boxes: &[Aabb], scratch: &mut Vec<(Real, u32, u32)>) {
+/// insertion sort moved each body past 500 others a step. `afresh` says whether the last
+/// order was sorted afresh, and is set to whether this one is: after one that was, an order
+/// with many bodies out of place (one in [`DESCENTS_PER`] or more left of its neighbour) is
+/// sorted afresh at once, without spending insertion sort's budget first (a step of spinner
+/// did, 1 % of its time). Either way the order is the same.
+fn sort_by_min_x(
+    order: &mut [u32],
+    boxes: &[Aabb],
+    (scratch, afresh): (&mut Vec<(Real, u32, u32)>, &mut bool),
+) {
+    let x = |k: u32| boxes[k as usize].min.x;
+    if *afresh {
+        let most = order.len() / DESCENTS_PER;
+        let descents = order
+            .windows(2)
+            .filter(|w| x(w[0]) > x(w[1]))
+            .take(most + 1);
+        if descents.count() > most {
+            return sort_afresh(order, boxes, scratch);
+        }
+    }
+    *afresh = false;
     let budget = INSERTION_MOVES * order.len();
     let mut moves = 0;
     for i in 1..order.len() {
         let item = order[i];
-        let x = boxes[item as usize].min.x;
+        let x = x(item);
         let mut j = i;
         while j > 0 && boxes[order[j - 1] as usize].min.x > x {
             order[j] = order[j - 1];
@@ -940,19 +963,25 @@ fn sort_by_min_x(order: &mut [u32], boxes: &[Aabb], scratch: &mut Vec<(Real, u32
         if moves > budget {
             // Equal edges are in their old order still (insertion moves a body past greater
             // edges only), so their places in this order break ties as a stable sort would.
-            // (+ 0.0 makes -0.0 equal to 0.0, as the comparison above holds them.)
-            scratch.clear();
-            scratch.extend(
-                (order.iter().zip(0..)).map(|(&k, at)| (boxes[k as usize].min.x + 0.0, at, k)),
-            );
-            scratch.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            for (slot, &(_, _, k)) in order.iter_mut().zip(scratch.iter()) {
-                *slot = k;
-            }
-            return;
+            *afresh = true;
+            return sort_afresh(order, boxes, scratch);
         }
     }
 }
+
+/// Sort `order` by its boxes' left edges, equal edges in their order here (a comparison
+/// sort by edge and place). (+ 0.0 makes -0.0 equal to 0.0, as insertion sort holds them.)
+fn sort_afresh(order: &mut [u32], boxes: &[Aabb], scratch: &mut Vec<(Real, u32, u32)>) {
+    scratch.clear();
+    scratch.extend((order.iter().zip(0..)).map(|(&k, at)| (boxes[k as usize].min.x + 0.0, at, k)));
+    scratch.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    for (slot, &(_, _, k)) in order.iter_mut().zip(scratch.iter()) {
+        *slot = k;
+    }
+}
+
+/// After an order sorted afresh, one body in this many out of place sorts the next afresh.
+const DESCENTS_PER: usize = 16;
 
 /// How many places, per body on average, insertion sort may move the bodies before the order
 /// is sorted afresh instead (a comparison sort costs about log2 n comparisons a body).
@@ -1424,12 +1453,30 @@ mod tests {
         nearly.sort_by(|&a, &b| edge(a).partial_cmp(&edge(b)).unwrap());
         nearly.swap(10, 11);
         let reversed: Vec<u32> = (0..200).rev().collect();
-        for start in [nearly, reversed] {
+        // Each both after an order restored by insertion and after one sorted afresh (which
+        // sorts the reversed one afresh at once, and tries insertion on the nearly sorted).
+        let cases = [
+            (&nearly, false),
+            (&reversed, false),
+            (&nearly, true),
+            (&reversed, true),
+        ];
+        for (start, last_afresh) in cases {
+            let start = start.clone();
+            let sorted_afresh = start == reversed;
             let mut expected = start.clone();
             expected.sort_by(|&a, &b| edge(a).partial_cmp(&edge(b)).unwrap());
             let mut order = start;
-            sort_by_min_x(&mut order, &boxes, &mut Vec::new());
-            assert_eq!(order, expected);
+            let mut afresh = last_afresh;
+            sort_by_min_x(&mut order, &boxes, (&mut Vec::new(), &mut afresh));
+            assert_eq!(
+                order, expected,
+                "after an order sorted afresh: {last_afresh}"
+            );
+            assert_eq!(
+                afresh, sorted_afresh,
+                "only the reversed order is sorted afresh"
+            );
         }
     }
 }

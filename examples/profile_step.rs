@@ -3,14 +3,24 @@
 //! (SCENE: a benchmark set-up's name, `pile_N` for N boxes in a pile 20 deep, or `sensors_N`
 //! for N sensors over a resting pile.)
 //! (WARM_UP: untimed steps first; the scene's own warm-up when left out).
+//! (WORKERS `1+N`: the same World steps on one thread and on N workers by turns, 25 steps
+//! each, and both medians and their ratio are printed: the results are the same to the bit
+//! either way, and taking turns within one run leaves out the host's slow drifts, which
+//! separate runs of a shared machine do not.)
 use std::time::Instant;
+
+/// Steps a turn, when one thread and workers take turns.
+const TURN: usize = 25;
 
 fn main() {
     let mut args = std::env::args().skip(1);
     let name = args.next().unwrap_or_else(|| "large_pyramid".to_string());
     let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(500);
     let warm_up: Option<usize> = args.next().and_then(|s| s.parse().ok());
-    let workers: u32 = args.next().and_then(|s| s.parse().ok()).unwrap_or(1);
+    let workers_arg = args.next().unwrap_or_else(|| "1".to_string());
+    // `1+N`: by turns on one thread and on N workers.
+    let turns: Option<u32> = workers_arg.strip_prefix("1+").and_then(|n| n.parse().ok());
+    let workers: u32 = turns.map_or_else(|| workers_arg.parse().unwrap_or(1), |_| 1);
     // `pile_N`: N boxes in a pile 20 deep (how the cost grows with the count).
     let pile = name
         .strip_prefix("pile_")
@@ -45,15 +55,43 @@ fn main() {
     for k in 0..warm_up {
         let _ = setup.step(&mut world, &mut spawned, k);
     }
+    let pool = match turns.map(tiltbox::physics::WorkerPool::new) {
+        Some(Err(e)) => {
+            eprintln!("{e}");
+            std::process::exit(1);
+        }
+        pool => pool.map(|p| p.expect("checked")),
+    };
     let mut times = Vec::with_capacity(steps);
+    let mut shared_times = Vec::with_capacity(steps);
     let mut contacts = 0;
     for k in warm_up..warm_up + steps {
+        // By turns: 25 steps alone, 25 on the pool's workers.
+        let on_pool = pool.as_ref().filter(|_| (k - warm_up) / TURN % 2 == 1);
+        match on_pool {
+            Some(pool) => world.share_workers(pool),
+            None if pool.is_some() => world.set_workers(1).expect("one worker"),
+            None => {}
+        }
         let t = Instant::now();
         let _ = setup.step(&mut world, &mut spawned, k);
-        times.push(t.elapsed().as_secs_f64() * 1e3);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        if on_pool.is_some() {
+            shared_times.push(ms);
+        } else {
+            times.push(ms);
+        }
         contacts += world.contact_count();
     }
     times.sort_by(f64::total_cmp);
+    if let (Some(n), false) = (turns, shared_times.is_empty()) {
+        shared_times.sort_by(f64::total_cmp);
+        let (alone, shared) = (times[times.len() / 2], shared_times[shared_times.len() / 2]);
+        println!(
+            "{name}: by turns, one thread median {alone:.6} ms/step, {n} workers {shared:.6}, speed-up {:.3}",
+            alone / shared
+        );
+    }
     let top = world
         .bodies()
         .map(|b| b.position().y)

@@ -603,6 +603,10 @@ impl Swept<'_> {
         match self.bands {
             None => sweep_band(self.active, false, out),
             Some((boxes, ends)) => {
+                // The band of the higher lower edge is the higher of the two lower edges'
+                // bands (the band is non-decreasing in the height), and both boxes reach into
+                // band k, so neither lower edge's band is above k: the pair is band k's when
+                // either box is lowest in it.
                 let mut start = 0;
                 for &end in ends {
                     sweep_band(&boxes[start..end as usize], true, out);
@@ -632,7 +636,8 @@ impl Swept<'_> {
                 let mut runs = 0;
                 let mut from = 0;
                 for (k, &end) in ends.iter().enumerate() {
-                    if end as usize - from >= per || k + 1 == ends.len() {
+                    let full = end as usize - from >= per && runs + 1 < MAX_BAND_BLOCKS;
+                    if full || k + 1 == ends.len() {
                         band_runs[runs] = k as u32 + 1;
                         runs += 1;
                         from = end as usize;

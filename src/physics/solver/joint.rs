@@ -728,13 +728,20 @@ fn warm_start_one(set: &JointSet, k: usize, bodies: &mut [SolverBody]) {
 /// Warm start joint `j`, with its `rows`, on its bodies `a` and `b`.
 #[inline(always)]
 fn warm_start_joint(j: &JointConstraint, rows: &[Row], (a, b): (&mut SolverBody, &mut SolverBody)) {
-    let pose = j.pose(a, b);
+    // (Warm starting moves no body, so the pose is the same for every part.)
     if let Some(p) = &j.point {
-        j.apply_point(a, b, &pose, p.impulse);
+        j.apply_point(a, b, &j.pose(a, b), p.impulse);
     }
     for row in rows {
-        let jac = jacobian(row.measure, &pose);
-        j.apply_row(a, b, &jac, row.sign() * row.impulse);
+        let lambda = row.sign() * row.impulse;
+        if row.measure == Measure::Angle {
+            // An angle row's Jacobian, [0, -1, 0, 1], turns the bodies only.
+            a.w -= a.inv_inertia * lambda;
+            b.w += b.inv_inertia * lambda;
+        } else {
+            let jac = jacobian(row.measure, &j.pose(a, b));
+            j.apply_row(a, b, &jac, lambda);
+        }
     }
 }
 

@@ -799,9 +799,11 @@ fn solve_joint(
     // An angle row's effective mass is the same at every pose: one division for all of them.
     let turn = a.inv_inertia + b.inv_inertia;
     let axial = if turn > 0.0 { 1.0 / turn } else { 0.0 };
+    // (A solve pass moves no body: the joint angle is the same for every angle row.)
+    let angle = j.frame.angle + b.dtheta - a.dtheta;
     for row in rows {
         if row.measure == Measure::Angle {
-            solve_angle_row(row, axial, j.frame.angle, (a, b), pass);
+            solve_angle_row(row, axial, angle, (a, b), pass);
         } else {
             let pose = j.pose(a, b);
             solve_row(row, masses(a, b), (a, b), &pose, pass);
@@ -1171,27 +1173,33 @@ fn solve_row(
     apply_row(masses, a, b, &jac, sign * (new - old));
 }
 
-/// Solve an angle row (`axial`: 1 / (iA + iB), 0 if neither turns; `start_angle`: the joint
-/// angle at the start of the step). Its Jacobian is [0, -1, 0, 1] at every pose, so it needs
-/// neither the pose nor the bodies' linear velocities (as Box2D's axial rows).
+/// Solve an angle row (`axial`: 1 / (iA + iB), 0 if neither turns; `angle`: the joint angle
+/// now, rad). Its Jacobian is [0, -1, 0, 1] at every pose, so it needs neither the pose nor
+/// the bodies' linear velocities (as Box2D's axial rows). An upper limit's value is
+/// target - angle: its signs are flipped by negation, not by a product on the chain of
+/// velocity updates that every row of the joint waits on.
 #[inline(always)]
 fn solve_angle_row(
     row: &mut Row,
     axial: Real,
-    start_angle: Real,
+    angle: Real,
     (a, b): (&mut SolverBody, &mut SolverBody),
     pass: (bool, Real),
 ) {
     if axial == 0.0 {
         return;
     }
-    let sign = row.sign();
-    let cdot = sign * (b.w - a.w);
-    let error = sign * (start_angle + b.dtheta - a.dtheta - row.target);
+    let (relative, offset) = (b.w - a.w, angle - row.target);
+    let upper = row.role == Role::Upper;
+    let (cdot, error) = if upper {
+        (-relative, -offset)
+    } else {
+        (relative, offset)
+    };
     let old = row.impulse;
     let new = row_impulse(row, axial, cdot, error, pass);
     row.impulse = new;
-    let lambda = sign * (new - old);
+    let lambda = if upper { old - new } else { new - old };
     a.w -= a.inv_inertia * lambda;
     b.w += b.inv_inertia * lambda;
 }
@@ -1230,7 +1238,12 @@ fn row_impulse(
             raw.max(0.0)
         }
     };
-    new.clamp(-row.max_impulse, row.max_impulse)
+    // (Most rows have no cap: the clamp would lengthen the chain every row waits on.)
+    if row.max_impulse == Real::INFINITY {
+        new
+    } else {
+        new.clamp(-row.max_impulse, row.max_impulse)
+    }
 }
 
 /// Apply impulse `lambda` along a row's Jacobian `jac` to bodies of inverse masses `masses`.

@@ -709,32 +709,23 @@ impl Merge {
         }
     }
 
-    /// Write `contact` as this step's for its key: it continues last step's, or it begins
-    /// (`begins`: which of its two bodies are nodes of the graph) and takes a colour.
-    fn write(&mut self, contacts: &mut Contacts, mut contact: Contact, begins: Option<[bool; 2]>) {
-        let continued = begins.is_none();
-        if let Some(dynamic) = begins {
-            contact.colour = contacts.graph.add([contact.a, contact.b], dynamic);
-        }
-        if self.in_place && !continued && self.written < contacts.awake.len() {
+    /// Write `contact`, which begins this step, as this step's for its key: it takes a colour
+    /// (`dynamic`: which of its two bodies are nodes of the graph). (A contact that goes on
+    /// is [`Merge::keep`]'s, made over in place.)
+    fn write(&mut self, contacts: &mut Contacts, mut contact: Contact, dynamic: [bool; 2]) {
+        contact.colour = contacts.graph.add([contact.a, contact.b], dynamic);
+        if self.in_place && self.written < contacts.awake.len() {
             // A new contact before last step's others: from here, copying.
             self.copy_from_here(contacts);
         }
         if self.in_place {
-            // Over its own last step's contact, or appended after them all.
-            if self.written < contacts.awake.len() {
-                contacts.awake[self.written] = contact;
-            } else {
-                contacts.awake.push(contact);
-            }
+            // Appended after last step's contacts, all of them passed.
+            contacts.awake.push(contact);
             self.written += 1;
+        } else if self.defer {
+            Merge::note_written(contacts, contact);
         } else {
-            if self.defer {
-                Merge::note_written(contacts, contact);
-            } else {
-                contacts.awake.push(contact);
-            }
-            self.read += usize::from(continued);
+            contacts.awake.push(contact);
         }
     }
 
@@ -959,11 +950,14 @@ impl<'a> PairInput<'a> {
         if found.manifold.count == 0 {
             return None;
         }
-        let previous = continued.then(|| merge.last(contacts));
-        let contact = self.fresh_contact(order, &found.manifold, sides, previous);
+        if continued {
+            let contact = merge.keep(contacts);
+            self.refresh(contact, &found.manifold, sides);
+            return Some(TierInput::of(contact, slop));
+        }
+        let contact = self.fresh_contact(order, &found.manifold, sides);
         let input = TierInput::of(&contact, slop);
-        let begins = (!continued).then_some([a.inv_mass > 0.0, b.inv_mass > 0.0]);
-        merge.write(contacts, contact, begins);
+        merge.write(contacts, contact, [a.inv_mass > 0.0, b.inv_mass > 0.0]);
         Some(input)
     }
 
@@ -990,11 +984,14 @@ impl<'a> PairInput<'a> {
             }
         }
         let manifold = self.collide((sa, sb), pair_of(order.0), wake_queue)?;
-        let previous = continued.then(|| merge.last(contacts));
-        let contact = self.fresh_contact(order, &manifold, (sa, sb), previous);
+        if continued {
+            let contact = merge.keep(contacts);
+            self.refresh(contact, &manifold, (sa, sb));
+            return Some(TierInput::of(contact, slop));
+        }
+        let contact = self.fresh_contact(order, &manifold, (sa, sb));
         let input = TierInput::of(&contact, slop);
-        let begins = (!continued).then_some([a.inv_mass > 0.0, b.inv_mass > 0.0]);
-        merge.write(contacts, contact, begins);
+        merge.write(contacts, contact, [a.inv_mass > 0.0, b.inv_mass > 0.0]);
         Some(input)
     }
 
@@ -1165,7 +1162,7 @@ impl<'a> PairInput<'a> {
             // with two workers).
             (Some(manifold), 0) if last.is_some() => {
                 let last = last.expect("a contact that goes on");
-                *last = self.fresh_contact(order, &manifold, sides, Some(&*last));
+                self.refresh(last, &manifold, sides);
                 Found::InPlace as u8
             }
             (Some(manifold), wakes) => {
@@ -1212,67 +1209,93 @@ impl<'a> PairInput<'a> {
             }
         }
         let (a, b) = self.bodies(key).expect("a pair with bodies");
-        let previous = continued.then(|| merge.last(contacts));
         let sides = (Side::whole(a), Side::whole(b));
-        let contact = self.fresh_contact(order, manifold, sides, previous);
+        if continued {
+            let contact = merge.keep(contacts);
+            self.refresh(contact, manifold, sides);
+            return Some(Some(TierInput::of(contact, slop)));
+        }
+        let contact = self.fresh_contact(order, manifold, sides);
         let input = TierInput::of(&contact, slop);
-        let begins = (!continued).then_some([a.inv_mass > 0.0, b.inv_mass > 0.0]);
-        merge.write(contacts, contact, begins);
+        merge.write(contacts, contact, [a.inv_mass > 0.0, b.inv_mass > 0.0]);
         Some(Some(input))
     }
 
-    /// A contact from a fresh `manifold` between `a` and `b`: it continues last step's
-    /// contact `previous` where there was one (its colour, load and age, and the impulses of
-    /// the points with the same feature ids), or begins (uncoloured, until the merge writes it).
+    /// A contact that begins from a fresh `manifold` between `a` and `b` (uncoloured, until
+    /// the merge writes it).
     fn fresh_contact(
         &self,
         (key, shapes): (u64, u32),
         manifold: &Manifold,
-        (sa, sb): (Side, Side),
-        previous: Option<&Contact>,
+        sides: (Side, Side),
     ) -> Contact {
         let (ia, ib) = pair_of(key);
-        let (a, b) = (sa.body, sb.body);
-        let (xf_a, xf_b) = (a.frame(), b.frame());
-        let colour = previous.map_or(UNCOLOURED, |c| c.colour);
         let mut contact = Contact {
             key,
             a: ia,
             b: ib,
             shapes,
-            normal: manifold.normal,
+            normal: Vec2::ZERO,
             friction: 0.0,
             restitution: 0.0,
-            touches_static: a.inv_mass == 0.0 || b.inv_mass == 0.0,
-            rounding: [sa.shape.rounding(), sb.shape.rounding()],
+            touches_static: false,
+            rounding: [0.0; 2],
             points: [ContactPoint::default(); 2],
-            count: manifold.count as u8,
-            hertz: previous.map_or(0.0, |c| c.hertz),
-            load: previous.map_or(0.0, |c| c.load),
-            force: previous.map_or(0.0, |c| c.force),
-            age: previous.map_or(0, |c| c.age),
-            colour,
-            local_normal: xf_a.q.inv_rotate(manifold.normal),
-            base_rotation: relative_rotation(xf_a.q, xf_b.q),
+            count: 0,
+            hertz: 0.0,
+            load: 0.0,
+            force: 0.0,
+            age: 0,
+            colour: UNCOLOURED,
+            local_normal: Vec2::ZERO,
+            base_rotation: Rot::IDENTITY,
         };
-        // Geometry as a recycled contact's (which also ages it a step)...
-        self.set_geometry(&mut contact, manifold, (sa, sb));
-        if previous.is_none() {
-            contact.age = 0;
-        }
-        // ...plus what recycling will read, and the impulses of the points that persist.
-        for (cp, mp) in contact.points.iter_mut().zip(manifold.points()) {
+        self.remake(&mut contact, manifold, sides, None);
+        contact.age = 0;
+        contact
+    }
+
+    /// Contact `c`, which goes on, made over in place from a fresh `manifold`: it keeps its
+    /// colour, load and age, and the impulses of the points with the same feature ids. (Made
+    /// apart and copied over it, as a contact that begins is, it cost two or three copies of
+    /// its 216 bytes.)
+    #[inline(always)]
+    fn refresh(&self, c: &mut Contact, manifold: &Manifold, sides: (Side, Side)) {
+        let (old, count) = (c.points, c.count as usize);
+        self.remake(c, manifold, sides, Some(&old[..count]));
+    }
+
+    /// What a fresh `manifold` between `a` and `b` makes of contact `c`: its geometry (which
+    /// also ages it a step), what recycling will read, and the impulses of `previous` points
+    /// with the same feature ids.
+    #[inline(always)]
+    fn remake(
+        &self,
+        c: &mut Contact,
+        manifold: &Manifold,
+        (sa, sb): (Side, Side),
+        previous: Option<&[ContactPoint]>,
+    ) {
+        let (a, b) = (sa.body, sb.body);
+        let (xf_a, xf_b) = (a.frame(), b.frame());
+        c.touches_static = a.inv_mass == 0.0 || b.inv_mass == 0.0;
+        c.rounding = [sa.shape.rounding(), sb.shape.rounding()];
+        c.count = manifold.count as u8;
+        c.local_normal = xf_a.q.inv_rotate(manifold.normal);
+        c.base_rotation = relative_rotation(xf_a.q, xf_b.q);
+        c.points = [ContactPoint::default(); 2];
+        self.set_geometry(c, manifold, (sa, sb));
+        for (cp, mp) in c.points.iter_mut().zip(manifold.points()) {
             cp.id = mp.id;
             cp.local_a = xf_a.apply_inv(mp.point);
             cp.local_b = xf_b.apply_inv(mp.point);
             cp.base_separation = mp.separation;
-            if let Some(prev) = previous.and_then(|c| c.live().iter().find(|p| p.id == mp.id)) {
+            if let Some(prev) = previous.and_then(|p| p.iter().find(|p| p.id == mp.id)) {
                 cp.normal_impulse = prev.normal_impulse;
                 cp.tangent_impulse = prev.tangent_impulse;
                 cp.approach_velocity = prev.approach_velocity;
             }
         }
-        contact
     }
 }
 

@@ -377,9 +377,17 @@ impl World {
             merge.end(contacts, Some(region));
             return;
         }
+        let ahead = if sorting {
+            2 * FETCH_AHEAD
+        } else {
+            FETCH_AHEAD
+        };
         for (p, &key) in keys.iter().enumerate() {
-            if let Some(&next) = keys.get(p + FETCH_AHEAD) {
+            if let Some(&next) = keys.get(p + ahead) {
                 pairs.fetch(next);
+            }
+            if let Some(&near) = keys.get(p + FETCH_AHEAD).filter(|_| sorting) {
+                pairs.fetch_extras(near);
             }
             if sorting && !(filters_allow(key, bodies) && joints.may_collide(key)) {
                 continue;
@@ -836,6 +844,21 @@ impl<'a> PairInput<'a> {
         for i in [ia, ib] {
             if let Some(slot) = self.slots.get(i as usize) {
                 prefetch(slot);
+            }
+        }
+    }
+
+    /// Start loading the extras (filters, parts) of the bodies of pair `key`, out of line on
+    /// the heap: a filtered world tests every pair's filters, and most pairs of a pile of
+    /// ragdolls are refused at once, too soon for a load begun there to arrive. Reads the
+    /// bodies, which [`PairInput::fetch`] fetched some pairs before.
+    #[inline(always)]
+    fn fetch_extras(&self, key: u64) {
+        let (ia, ib) = pair_of(key);
+        for i in [ia, ib] {
+            let body = self.slots.get(i as usize).and_then(|s| s.body.as_ref());
+            if let Some(extras) = body.and_then(|b| b.extras.as_deref()) {
+                prefetch(extras);
             }
         }
     }

@@ -461,6 +461,25 @@ impl<L: Wide> Packed<L> {
         }
     }
 
+    /// Once packed: each slot's list's index in `packed` (slots not in use: none).
+    fn by_slot(&self) -> [usize; LISTS] {
+        let mut at = [usize::MAX; LISTS];
+        for (k, &slot) in self.slots.iter().enumerate() {
+            at[slot as usize] = k;
+        }
+        at
+    }
+
+    /// Once packed: the impulses of lane `place` of list `k` of `packed`.
+    #[inline(always)]
+    fn lane_impulses(&self, k: usize, place: usize) -> [PointImpulses; 2] {
+        let list = &self.packed[k];
+        let (b, lane) = (place / L::WIDTH, place % L::WIDTH);
+        let bundle = &list.bundles[b];
+        let bounce = self.bounces.get(bundle.bounce_index as usize);
+        bundle.lane_impulses(lane, &list.ledgers[b], bounce)
+    }
+
     /// Move the lists in use out, in solve order, once packed.
     fn close(&mut self) {
         let mut used = std::mem::take(&mut self.used);
@@ -693,6 +712,9 @@ pub(crate) struct ContactBundles {
     /// Contacts up to which a solve fills its half-empty bundles; `None`: [`GAPS_FILLED_UP_TO`]
     /// (tests set 0 to compare).
     pub gaps_up_to: Option<usize>,
+    /// Where a build on this thread put each contact, in key order ([`Place`]); empty after
+    /// a build on the workers, or where a list outgrew a place.
+    places: Vec<Place>,
 }
 
 /// What packing reads: the bodies, the contacts, which of them to pack, and how to prepare
@@ -732,11 +754,15 @@ impl ContactBundles {
         let singles = self.singles_apart(count);
         let up_to = self.gaps_up_to.unwrap_or(GAPS_FILLED_UP_TO);
         let small = (input.fill_gaps && (2..=up_to).contains(&count)).then_some(&mut self.small);
-        let overflow = &mut self.overflow;
+        let (overflow, places) = (&mut self.overflow, &mut self.places);
         self.bouncy = match width {
-            Width::One => pack((&mut self.single, overflow), input, (singles, small)),
-            Width::Four => pack((&mut self.four, overflow), input, (singles, small)),
-            Width::Eight => pack((&mut self.eight, overflow), input, (singles, small)),
+            Width::One => pack(
+                (&mut self.single, overflow, places),
+                input,
+                (singles, small),
+            ),
+            Width::Four => pack((&mut self.four, overflow, places), input, (singles, small)),
+            Width::Eight => pack((&mut self.eight, overflow, places), input, (singles, small)),
         };
     }
 
@@ -751,6 +777,7 @@ impl ContactBundles {
         };
         self.built = Some(width);
         self.overflow.reset(KINDS);
+        self.places.clear();
         let (order, overflow) = (&mut self.order, &mut self.overflow);
         self.bouncy = match width {
             Width::One => pack_shared((&mut self.single, overflow), input, region, order),
@@ -867,12 +894,23 @@ impl ContactBundles {
         }
     }
 
-    /// Hand each packed contact its points' impulses, for the store stage to write back.
+    /// Hand each packed contact its points' impulses, for the store stage to write back: in
+    /// key order where this thread packed them (each contact's lane read where its
+    /// [`Place`] says), else bundle by bundle.
     pub fn store(
         &self,
         contacts: &mut [Contact],
         mut then: impl FnMut(&mut Contact, &[PointImpulses; 2]),
     ) {
+        if !self.places.is_empty() {
+            let (places, overflow) = (&self.places[..], &self.overflow);
+            match self.built {
+                Some(Width::Eight) => store_in_order(&self.eight, overflow, places, contacts, then),
+                Some(Width::One) => store_in_order(&self.single, overflow, places, contacts, then),
+                _ => store_in_order(&self.four, overflow, places, contacts, then),
+            }
+            return;
+        }
         self.overflow.store(contacts, &mut then);
         match self.built {
             Some(Width::Eight) => eight::store(&self.eight, contacts, &mut then),
@@ -956,6 +994,60 @@ fn put<L: Wide>(
             rounds.push(RoundLanes::NONE);
         }
         rounds[bundle.round_index as usize].set(lane, c);
+    }
+}
+
+/// Where the packer put a contact: its index (the high half), its list's slot (the overflow's
+/// from [`IN_OVERFLOW`]) and its lane's place in the list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Place(u64);
+
+impl Place {
+    /// Bits of a lane's place in its list (32 million lanes a list).
+    const LANE_BITS: u32 = 25;
+    /// A contact whose place does not fit ([`Packer::finish`] then keeps none).
+    const NONE: Place = Place(u64::MAX);
+
+    /// Contact `i` in lane `lane` of list `slot`.
+    #[inline(always)]
+    fn of(i: usize, slot: usize, lane: usize) -> Place {
+        if lane >> Self::LANE_BITS != 0 {
+            return Self::NONE;
+        }
+        Place(((i as u64) << 32) | ((slot as u64) << Self::LANE_BITS) | lane as u64)
+    }
+
+    /// The contact, slot and lane.
+    #[inline(always)]
+    fn parts(self) -> (usize, usize, usize) {
+        let low = self.0 as u32;
+        let mask = (1 << Self::LANE_BITS) - 1;
+        let (i, slot) = ((self.0 >> 32) as usize, (low >> Self::LANE_BITS) as usize);
+        (i, slot, (low & mask) as usize)
+    }
+}
+
+/// The store in key order: each contact at `places` handed its lane's impulses from the
+/// `coloured` lists or the `overflow`. The contacts stream through once, in order, and each
+/// colour's bundles are read in order too; bundle by bundle, the writes went all over the
+/// contacts (a third of the store's time waited on their lines in large scenes).
+fn store_in_order<L: Wide>(
+    coloured: &Packed<L>,
+    overflow: &Packed<Lanes1>,
+    places: &[Place],
+    contacts: &mut [Contact],
+    mut then: impl FnMut(&mut Contact, &[PointImpulses; 2]),
+) {
+    let (lists, overflow_lists) = (coloured.by_slot(), overflow.by_slot());
+    for &place in places {
+        let (i, slot, lane) = place.parts();
+        let ends = match slot.checked_sub(IN_OVERFLOW as usize) {
+            Some(kind) => overflow.lane_impulses(overflow_lists[kind], lane),
+            None => coloured.lane_impulses(lists[slot], lane),
+        };
+        if let Some(c) = contacts.get_mut(i) {
+            then(c, &ends);
+        }
     }
 }
 
@@ -1091,6 +1183,8 @@ fn pack_shared<L: Wide>(
 struct Packer<'p, L: Wide> {
     coloured: &'p mut Packed<L>,
     overflow: &'p mut Packed<Lanes1>,
+    /// Each contact's [`Place`], in packing order.
+    places: &'p mut Vec<Place>,
     dummy: u32,
     filled: [usize; LISTS],
     overflowed: [usize; KINDS],
@@ -1100,14 +1194,20 @@ struct Packer<'p, L: Wide> {
 impl<'p, L: Wide> Packer<'p, L> {
     /// Empty lists, for `bodies` (the last the fixed dummy that empty lanes point at).
     fn new(
-        (coloured, overflow): (&'p mut Packed<L>, &'p mut Packed<Lanes1>),
+        (coloured, overflow, places): (
+            &'p mut Packed<L>,
+            &'p mut Packed<Lanes1>,
+            &'p mut Vec<Place>,
+        ),
         bodies: &[SolverBody],
     ) -> Self {
         let dummy = (bodies.len() - 1) as u32;
         coloured.reset(LISTS);
+        places.clear();
         Packer {
             coloured,
             overflow,
+            places,
             dummy,
             filled: [0; LISTS],
             overflowed: [0; KINDS],
@@ -1126,22 +1226,31 @@ impl<'p, L: Wide> Packer<'p, L> {
         bodies: &[SolverBody],
     ) {
         self.bouncy |= c.restitution != 0.0;
-        if colour >= OVERFLOW {
-            let filled = (kind, &mut self.overflowed[kind]);
-            let inert = || Bundle::inert(ALL_KINDS[kind], self.dummy);
-            self.overflow.put(filled, inert, (i, c), k, bodies);
+        let dummy = self.dummy;
+        let place = if colour >= OVERFLOW {
+            let filled = &mut self.overflowed[kind];
+            let place = Place::of(i, IN_OVERFLOW as usize + kind, *filled);
+            let inert = || Bundle::inert(ALL_KINDS[kind], dummy);
+            self.overflow.put((kind, filled), inert, (i, c), k, bodies);
+            place
         } else {
             let slot = colour as usize * KINDS + kind;
-            let inert = || Bundle::inert(ALL_KINDS[kind], self.dummy);
-            self.coloured
-                .put((slot, &mut self.filled[slot]), inert, (i, c), k, bodies);
-        }
+            let filled = &mut self.filled[slot];
+            let place = Place::of(i, slot, *filled);
+            let inert = || Bundle::inert(ALL_KINDS[kind], dummy);
+            self.coloured.put((slot, filled), inert, (i, c), k, bodies);
+            place
+        };
+        self.places.push(place);
     }
 
     /// Close the lists; whether any contact bounces.
     fn finish(self) -> bool {
         self.coloured.close();
         self.overflow.close();
+        if self.places.contains(&Place::NONE) {
+            self.places.clear();
+        }
         self.bouncy
     }
 }
@@ -1150,7 +1259,7 @@ impl<'p, L: Wide> Packer<'p, L> {
 /// apart if `singles`; whether any bounces. A small solve without joints (`small`) fills its
 /// half-empty bundles from other colours ([`pack_small`]).
 fn pack<L: Wide, P>(
-    lists: (&mut Packed<L>, &mut Packed<Lanes1>),
+    lists: (&mut Packed<L>, &mut Packed<Lanes1>, &mut Vec<Place>),
     input: PackInput<'_, '_, P>,
     (singles, small): (bool, Option<&mut SmallSolve>),
 ) -> bool

@@ -845,6 +845,31 @@ impl<L: Wide> Bundle<L> {
         }
         ends
     }
+
+    /// [`Bundle::impulses`] of lane `lane` alone, read lane by lane where it lives.
+    #[inline(always)]
+    pub fn lane_impulses(
+        &self,
+        lane: usize,
+        ledger: &Ledger<L>,
+        bounce: Option<&BounceLanes<L>>,
+    ) -> [PointImpulses; 2] {
+        std::array::from_fn(|j| {
+            let p = &self.p[j];
+            let (normal, total) = (
+                p.normal_impulse.lane(lane),
+                ledger.total_normal_impulse[j].lane(lane),
+            );
+            let pushed = total + normal > 0.0;
+            let carried = bounce.filter(|b| pushed && 1.0 > b.touched[j].lane(lane));
+            PointImpulses {
+                normal,
+                tangent: p.tangent_impulse.lane(lane),
+                total_normal: total + normal,
+                approach: carried.map_or(0.0, |b| b.approach[j].lane(lane)),
+            }
+        })
+    }
 }
 
 /// Point `p`'s separation now (m; see `Bundle::coefficients`): its separation when the step

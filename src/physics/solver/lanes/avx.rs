@@ -83,6 +83,12 @@ impl Wide for Lanes8 {
         lanes[i] = x;
     }
     #[inline(always)]
+    fn lane(&self, i: usize) -> Real {
+        // SAFETY: as in `set_lane`.
+        let lanes = unsafe { &*(self as *const Lanes8).cast::<[f32; 8]>() };
+        lanes[i]
+    }
+    #[inline(always)]
     fn to_lanes(self) -> [Real; 8] {
         self.to_array()
     }

@@ -63,6 +63,8 @@ pub(crate) trait Wide:
     fn index_splat(i: u32) -> Self::Index;
     /// Set lane `i` to `x`, in place (packing writes each lane once, where it lives).
     fn set_lane(&mut self, i: usize, x: Real);
+    /// Lane `i`, read where it lives (the store reads one lane of a bundle at a time).
+    fn lane(&self, i: usize) -> Real;
     /// All lanes as plain numbers.
     fn to_lanes(self) -> Self::Array;
     /// Lane-wise `if self > rhs { self } else { rhs }` (SSE's `maxps`).
@@ -143,6 +145,10 @@ impl Wide for Lanes4 {
     #[inline(always)]
     fn set_lane(&mut self, i: usize, x: Real) {
         self[i] = x;
+    }
+    #[inline(always)]
+    fn lane(&self, i: usize) -> Real {
+        self[i]
     }
     #[inline(always)]
     fn to_lanes(self) -> [Real; 4] {

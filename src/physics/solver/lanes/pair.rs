@@ -77,6 +77,9 @@ impl Wide for Lanes8 {
     fn set_lane(&mut self, i: usize, x: Real) {
         self.0[i / 4].set_lane(i % 4, x);
     }
+    fn lane(&self, i: usize) -> Real {
+        self.0[i / 4].lane(i % 4)
+    }
     fn to_lanes(self) -> [Real; 8] {
         let (lo, hi) = (self.0[0].to_lanes(), self.0[1].to_lanes());
         std::array::from_fn(|i| if i < 4 { lo[i] } else { hi[i - 4] })

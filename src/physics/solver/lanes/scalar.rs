@@ -83,6 +83,10 @@ impl Wide for Lanes1 {
         self.0 = x;
     }
     #[inline(always)]
+    fn lane(&self, _: usize) -> Real {
+        self.0
+    }
+    #[inline(always)]
     fn to_lanes(self) -> [Real; 1] {
         [self.0]
     }
